@@ -1,0 +1,43 @@
+# Quick start: `make demo` and `make test` on a fresh clone are the whole set-up.
+PY ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+export PYVISTA_OFF_SCREEN := true
+export MPLBACKEND := Agg
+
+.PHONY: demo test lint report quick-report bench clean
+
+$(BIN)/python:
+	$(PY) -m venv $(VENV)
+	$(BIN)/python -m pip install --upgrade pip
+
+$(VENV)/.installed: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install -e .
+	touch $@
+
+$(VENV)/.installed-test: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install -e '.[test]'
+	touch $@ $(VENV)/.installed
+
+demo: $(VENV)/.installed
+	$(BIN)/springfem compare
+
+test: $(VENV)/.installed-test
+	$(BIN)/ruff check .
+	$(BIN)/python -m pytest -q
+
+lint: $(VENV)/.installed-test
+	$(BIN)/ruff check .
+
+report: $(VENV)/.installed
+	$(BIN)/springfem report
+
+quick-report: $(VENV)/.installed
+	$(BIN)/springfem report --quick
+
+bench: $(VENV)/.installed
+	$(BIN)/springfem bench forces
+	$(BIN)/springfem bench fem
+
+clean:
+	rm -rf $(VENV) build *.egg-info .pytest_cache .ruff_cache

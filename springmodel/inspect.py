@@ -1,0 +1,58 @@
+"""Scene statistics for ``springfem inspect``: mesh, quality, axes, intersections."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .intersections import axis_vectors, cast_rays
+from .scene import Scene
+
+
+def inspect_scene(scene: Scene, calibration: bool = True) -> dict[str, Any]:
+    """Counts, volume, element quality, axis lengths and ray-cast success of a scene.
+
+    With ``calibration`` (and the spring calibration module present) the distribution of
+    the spring element's calibration mismatch is included too.
+    """
+    mesh = scene.mesh
+    q = mesh.quality()
+    rc = cast_rays(mesh.points, mesh.tets, scene.frames)
+    lengths = np.linalg.norm(axis_vectors(mesh.points, mesh.tets, rc.coefficients), axis=2)
+    lo, hi = mesh.bounding_box()
+    out: dict[str, Any] = {
+        "scene": scene.name,
+        "mesh": mesh.source,
+        "nodes": mesh.n_points,
+        "tets": mesh.n_tets,
+        "volume": float(mesh.volumes().sum()),
+        "bounding_box": [lo.tolist(), hi.tolist()],
+        "quality_min": float(q.min()),
+        "quality_max": float(q.max()),
+        "axis_length_min": float(lengths.min()),
+        "axis_length_max": float(lengths.max()),
+        "all_rays_hit": int(rc.all_hit.sum()),
+        "material": scene.material.law,
+        "boundaries": [b.region.name for b in scene.boundaries],
+        "loads": [ld.type for ld in scene.loads],
+        "probes": [p.name for p in scene.probes],
+    }
+    if calibration:
+        out.update(_calibration_stats(scene))
+    return out
+
+
+def _calibration_stats(scene: Scene) -> dict[str, Any]:
+    try:
+        from .model import SpringModel
+    except ImportError:  # spring model not built yet
+        return {}
+    model = SpringModel(scene)
+    mm = np.asarray(model.elements.mismatch)
+    return {
+        "calibration": scene.spring.calibration,
+        "calibration_mismatch_min": float(mm.min()),
+        "calibration_mismatch_median": float(np.median(mm)),
+        "calibration_mismatch_max": float(mm.max()),
+    }

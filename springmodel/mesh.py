@@ -1,0 +1,434 @@
+"""Tetrahedral meshes: generation, validation, quality, meshio input/output.
+
+A :class:`TetMesh` holds node coordinates, positively oriented linear tetrahedra and the
+named sets found in a mesh file (node sets, cell sets, boundary facet sets) plus cell data
+such as per-cell fiber vectors. Both models use the same :class:`TetMesh`.
+
+Examples
+--------
+>>> m = box_mesh((1.0, 1.0, 1.0), (2, 2, 2), split="six")
+>>> m.n_points, m.n_tets
+(27, 48)
+>>> round(float(m.volumes().sum()), 12)
+1.0
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Literal, get_args
+
+import numpy as np
+
+from .errors import MeshError
+
+Split = Literal["five", "six", "five-mirrored", "six-mirrored"]
+
+# Hexahedron corners, local index -> (i, j, k) offsets.
+_HEX_CORNERS = np.array(
+    [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
+)
+# Six tets around the main diagonal 0-6 (Kuhn/Freudenthal split): conforming when every
+# hexahedron is split the same way.
+_SIX = np.array(
+    [[0, 1, 2, 6], [0, 2, 3, 6], [0, 3, 7, 6], [0, 7, 4, 6], [0, 4, 5, 6], [0, 5, 1, 6]]
+)
+# Five tets: four corner tets and the central tet on the even corners 0, 2, 5, 7. Face
+# diagonals alternate between opposite faces, so neighbours must use the mirrored split.
+_FIVE_EVEN = np.array([[1, 0, 2, 5], [3, 2, 0, 7], [4, 5, 7, 0], [6, 7, 5, 2], [0, 2, 5, 7]])
+_FIVE_ODD = np.array([[0, 1, 3, 4], [2, 3, 1, 6], [5, 4, 6, 1], [7, 6, 4, 3], [1, 3, 4, 6]])
+
+
+@dataclass
+class TetMesh:
+    """A linear tetrahedral mesh.
+
+    Attributes
+    ----------
+    points
+        Node coordinates, shape ``(n, 3)``.
+    tets
+        Node indices, shape ``(m, 4)``, positively oriented.
+    node_sets, cell_sets, facet_sets
+        Named regions read from a file: node indices, tet indices and boundary
+        triangles ``(k, 3)``.
+    cell_data
+        Per-tet arrays read from a file (e.g. ``fiber``, ``sheet``), first axis ``m``.
+    notes
+        What validation repaired or dropped, one sentence each.
+    source
+        File the mesh came from, or the generator description.
+    """
+
+    points: np.ndarray
+    tets: np.ndarray
+    node_sets: dict[str, np.ndarray] = field(default_factory=dict)
+    cell_sets: dict[str, np.ndarray] = field(default_factory=dict)
+    facet_sets: dict[str, np.ndarray] = field(default_factory=dict)
+    cell_data: dict[str, np.ndarray] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+    source: str = ""
+
+    @property
+    def n_points(self) -> int:
+        return int(self.points.shape[0])
+
+    @property
+    def n_tets(self) -> int:
+        return int(self.tets.shape[0])
+
+    def volumes(self, points: np.ndarray | None = None) -> np.ndarray:
+        """Signed tet volumes at ``points`` (default: the rest configuration)."""
+        return tet_volumes(self.points if points is None else points, self.tets)
+
+    def quality(self) -> np.ndarray:
+        """Mean-ratio quality per tet, 1 for a regular tet, 0 for a degenerate one."""
+        return mean_ratio_quality(self.points, self.tets)
+
+    def bounding_box(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.points.min(axis=0), self.points.max(axis=0)
+
+    def boundary_facets(self) -> np.ndarray:
+        """Boundary triangles ``(k, 3)``, ordered so their normal points outward."""
+        if not hasattr(self, "_boundary"):
+            self._boundary = boundary_facets(self.tets)
+        return self._boundary
+
+    def centers(self) -> np.ndarray:
+        """Tet barycenters ``(m, 3)``."""
+        return self.points[self.tets].mean(axis=1)
+
+
+def tet_volumes(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """Signed volumes ``det[x1-x0, x2-x0, x3-x0] / 6`` of the tets."""
+    x = points[tets]
+    d = x[:, 1:] - x[:, :1]
+    return np.einsum("ij,ij->i", d[:, 0], np.cross(d[:, 1], d[:, 2])) / 6.0
+
+
+def mean_ratio_quality(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """Mean-ratio quality ``12 (3|V|)^(2/3) / sum of squared edge lengths``, in [0, 1]."""
+    x = points[tets]
+    edges = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
+    l2 = sum(((x[:, a] - x[:, b]) ** 2).sum(axis=1) for a, b in edges)
+    vol = np.abs(tet_volumes(points, tets))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        q = 12.0 * (3.0 * vol) ** (2.0 / 3.0) / l2
+    return np.nan_to_num(q)
+
+
+_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])  # outward for positive tets
+
+
+def boundary_facets(tets: np.ndarray) -> np.ndarray:
+    """Triangles that belong to exactly one tet, oriented outward (tets positively oriented)."""
+    faces = tets[:, _FACES].reshape(-1, 3)
+    key = np.sort(faces, axis=1)
+    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    return faces[counts[inverse.ravel()] == 1]
+
+
+def box_mesh(
+    size: tuple[float, float, float],
+    divisions: tuple[int, int, int],
+    split: Split = "six",
+    origin: tuple[float, float, float] = (0.0, 0.0, 0.0),
+) -> TetMesh:
+    """Structured box mesh, each hexahedron split into five or six tets.
+
+    Parameters
+    ----------
+    size
+        Box edge lengths.
+    divisions
+        Number of hexahedra along x, y, z.
+    split
+        ``six``: six tets around the main diagonal of every hexahedron (all alike).
+        ``six-mirrored``: the same split mirrored across every other hexahedron along each
+        axis, so each 2x2x2 block is symmetric. ``five``: five tets per hexahedron; a
+        conforming five-tet mesh must alternate the two mirror-image splits, so ``five``
+        starts with the even split at the origin and ``five-mirrored`` with the odd one
+        (the mirror image of ``five``).
+    origin
+        Coordinates of the box corner with the smallest coordinates.
+
+    Returns
+    -------
+    TetMesh
+        With node sets ``x_min`` … ``z_max`` left to :mod:`springmodel.regions`.
+    """
+    if split not in get_args(Split):
+        raise MeshError(f"mesh split {split!r} is not one of {', '.join(get_args(Split))}")
+    nx, ny, nz = (int(d) for d in divisions)
+    if min(nx, ny, nz) < 1:
+        raise MeshError(f"mesh divisions must be positive integers, got {list(divisions)}")
+    if min(size) <= 0 or not np.all(np.isfinite(size)):
+        raise MeshError(f"mesh size must be positive and finite, got {list(size)}")
+    axes = [np.linspace(o, o + s, n + 1) for o, s, n in zip(origin, size, (nx, ny, nz))]
+    X, Y, Z = np.meshgrid(*axes, indexing="ij")
+    points = np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
+
+    def node(i, j, k):
+        return (i * (ny + 1) + j) * (nz + 1) + k
+
+    I, J, K = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
+    I, J, K = I.ravel(), J.ravel(), K.ravel()
+    if split.startswith("six"):
+        if split == "six-mirrored":
+            # mirror the corner offsets of odd hexahedra along each axis
+            off = np.stack(
+                [
+                    np.where(
+                        (I % 2)[:, None] == 1, 1 - _HEX_CORNERS[None, :, 0], _HEX_CORNERS[:, 0]
+                    ),
+                    np.where(
+                        (J % 2)[:, None] == 1, 1 - _HEX_CORNERS[None, :, 1], _HEX_CORNERS[:, 1]
+                    ),
+                    np.where(
+                        (K % 2)[:, None] == 1, 1 - _HEX_CORNERS[None, :, 2], _HEX_CORNERS[:, 2]
+                    ),
+                ],
+                axis=-1,
+            )
+        else:
+            off = np.broadcast_to(_HEX_CORNERS, (I.size, 8, 3))
+        corners = node(I[:, None] + off[..., 0], J[:, None] + off[..., 1], K[:, None] + off[..., 2])
+        tets = np.take_along_axis(
+            corners[:, None, :].repeat(6, axis=1), _SIX[None].repeat(I.size, axis=0), axis=2
+        ).reshape(-1, 4)
+    else:
+        corners = node(
+            I[:, None] + _HEX_CORNERS[:, 0],
+            J[:, None] + _HEX_CORNERS[:, 1],
+            K[:, None] + _HEX_CORNERS[:, 2],
+        )
+        parity = (I + J + K + (1 if split == "five-mirrored" else 0)) % 2
+        local = np.where(parity[:, None, None] == 0, _FIVE_EVEN[None], _FIVE_ODD[None])
+        tets = np.take_along_axis(corners[:, None, :].repeat(5, axis=1), local, axis=2).reshape(
+            -1, 4
+        )
+    tets = tets.astype(np.int64)
+    vol = tet_volumes(points, tets)
+    flip = vol < 0
+    tets[flip] = tets[flip][:, [0, 2, 1, 3]]
+    desc = f"box {list(size)} divisions {[nx, ny, nz]} split {split}"
+    return TetMesh(points=points, tets=tets, source=desc)
+
+
+def validate_mesh(mesh: TetMesh, name: str = "mesh", rel_volume_tol: float = 1e-12) -> TetMesh:
+    """Check and repair a mesh in place; raise :class:`MeshError` for what can't be repaired.
+
+    Rejected: non-finite coordinates, no tets, node indices out of range, zero-volume tets,
+    duplicate tets, coincident nodes used by tets. Repaired (and noted in ``mesh.notes``):
+    inverted tets are reoriented, unreferenced nodes are removed.
+    """
+    pts, tets = mesh.points, mesh.tets
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        raise MeshError(f"{name}: points must have shape (n, 3), got {pts.shape}")
+    bad = np.flatnonzero(~np.isfinite(pts).all(axis=1))
+    if bad.size:
+        raise MeshError(f"{name}: non-finite coordinates at nodes {_ids(bad)}")
+    if tets.ndim != 2 or tets.shape[1] != 4 or tets.shape[0] == 0:
+        raise MeshError(f"{name}: contains no tetrahedra")
+    if tets.min() < 0 or tets.max() >= len(pts):
+        bad = np.flatnonzero((tets < 0).any(axis=1) | (tets >= len(pts)).any(axis=1))
+        raise MeshError(f"{name}: tets {_ids(bad)} reference nodes that do not exist")
+    repeated = np.flatnonzero(
+        (np.sort(tets, axis=1)[:, 1:] == np.sort(tets, axis=1)[:, :-1]).any(1)
+    )
+    if repeated.size:
+        raise MeshError(f"{name}: zero-volume tets {_ids(repeated)} (a node repeated)")
+    key = np.sort(tets, axis=1)
+    _, first, inverse, counts = np.unique(
+        key, axis=0, return_index=True, return_inverse=True, return_counts=True
+    )
+    dup = np.flatnonzero(counts[inverse.ravel()] > 1)
+    if dup.size:
+        raise MeshError(f"{name}: duplicate tets {_ids(dup)} (same four nodes)")
+    vol = tet_volumes(pts, tets)
+    scale = np.ptp(pts, axis=0).max() ** 3 if len(pts) else 1.0
+    zero = np.flatnonzero(np.abs(vol) <= rel_volume_tol * scale)
+    if zero.size:
+        raise MeshError(f"{name}: zero-volume tets {_ids(zero)}")
+    used = np.zeros(len(pts), dtype=bool)
+    used[tets.ravel()] = True
+    upts = np.flatnonzero(used)
+    rounded = np.round(pts[upts] / (np.ptp(pts, axis=0).max() * 1e-12 + 1e-300))
+    _, uidx, uinv, ucnt = np.unique(
+        rounded, axis=0, return_index=True, return_inverse=True, return_counts=True
+    )
+    if (ucnt > 1).any():
+        grp = np.flatnonzero(ucnt[uinv.ravel()] > 1)
+        raise MeshError(
+            f"{name}: duplicate nodes {_ids(upts[grp])} (coincident coordinates; merge them)"
+        )
+    inverted = vol < 0
+    if inverted.any():
+        tets = tets.copy()
+        tets[inverted] = tets[inverted][:, [0, 2, 1, 3]]
+        mesh.notes.append(f"{name}: reoriented {int(inverted.sum())} inverted tets")
+    if not used.all():
+        n_unused = int((~used).sum())
+        remap = -np.ones(len(pts), dtype=np.int64)
+        remap[used] = np.arange(used.sum())
+        pts = pts[used]
+        tets = remap[tets]
+        mesh.node_sets = {k: remap[v][remap[v] >= 0] for k, v in mesh.node_sets.items()}
+        mesh.facet_sets = {
+            k: remap[v][(remap[v] >= 0).all(axis=1)] for k, v in mesh.facet_sets.items()
+        }
+        mesh.notes.append(f"{name}: removed {n_unused} nodes not used by any tet")
+    mesh.points = np.ascontiguousarray(pts, dtype=np.float64)
+    mesh.tets = np.ascontiguousarray(tets, dtype=np.int64)
+    if hasattr(mesh, "_boundary"):
+        del mesh._boundary
+    return mesh
+
+
+def _ids(idx: np.ndarray, limit: int = 8) -> str:
+    idx = np.asarray(idx).ravel()
+    shown = ", ".join(str(int(i)) for i in idx[:limit])
+    return shown + (f" … ({idx.size} in all)" if idx.size > limit else "")
+
+
+_TET_TYPES = {"tetra": 4, "tetra10": 10}
+_TRI_TYPES = {"triangle": 3, "triangle6": 6}
+
+
+def read_mesh(path: str | os.PathLike) -> TetMesh:
+    """Read a tetrahedral mesh with meshio and validate it.
+
+    Tets (``tetra``, or ``tetra10`` reduced to its corners) are kept; other cells are
+    dropped with a note, except triangles, which become named boundary facet sets when a
+    gmsh physical group or cell set names them. Node sets (``point_sets``) and tet cell
+    sets become named regions; per-tet cell data (e.g. ``fiber``) is kept.
+
+    Raises
+    ------
+    MeshError
+        If the file can't be read or holds no usable tets.
+    """
+    import meshio
+
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise MeshError(f"mesh file {path} does not exist")
+    import contextlib
+    import io
+
+    chatter = io.StringIO()
+    try:
+        # meshio prints to stderr and may call sys.exit on unreadable files
+        with contextlib.redirect_stderr(chatter), contextlib.redirect_stdout(chatter):
+            m = meshio.read(path)
+    except (Exception, SystemExit) as exc:  # meshio raises many types; report one line
+        text = str(exc).strip() if not isinstance(exc, SystemExit) else chatter.getvalue()
+        text = " ".join(text.split()) or type(exc).__name__
+        raise MeshError(f"mesh file {path} could not be read: {text}") from None
+    return mesh_from_meshio(m, path)
+
+
+def mesh_from_meshio(m, name: str = "mesh") -> TetMesh:
+    """Build a validated :class:`TetMesh` from a ``meshio.Mesh`` (see :func:`read_mesh`)."""
+    pts = np.asarray(m.points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[0] == 0:
+        raise MeshError(f"{name}: contains no nodes")
+    if pts.shape[1] == 2:
+        raise MeshError(f"{name}: is two-dimensional; a tetrahedral mesh is needed")
+    pts = pts[:, :3]
+    tet_blocks, tri_blocks, dropped = [], [], {}
+    for b, block in enumerate(m.cells):
+        if block.type in _TET_TYPES:
+            tet_blocks.append((b, np.asarray(block.data)[:, :4]))
+            if block.type == "tetra10":
+                dropped["tetra10 mid-edge nodes"] = dropped.get("tetra10 mid-edge nodes", 0) + 1
+        elif block.type in _TRI_TYPES:
+            tri_blocks.append((b, np.asarray(block.data)[:, :3]))
+        else:
+            dropped[block.type] = dropped.get(block.type, 0) + len(block.data)
+    if not tet_blocks:
+        kinds = ", ".join(sorted({c.type for c in m.cells})) or "none"
+        raise MeshError(f"{name}: contains no tetrahedra (cell types: {kinds})")
+    tets = np.concatenate([t for _, t in tet_blocks]).astype(np.int64)
+    offsets = np.cumsum([0] + [len(t) for _, t in tet_blocks])
+    block_offset = {b: int(o) for (b, _), o in zip(tet_blocks, offsets)}
+    cell_sets: dict[str, np.ndarray] = {}
+    facet_sets: dict[str, np.ndarray] = {}
+    for set_name, per_block in getattr(m, "cell_sets", {}).items():
+        tet_ids, tris = [], []
+        for b, ids in enumerate(per_block):
+            if ids is None or len(ids) == 0:
+                continue
+            ids = np.asarray(ids, dtype=np.int64)
+            if b in block_offset:
+                tet_ids.append(ids + block_offset[b])
+            else:
+                for bb, data in tri_blocks:
+                    if bb == b:
+                        tris.append(data[ids])
+        if tet_ids:
+            cell_sets[set_name] = np.concatenate(tet_ids)
+        if tris:
+            facet_sets[set_name] = np.concatenate(tris).astype(np.int64)
+    # gmsh physical tags without names: expose as "tag:<n>"
+    phys = m.cell_data.get("gmsh:physical")
+    if phys is not None:
+        names_by_tag = {}
+        for nm, (tag, _dim) in getattr(m, "field_data", {}).items():
+            names_by_tag[int(tag)] = nm
+        for b, tags in enumerate(phys):
+            tags = np.asarray(tags).astype(np.int64)
+            for tag in np.unique(tags):
+                nm = names_by_tag.get(int(tag), f"tag:{int(tag)}")
+                ids = np.flatnonzero(tags == tag)
+                if b in block_offset:
+                    cell_sets.setdefault(nm, ids + block_offset[b])
+                else:
+                    for bb, data in tri_blocks:
+                        if bb == b:
+                            facet_sets.setdefault(nm, data[ids].astype(np.int64))
+    cell_data: dict[str, np.ndarray] = {}
+    for key, per_block in m.cell_data.items():
+        if key.startswith("gmsh:") or key.startswith("medit:"):
+            continue
+        arrays = [np.asarray(per_block[b]) for b, _ in tet_blocks]
+        try:
+            cell_data[key] = np.concatenate(arrays).astype(np.float64)
+        except (ValueError, TypeError):
+            continue
+    node_sets = {k: np.asarray(v, dtype=np.int64) for k, v in getattr(m, "point_sets", {}).items()}
+    mesh = TetMesh(
+        points=pts,
+        tets=tets,
+        node_sets=node_sets,
+        cell_sets=cell_sets,
+        facet_sets=facet_sets,
+        cell_data=cell_data,
+        source=name,
+    )
+    if dropped:
+        what = ", ".join(f"{n} {k}" for k, n in sorted(dropped.items()))
+        mesh.notes.append(f"{name}: kept {len(tets)} tets, dropped {what}")
+    return validate_mesh(mesh, name)
+
+
+def write_vtu(
+    path: str | os.PathLike,
+    mesh: TetMesh,
+    point_data: dict[str, np.ndarray] | None = None,
+    cell_data: dict[str, np.ndarray] | None = None,
+) -> None:
+    """Write the mesh with point and cell data as VTU, atomically (temp file + rename)."""
+    import meshio
+
+    path = os.fspath(path)
+    out = meshio.Mesh(
+        mesh.points,
+        [("tetra", mesh.tets)],
+        point_data={k: np.asarray(v) for k, v in (point_data or {}).items()},
+        cell_data={k: [np.asarray(v)] for k, v in (cell_data or {}).items()},
+    )
+    tmp = f"{path}.tmp-{os.getpid()}.vtu"
+    meshio.write(tmp, out, file_format="vtu")
+    os.replace(tmp, path)

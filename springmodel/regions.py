@@ -1,0 +1,137 @@
+"""Named regions of a mesh: node sets and boundary facets.
+
+A region is given in a scene as a name (box faces ``x_min`` … ``z_max`` of the bounding
+box, or a node/cell/facet set from the mesh file), as ``{ box = [[x0,y0,z0],[x1,y1,z1]] }``
+or as ``{ point = [x, y, z] }`` (the nearest node).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InputError
+from .mesh import TetMesh
+
+BOX_FACES = ("x_min", "x_max", "y_min", "y_max", "z_min", "z_max")
+
+
+@dataclass(frozen=True)
+class Region:
+    """Nodes of a region and the boundary triangles (outward oriented) that lie in it."""
+
+    name: str
+    nodes: np.ndarray
+    facets: np.ndarray
+
+
+def region_label(spec: str | dict) -> str:
+    """Short human-readable label of a region spec (used in messages and result keys)."""
+    if isinstance(spec, str):
+        return spec
+    if "box" in spec:
+        return "box" + str([list(map(float, c)) for c in spec["box"]])
+    return "point" + str(list(map(float, spec["point"])))
+
+
+def resolve_region(mesh: TetMesh, spec: str | dict, where: str = "region") -> Region:
+    """Resolve a region spec on ``mesh``.
+
+    Raises
+    ------
+    InputError
+        If the name is unknown (listing the valid ones) or the region selects nothing.
+    """
+    label = region_label(spec)
+    bf = mesh.boundary_facets()
+    if isinstance(spec, str):
+        if spec in BOX_FACES:
+            axis = "xyz".index(spec[0])
+            lo, hi = mesh.bounding_box()
+            target = lo[axis] if spec.endswith("min") else hi[axis]
+            tol = 1e-9 * float(np.ptp(mesh.points, axis=0).max())
+            on = np.abs(mesh.points[:, axis] - target) <= tol
+            nodes = np.flatnonzero(on)
+            facets = bf[on[bf].all(axis=1)]
+        elif spec in mesh.facet_sets:
+            facets = mesh.facet_sets[spec]
+            nodes = np.unique(facets)
+        elif spec in mesh.node_sets:
+            nodes = np.unique(mesh.node_sets[spec])
+            mask = np.zeros(mesh.n_points, dtype=bool)
+            mask[nodes] = True
+            facets = bf[mask[bf].all(axis=1)]
+        elif spec in mesh.cell_sets:
+            nodes = np.unique(mesh.tets[mesh.cell_sets[spec]])
+            mask = np.zeros(mesh.n_points, dtype=bool)
+            mask[nodes] = True
+            facets = bf[mask[bf].all(axis=1)]
+        else:
+            valid = list(BOX_FACES) + sorted(
+                set(mesh.facet_sets) | set(mesh.node_sets) | set(mesh.cell_sets)
+            )
+            raise InputError(
+                f"{where}: unknown region {spec!r}; valid names: {', '.join(valid)}, "
+                "or {{ box = [[x0,y0,z0],[x1,y1,z1]] }} or {{ point = [x,y,z] }}"
+            )
+    elif "box" in spec:
+        lo, hi = (np.asarray(c, dtype=float) for c in spec["box"])
+        tol = 1e-9 * float(np.ptp(mesh.points, axis=0).max())
+        inside = np.all((mesh.points >= lo - tol) & (mesh.points <= hi + tol), axis=1)
+        nodes = np.flatnonzero(inside)
+        facets = bf[inside[bf].all(axis=1)]
+    else:
+        p = np.asarray(spec["point"], dtype=float)
+        nodes = np.array([int(np.argmin(((mesh.points - p) ** 2).sum(axis=1)))])
+        facets = np.zeros((0, 3), dtype=np.int64)
+    if nodes.size == 0:
+        raise InputError(f"{where}: region {label} selects no nodes")
+    return Region(name=label, nodes=nodes.astype(np.int64), facets=np.asarray(facets, np.int64))
+
+
+def facet_areas_normals(points: np.ndarray, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Areas ``(k,)`` and unit outward normals ``(k, 3)`` of triangles at ``points``."""
+    x = points[facets]
+    a = 0.5 * np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+    area = np.linalg.norm(a, axis=1)
+    return area, a / np.maximum(area, 1e-300)[:, None]
+
+
+def locate_points(
+    points: np.ndarray, tets: np.ndarray, query: np.ndarray, tol: float = 1e-9
+) -> tuple[np.ndarray, np.ndarray]:
+    """Find the tet containing each query point and its barycentric coordinates.
+
+    Returns ``(tet_index, bary)`` with ``tet_index = -1`` for points outside the mesh
+    (beyond a relative tolerance ``tol`` in barycentric coordinates).
+    """
+    from scipy.spatial import cKDTree
+
+    query = np.atleast_2d(np.asarray(query, dtype=float))
+    x = points[tets]
+    centers = x.mean(axis=1)
+    T = np.stack([x[:, 1] - x[:, 0], x[:, 2] - x[:, 0], x[:, 3] - x[:, 0]], axis=2)
+    tree = cKDTree(centers)
+    k = min(64, len(tets))
+    out_idx = -np.ones(len(query), dtype=np.int64)
+    out_bary = np.zeros((len(query), 4))
+    for q, p in enumerate(query):
+        _, cand = tree.query(p, k=k)
+        cand = np.atleast_1d(cand)
+        lam = np.linalg.solve(T[cand], (p - x[cand, 0])[..., None])[..., 0]
+        bary = np.column_stack([1 - lam.sum(axis=1), lam])
+        worst = bary.min(axis=1)
+        best = int(np.argmax(worst))
+        if worst[best] >= -tol:
+            out_idx[q] = cand[best]
+            out_bary[q] = bary[best]
+        else:  # fall back to a full search (far from the centers of large tets)
+            lam = np.linalg.solve(T, (p - x[:, 0])[..., None])[..., 0]
+            bary = np.column_stack([1 - lam.sum(axis=1), lam])
+            worst = bary.min(axis=1)
+            best = int(np.argmax(worst))
+            if worst[best] >= -tol:
+                out_idx[q] = best
+                out_bary[q] = bary[best]
+    return out_idx, out_bary

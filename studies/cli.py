@@ -1,0 +1,152 @@
+"""The ``springfem`` command line: inspect, solve, compare, study, report, bench.
+
+Exit codes (DESIGN §6): 0 ok, 2 bad input (one clear line on stderr, no traceback),
+3 solver failure (what, where, when), 1 internal error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import traceback
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from springmodel.errors import InputError, SpringFemError
+
+SCENES = Path(__file__).resolve().parent / "scenes"
+DEFAULT_SCENE = SCENES / "cantilever.toml"
+
+
+def scene_path(name: str | None) -> Path:
+    """A scene file path, or the name of a bundled scene (``cantilever``, ``sag`` …)."""
+    if name is None:
+        return DEFAULT_SCENE
+    p = Path(name)
+    if p.is_file():
+        return p
+    bundled = SCENES / f"{name}.toml"
+    if bundled.is_file() and p.suffix == "":
+        return bundled
+    names = ", ".join(sorted(s.stem for s in SCENES.glob("*.toml")))
+    raise InputError(f"scene file {name} does not exist (bundled scenes: {names})")
+
+
+def _print_json(obj) -> None:
+    print(json.dumps(obj, indent=2, sort_keys=True))
+
+
+def cmd_inspect(args: argparse.Namespace) -> int:
+    from springmodel.inspect import inspect_scene
+    from springmodel.scene import load_scene
+
+    scene = load_scene(scene_path(args.scene))
+    report = inspect_scene(scene)
+    for note in scene.mesh.notes:
+        print(f"note: {note}", file=sys.stderr)
+    if args.json:
+        _print_json(report)
+    else:
+        width = max(len(k) for k in report)
+        for key, value in report.items():
+            print(f"{key:<{width}}  {value}")
+    return 0
+
+
+def _subcommand(module: str, func: str) -> Callable[[argparse.Namespace], int]:
+    """Lazily import the module implementing a subcommand (keeps start-up fast)."""
+
+    def run(args: argparse.Namespace) -> int:
+        import importlib
+
+        return getattr(importlib.import_module(module), func)(args)
+
+    return run
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="springfem",
+        description="Anisotropic spring model vs FEM on the same tetrahedral mesh.",
+    )
+    parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("inspect", help="mesh, axes and intersection statistics of a scene")
+    p.add_argument("scene", help="scene TOML file or bundled scene name")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=cmd_inspect)
+
+    p = sub.add_parser("solve", help="solve a scene with one model")
+    p.add_argument("scene", help="scene TOML file or bundled scene name")
+    p.add_argument("--model", choices=("spring", "fem"), default="spring")
+    p.add_argument("--order", type=int, choices=(1, 2), default=None, help="FEM order")
+    p.add_argument("--law", default=None, help="FEM material law override")
+    p.add_argument("--out", default=None, help="output folder (default: out/<scene>-<model>)")
+    p.add_argument("--json", action="store_true", help="print result.json to stdout")
+    p.add_argument("--verbose", "-v", action="store_true", help="print solver progress")
+    p.set_defaults(func=_subcommand("studies.solve", "cmd_solve"))
+
+    p = sub.add_parser("compare", help="spring model vs FEM (P1, P2) on the same scene")
+    p.add_argument("scene", nargs="?", default=None, help="scene (default: cantilever)")
+    p.add_argument("--out", default=None, help="output folder (default: out/compare-<scene>)")
+    p.add_argument("--json", action="store_true", help="print the table as JSON")
+    p.set_defaults(func=_subcommand("studies.compare", "cmd_compare"))
+
+    p = sub.add_parser("study", help="run one study into reports/")
+    p.add_argument("name", help="study name")
+    p.add_argument("--quick", action="store_true", help="coarser meshes, fewer points")
+    p.add_argument(
+        "--out", default=None, help="report folder (default reports/, quick: reports/quick/)"
+    )
+    p.set_defaults(func=_subcommand("studies.runner", "cmd_study"))
+
+    p = sub.add_parser("report", help="run all studies and write reports/REPORT.md")
+    p.add_argument("--quick", action="store_true", help="coarser meshes, fewer points")
+    p.add_argument(
+        "--out", default=None, help="report folder (default reports/, quick: reports/quick/)"
+    )
+    p.set_defaults(func=_subcommand("studies.runner", "cmd_report"))
+
+    p = sub.add_parser("bench", help="benchmarks: spring force kernel or FEM assembly/solve")
+    p.add_argument("what", choices=("forces", "fem", "step"))
+    p.add_argument("--tets", type=int, default=None, help="approximate number of tets")
+    p.add_argument("--repeats", type=int, default=7, help="repeats (median reported)")
+    p.set_defaults(func=_subcommand("studies.bench", "cmd_bench"))
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``springfem`` console script."""
+    os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except SpringFemError as exc:
+        if args.debug:
+            traceback.print_exc()
+        kind = "solver failure" if exc.exit_code == 3 else "error"
+        print(f"springfem: {kind}: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except KeyboardInterrupt:
+        print("springfem: interrupted", file=sys.stderr)
+        return 130
+    except MemoryError:
+        print("springfem: error: out of memory", file=sys.stderr)
+        return 1
+    except Exception as exc:  # noqa: BLE001 - last line of defence: one line, exit 1
+        if args.debug:
+            traceback.print_exc()
+        print(
+            f"springfem: internal error: {type(exc).__name__}: {exc} (rerun with --debug)",
+            file=sys.stderr,
+        )
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

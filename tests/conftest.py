@@ -1,0 +1,17 @@
+"""Test configuration: off-screen rendering and the Agg backend (pyvista's convention)."""
+
+import os
+
+os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+
+try:  # pragma: no cover - pyvista is optional for most tests
+    import pyvista
+
+    pyvista.OFF_SCREEN = True
+except ImportError:  # pragma: no cover
+    pass
