@@ -4,6 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 export PYVISTA_OFF_SCREEN := true
 export MPLBACKEND := Agg
+export OPENBLAS_NUM_THREADS ?= 1
 
 .PHONY: demo test lint report quick-report bench clean
 

@@ -1,8 +1,22 @@
 """reference_fem: the scikit-fem reference on the spring model's own mesh.
 
 Linear elasticity (isotropic and transversely isotropic) and compressible neo-Hookean
-hyperelasticity, P1 or P2 tets on the scene's vertices, Newton with adaptive load stepping,
-SuperLU or AMG-preconditioned Krylov solves.
+hyperelasticity (coupled, or uncoupled with a choice of ``U(J)``), P1 or P2 tets on the
+scene's vertices, Newton with line search and adaptive load stepping, SuperLU or
+AMG-preconditioned Krylov solves.
+
+Modules, one idea each:
+
+- ``materials``: Voigt matrices, transverse compliance, rotation to element frames.
+- ``hyperelastic``: neo-Hookean energy, stress and tangent.
+- ``space``: P1/P2 shape-function gradients and quadrature on the scene mesh.
+- ``assembly``: einsum element arrays and 3x3-block sparse assembly.
+- ``loads``: consistent load vectors, follower pressure and its stiffness.
+- ``constraints``: prescribed displacements, reactions, the rigid-motion check.
+- ``linsolve``: SuperLU / AMG-CG / AMG-GMRES with failure detection.
+- ``newton``: Newton, line search, adaptive load stepping.
+- ``solver``: :class:`FemProblem` and :func:`solve` (scene in, Result out).
+- ``scenes``: verification scenes built in code; ``bench``: the speed benchmark.
 
 Public API
 ----------

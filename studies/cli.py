@@ -9,6 +9,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
+
+# One BLAS thread: multithreaded OpenBLAS on a busy 2-core machine is many times slower
+# for the small dense factorisations of the solvers (set before numpy is imported).
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import sys
 import traceback
 from collections.abc import Callable, Sequence
