@@ -1,0 +1,502 @@
+"""Material parameters -> spring constants (DESIGN §4).
+
+Under the affine deformation of a linear tet (gradient ``F``) every axis vector and every
+radial vector maps exactly, ``zeta_l = F zeta_l^0`` and ``xi_j = F xi_j^0``, so the energy of
+a spring element is a function of ``F`` alone (:func:`element_energy_from_F`)::
+
+    W_k(F) = sum_l k_l/2 (|F zeta_l^0| - l_l^0)^2                 axial springs (2.35)
+           + sum_lm k_lm/2 (c_lm(F) - c_lm^0)^2                     torsion (energy form)
+           + k_s/2 (sum_j |F xi_j^0| - L^0)^2                       volume springs (2.76)
+
+Linearising at ``F = I`` every term is ``k_a/2 (a_a : eps)^2`` with a symmetric "strain
+tensor" ``a_a`` of the rest geometry (:func:`spring_strain_tensors`):
+
+* axial ``a_l = zeta_l zeta_l^T / l_l`` (``d|zeta_l| = zeta_hat . eps . zeta``),
+* torsion ``a_lm = 2 sym(zh_l zh_m^T) - c0 (zh_l zh_l^T + zh_m zh_m^T)`` (``dc_lm = a_lm : eps``),
+* volume ``R = sum_j xi_j xi_j^T / |xi_j|`` (``dL = R : eps``),
+
+so the element is a P1 element with the effective Voigt matrix
+``D_k = (1/V) sum_a k_a v_a v_a^T`` (:func:`effective_matrix`), ``v_a`` the Voigt vector of
+``a_a``. Calibration chooses the seven constants so that ``D_k`` matches the material
+matrix ``C``:
+
+``analytic`` (orthonormal axes, ``c0 = 0``). In the element frame the axial springs carry
+the normal strains, the torsion springs the three shears (``dc_lm = gamma_lm``), and the
+volume spring ``rho tr(eps)`` when ``R = rho I``. Writing the frame-local normal block of
+``C`` as ``diag(a) + b 1 1^T`` and the shear block as ``diag(G_lm)``::
+
+    b    = mean of the three off-diagonal normal entries  (= lambda if isotropic)
+    k_s  = b V / rho^2,             rho = tr(R) / 3 (mean eigenvalue of R)
+    k_l  = (C_ll - b) V / l_l^2     (= 2 mu V / l_l^2 if isotropic)
+    k_lm = G_lm V                   (= mu V if isotropic)
+
+This is exact for isotropic material when ``R = rho I`` (e.g. a regular tet), for any
+``nu``. For transversely isotropic material the normal block has two different
+off-diagonals (``C_01 = C_02 != C_12``), which one volume spring cannot represent: ``b``
+is their least-squares value. Where ``R`` is anisotropic (any non-regular tet) the volume
+spring also couples normal and shear strains; no constants remove that, and the remaining
+mismatch is reported, not hidden. Negative ``C_ll - b`` is clipped to zero.
+
+``analytic-lsq``: the same, but ``k_s = b V tr(R)^2 / ||R||_F^4``, the least-squares fit of
+the volume term ``k_s R R`` to ``b V I I``; equal to the above when ``R = rho I`` and about
+half of it on the six-tet split, where it cuts the mismatch from 0.58 to 0.41 (nu = 0.3).
+
+``nnls``: per element, non-negative least squares of ``D_k(k) - C`` in the Frobenius norm
+of the Mandel representation (the rotation-invariant norm of the fourth-order tensor).
+
+The mismatch (:func:`calibration_mismatch`) is ``||D_k - C|| / ||C||`` in that same norm.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, Literal, NamedTuple
+
+import numpy as np
+from scipy.optimize import nnls as _scipy_nnls
+
+# Voigt order xx, yy, zz, yz, xz, xy (engineering shear strains).
+VOIGT_PAIRS = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
+# Torsion spring pairs (l, m) and the Voigt index of the shear they carry.
+TORSION_PAIRS = ((0, 1), (0, 2), (1, 2))
+TORSION_VOIGT = (5, 4, 3)
+_MANDEL_W = np.array([1.0, 1.0, 1.0, np.sqrt(2.0), np.sqrt(2.0), np.sqrt(2.0)])
+
+
+class RestGeometry(NamedTuple):
+    """What calibration needs from an element's rest state.
+
+    Attributes
+    ----------
+    zeta0
+        Rest axis vectors, ``(m, 3, 3)``, ``zeta0[k, l]`` for axis ``l``.
+    xi0
+        Rest radial vectors barycenter -> vertex, ``(m, 4, 3)``.
+    V0
+        Rest volumes, ``(m,)``.
+    """
+
+    zeta0: np.ndarray
+    xi0: np.ndarray
+    V0: np.ndarray
+
+
+class Calibrated(NamedTuple):
+    """Spring constants of every element and how well they reproduce the material."""
+
+    k_axial: np.ndarray  # (m, 3)  N/m
+    k_torsion: np.ndarray  # (m, 3) J (energy units: U = k/2 (c - c0)^2)
+    k_volume: np.ndarray  # (m,)   N/m
+    mismatch: np.ndarray  # (m,)   relative Frobenius (Mandel) ||D_k - C|| / ||C||
+
+
+# --------------------------------------------------------------------------- tensors
+
+
+def voigt_vector(A: np.ndarray) -> np.ndarray:
+    """Stress-like Voigt vector ``[A00, A11, A22, A12, A02, A01]`` of symmetric ``A``.
+
+    With engineering shear strains ``g``, ``A : eps = voigt_vector(A) . g``.
+    """
+    return np.stack([A[..., i, j] for i, j in VOIGT_PAIRS], axis=-1)
+
+
+def sym_to_mandel(A: np.ndarray) -> np.ndarray:
+    """Mandel vector ``[A00, A11, A22, √2 A12, √2 A02, √2 A01]`` of symmetric ``A``."""
+    return voigt_vector(A) * _MANDEL_W
+
+
+def strain_voigt(eps: np.ndarray) -> np.ndarray:
+    """Engineering Voigt strain ``[e00, e11, e22, 2 e12, 2 e02, 2 e01]`` of symmetric ``eps``."""
+    v = voigt_vector(eps)
+    return v * np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0])
+
+
+def strain_tensor(g: np.ndarray) -> np.ndarray:
+    """Symmetric strain tensor of an engineering Voigt strain ``g`` (inverse of strain_voigt)."""
+    g = np.asarray(g, dtype=float)
+    eps = np.zeros((*g.shape[:-1], 3, 3))
+    for a, (i, j) in enumerate(VOIGT_PAIRS):
+        val = g[..., a] if i == j else 0.5 * g[..., a]
+        eps[..., i, j] = val
+        eps[..., j, i] = val
+    return eps
+
+
+def to_mandel(D: np.ndarray) -> np.ndarray:
+    """Mandel form ``W D W`` of a Voigt stiffness (engineering strains), ``W = diag(1,1,1,√2..)``.
+
+    The Frobenius norm of the Mandel form is the norm of the fourth-order tensor, so it does
+    not depend on the frame.
+    """
+    return D * _MANDEL_W[:, None] * _MANDEL_W[None, :]
+
+
+def from_mandel(M: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`to_mandel`."""
+    return M / (_MANDEL_W[:, None] * _MANDEL_W[None, :])
+
+
+def _mandel_rotation(frames: np.ndarray) -> np.ndarray:
+    """Orthogonal 6x6 maps ``m_local = Qm @ m_global`` of Mandel strain vectors, ``(m, 6, 6)``.
+
+    ``frames[k]`` has the local unit axes as rows, so local components are ``Q @ v``.
+    """
+    Q = np.asarray(frames, dtype=float)
+    basis = np.zeros((6, 3, 3))
+    for a, (i, j) in enumerate(VOIGT_PAIRS):
+        if i == j:
+            basis[a, i, i] = 1.0
+        else:
+            basis[a, i, j] = basis[a, j, i] = 1.0 / np.sqrt(2.0)
+    rotated = Q[:, None] @ basis[None] @ Q.transpose(0, 2, 1)[:, None]  # Q E_a Q^T
+    # Mandel components of the rotated basis tensors are the columns of Qm
+    return sym_to_mandel(rotated).transpose(0, 2, 1)
+
+
+def rotate_to_global(C_local: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    """Voigt matrix given in each element's frame -> global Voigt matrix, ``(m, 6, 6)``."""
+    Qm = _mandel_rotation(frames)
+    M = Qm.transpose(0, 2, 1) @ to_mandel(np.asarray(C_local, float)) @ Qm
+    return from_mandel(M)
+
+
+def rotate_to_local(C_global: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    """Global Voigt matrix (or ``(m, 6, 6)`` stack) -> each element's frame, ``(m, 6, 6)``."""
+    Qm = _mandel_rotation(frames)
+    M = to_mandel(np.asarray(C_global, float))
+    if M.ndim == 2:
+        M = np.broadcast_to(M, (Qm.shape[0], 6, 6))
+    return from_mandel(Qm @ M @ Qm.transpose(0, 2, 1))
+
+
+# --------------------------------------------------------------------------- material
+
+
+def _param(material: Any, name: str) -> Any:
+    if isinstance(material, Mapping):
+        return material.get(name)
+    return getattr(material, name, None)
+
+
+def is_transverse(material: Any) -> bool:
+    """True for a transversely isotropic material (``law = "transverse-linear"``, or no law
+    and ``E_fiber`` given)."""
+    law = _param(material, "law")
+    if law is not None:
+        return "transverse" in str(law)
+    return _param(material, "E_fiber") is not None
+
+
+def isotropic_matrix(mu: float, lam: float) -> np.ndarray:
+    """Isotropic Voigt matrix (engineering shear strains), ``(6, 6)``."""
+    C = np.zeros((6, 6))
+    C[:3, :3] = lam
+    C[[0, 1, 2], [0, 1, 2]] = lam + 2.0 * mu
+    C[[3, 4, 5], [3, 4, 5]] = mu
+    return C
+
+
+def transverse_matrix(
+    E_fiber: float, E_cross: float, nu_fiber_cross: float, nu_cross: float, G_fiber: float
+) -> np.ndarray:
+    """Transversely isotropic Voigt matrix in the fibre frame (fiber = axis 0), ``(6, 6)``.
+
+    Inverts the compliance with ``S_01 = -nu_fiber_cross / E_fiber`` (contraction across the
+    fiber under fiber tension), ``S_12 = -nu_cross / E_cross``, in-plane cross shear modulus
+    ``E_cross / (2 (1 + nu_cross))`` (Voigt index 3, ``yz``) and ``G_fiber`` for the two
+    shears containing the fiber (``xz``, ``xy``).
+    """
+    Ef, Ec, nfc, nc, Gf = (float(v) for v in (E_fiber, E_cross, nu_fiber_cross, nu_cross, G_fiber))
+    S = np.zeros((6, 6))
+    S[0, 0] = 1.0 / Ef
+    S[1, 1] = S[2, 2] = 1.0 / Ec
+    S[0, 1] = S[1, 0] = S[0, 2] = S[2, 0] = -nfc / Ef
+    S[1, 2] = S[2, 1] = -nc / Ec
+    S[3, 3] = 2.0 * (1.0 + nc) / Ec
+    S[4, 4] = S[5, 5] = 1.0 / Gf
+    return np.linalg.inv(S)
+
+
+def material_matrix(material: Any, frames: np.ndarray | None = None) -> np.ndarray:
+    """Voigt matrix ``C`` (engineering shear, order xx, yy, zz, yz, xz, xy) in the global frame.
+
+    Parameters
+    ----------
+    material
+        Any object or mapping with ``law`` and either isotropic ``E, nu`` (or ``mu, lam``)
+        or transverse ``E_fiber, E_cross, nu_fiber_cross, nu_cross, G_fiber``. Neo-Hookean
+        materials give their small-strain (isotropic) matrix.
+    frames
+        ``(m, 3, 3)`` element frames (rows = axes, fiber first). Needed to rotate a
+        transverse material; if given, the result is stacked per element.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(6, 6)`` without frames, ``(m, 6, 6)`` with frames.
+    """
+    if is_transverse(material):
+        names = ("E_fiber", "E_cross", "nu_fiber_cross", "nu_cross", "G_fiber")
+        vals = [_param(material, n) for n in names]
+        if any(v is None for v in vals):
+            missing = [n for n, v in zip(names, vals, strict=True) if v is None]
+            raise ValueError(f"transverse material needs {', '.join(missing)}")
+        C = transverse_matrix(*vals)
+        return C if frames is None else rotate_to_global(C, frames)
+    mu, lam = _param(material, "mu"), _param(material, "lam")
+    if mu is None or lam is None:
+        E, nu = _param(material, "E"), _param(material, "nu")
+        if E is None or nu is None:
+            raise ValueError("isotropic material needs E and nu (or mu and lam)")
+        mu = E / (2.0 * (1.0 + nu))
+        lam = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+    C = isotropic_matrix(float(mu), float(lam))
+    if frames is None:
+        return C
+    return np.broadcast_to(C, (np.asarray(frames).shape[0], 6, 6)).copy()
+
+
+# --------------------------------------------------------------------------- spring element
+
+
+def rest_geometry(points: np.ndarray, tets: np.ndarray, G: np.ndarray) -> RestGeometry:
+    """Rest axis vectors (``zeta_l = sum_i G[k,i,l] x_i``), radial vectors and volumes."""
+    X = np.asarray(points, float)[tets]
+    zeta0 = G.transpose(0, 2, 1) @ X
+    xi0 = X - X.mean(axis=1, keepdims=True)
+    e = X[:, 1:] - X[:, :1]
+    V0 = np.linalg.det(e) / 6.0
+    return RestGeometry(zeta0, xi0, V0)
+
+
+def rest_cosines(zeta0: np.ndarray) -> np.ndarray:
+    """Rest cosines ``c_lm^0`` for the pairs (0,1), (0,2), (1,2), ``(m, 3)``."""
+    u = zeta0 / np.linalg.norm(zeta0, axis=-1, keepdims=True)
+    return np.stack([(u[:, a] * u[:, b]).sum(-1) for a, b in TORSION_PAIRS], axis=1)
+
+
+def radial_tensor(xi0: np.ndarray) -> np.ndarray:
+    """``R = sum_j xi_j xi_j^T / |xi_j|``, ``(m, 3, 3)``: ``dL = R : eps`` at small strain."""
+    r = np.linalg.norm(xi0, axis=-1)
+    return (xi0 / r[..., None]).transpose(0, 2, 1) @ xi0
+
+
+def spring_strain_tensors(zeta0: np.ndarray, xi0: np.ndarray) -> np.ndarray:
+    """Tensors ``a_a`` with ``d(measure_a) = a_a : eps`` at rest, ``(m, 7, 3, 3)``.
+
+    Order: axial 0, 1, 2 (measure ``|zeta_l|``), torsion (0,1), (0,2), (1,2) (measure
+    ``c_lm``), volume (measure ``L = sum_j |xi_j|``).
+    """
+    m = zeta0.shape[0]
+    l0 = np.linalg.norm(zeta0, axis=-1)
+    u = zeta0 / l0[..., None]
+    c0 = rest_cosines(zeta0)
+    a = np.empty((m, 7, 3, 3))
+    a[:, :3] = u[..., :, None] * zeta0[..., None, :]
+    for p, (l, n) in enumerate(TORSION_PAIRS):
+        ul, un = u[:, l, :, None], u[:, n, :, None]
+        outer = ul * un.transpose(0, 2, 1)
+        a[:, 3 + p] = (outer + outer.transpose(0, 2, 1)) - c0[:, p, None, None] * (
+            ul * ul.transpose(0, 2, 1) + un * un.transpose(0, 2, 1)
+        )
+    a[:, 6] = radial_tensor(xi0)
+    return a
+
+
+def _stack_constants(k_axial, k_torsion, k_volume, m: int) -> np.ndarray:
+    k = np.empty((m, 7))
+    k[:, :3] = np.broadcast_to(np.asarray(k_axial, float), (m, 3))
+    k[:, 3:6] = np.broadcast_to(np.asarray(k_torsion, float), (m, 3))
+    k[:, 6] = np.broadcast_to(np.asarray(k_volume, float), (m,))
+    return k
+
+
+def effective_matrix(geometry: Any, k_axial, k_torsion, k_volume) -> np.ndarray:
+    """Small-strain effective Voigt matrix ``D_k`` of the spring elements, ``(m, 6, 6)``.
+
+    ``D_k = (1/V) sum_a k_a v_a v_a^T`` with ``v_a`` the Voigt vectors of
+    :func:`spring_strain_tensors`: the element energy is ``V/2 g^T D_k g`` to second order in
+    the engineering strain ``g``. Valid for the energy forms (axial linear/polynomial,
+    torsion ``energy``, volume ``gradient``); the torsion force laws ``angle``/``cosine``/
+    ``cubic`` linearise to non-symmetric stiffnesses that share its symmetric shear part only
+    on the pure-shear modes.
+
+    Parameters
+    ----------
+    geometry
+        Anything with ``zeta0 (m,3,3)``, ``xi0 (m,4,3)``, ``V0 (m,)`` (e.g.
+        :class:`RestGeometry` or :class:`~springmodel.elements.SpringElements`).
+    k_axial, k_torsion, k_volume
+        ``(m, 3)``, ``(m, 3)``, ``(m,)`` or broadcastable; torsion in energy units.
+    """
+    v = voigt_vector(spring_strain_tensors(geometry.zeta0, geometry.xi0))  # (m, 7, 6)
+    k = _stack_constants(k_axial, k_torsion, k_volume, v.shape[0])
+    return (v * (k / geometry.V0[:, None])[..., None]).transpose(0, 2, 1) @ v
+
+
+def calibration_mismatch(
+    D: np.ndarray, C: np.ndarray, norm: Literal["mandel", "voigt"] = "mandel"
+) -> np.ndarray:
+    """Relative Frobenius mismatch ``||D - C|| / ||C||`` of Voigt matrices, ``(m,)``.
+
+    ``norm = "mandel"`` (default) measures the fourth-order tensors (frame-independent);
+    ``"voigt"`` takes the Frobenius norm of the Voigt matrices as they are (engineering
+    shear), which depends on the orientation of the axes relative to the global frame.
+    """
+    if norm == "mandel":
+        Dm, Cm = to_mandel(np.asarray(D, float)), to_mandel(np.asarray(C, float))
+    elif norm == "voigt":
+        Dm, Cm = np.asarray(D, float), np.asarray(C, float)
+    else:
+        raise ValueError(f"norm {norm!r} is not one of mandel, voigt")
+    Cm = np.broadcast_to(Cm, Dm.shape)
+    return np.linalg.norm(Dm - Cm, axis=(-2, -1)) / np.linalg.norm(Cm, axis=(-2, -1))
+
+
+def analytic_constants(
+    geometry: Any, C_local: np.ndarray, volume: Literal["mean", "lsq"] = "mean"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Analytic calibration (module docstring) from the frame-local Voigt matrix.
+
+    Parameters
+    ----------
+    geometry
+        Rest geometry (``zeta0``, ``xi0``, ``V0``); axes assumed orthonormal (``c0 = 0``).
+    C_local
+        ``(m, 6, 6)`` material matrix in each element's frame (fiber = axis 0).
+    volume
+        ``mean``: ``k_s = b V / rho^2`` with ``rho = tr(R)/3`` (DESIGN §4). ``lsq``: the
+        least-squares fit of ``k_s R R`` to ``b V I I`` (Frobenius),
+        ``k_s = b V tr(R)^2 / ||R||^4``; both are exact when ``R = rho I``, ``lsq`` is about
+        half the ``mean`` value on the six-tet split and leaves a smaller mismatch there.
+    """
+    V = geometry.V0
+    l0 = np.linalg.norm(geometry.zeta0, axis=-1)
+    R = radial_tensor(geometry.xi0)
+    trace = np.trace(R, axis1=1, axis2=2)
+    b = (C_local[:, 0, 1] + C_local[:, 0, 2] + C_local[:, 1, 2]) / 3.0
+    b = np.maximum(b, 0.0)
+    diag = C_local[:, [0, 1, 2], [0, 1, 2]]
+    k_axial = np.maximum(diag - b[:, None], 0.0) * V[:, None] / l0**2
+    k_torsion = C_local[:, list(TORSION_VOIGT), list(TORSION_VOIGT)] * V[:, None]
+    if volume == "mean":
+        k_volume = b * V / (trace / 3.0) ** 2
+    elif volume == "lsq":
+        k_volume = b * V * trace**2 / np.sum(R * R, axis=(1, 2)) ** 2
+    else:
+        raise ValueError(f"volume {volume!r} is not one of mean, lsq")
+    return k_axial, k_torsion, k_volume
+
+
+def _unique_rows(A: np.ndarray, decimals: int = 10) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of representative rows and the inverse map, up to relative rounding."""
+    scale = np.abs(A).max(axis=0)
+    scale[scale == 0] = 1.0
+    key = np.round(A / scale, decimals)
+    # two fixed random projections of the rounded rows: equal rows give equal keys exactly
+    proj = key @ np.random.default_rng(12345).standard_normal((A.shape[1], 2))
+    _, first, inverse = np.unique(proj, axis=0, return_index=True, return_inverse=True)
+    return first, inverse.ravel()
+
+
+def nnls_constants(
+    geometry: Any, C_global: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-element non-negative least squares of ``D_k(k) ~ C`` (Mandel Frobenius norm).
+
+    ``D_k`` is linear in the seven constants, so each element is a 36 x 7 NNLS problem
+    (scipy's Lawson-Hanson, columns scaled to unit norm). Elements with the same rest
+    geometry and material matrix up to translation (structured meshes: a handful of
+    shapes) are solved once.
+    """
+    m = geometry.V0.shape[0]
+    Cm = np.broadcast_to(to_mandel(np.asarray(C_global, float)), (m, 6, 6)).reshape(m, 36)
+    features = np.concatenate(
+        [geometry.zeta0.reshape(m, 9), geometry.xi0.reshape(m, 12), geometry.V0[:, None], Cm],
+        axis=1,
+    )
+    first, inverse = _unique_rows(features)
+    xs = np.empty((first.size, 7))
+    for start in range(0, first.size, 20000):  # bounded memory on unstructured meshes
+        rep = first[start : start + 20000]
+        v = sym_to_mandel(spring_strain_tensors(geometry.zeta0[rep], geometry.xi0[rep]))
+        A = (v[..., :, None] * v[..., None, :]).reshape(rep.size, 7, 36).transpose(0, 2, 1)
+        A = A / geometry.V0[rep, None, None]  # (r, 36, 7): columns are D_k basis matrices
+        scale = np.linalg.norm(A, axis=1)
+        scale[scale == 0] = 1.0
+        for u, k in enumerate(rep):  # the optimum is invariant under column scaling
+            xs[start + u] = _scipy_nnls(A[u] / scale[u], Cm[k])[0] / scale[u]
+    k_all = xs[inverse]
+    return k_all[:, :3], k_all[:, 3:6], k_all[:, 6]
+
+
+def calibrate(
+    geometry: Any,
+    frames: np.ndarray,
+    material: Any,
+    method: Literal["analytic", "analytic-lsq", "nnls"] = "analytic",
+) -> Calibrated:
+    """Spring constants of every element, and the mismatch they leave.
+
+    Parameters
+    ----------
+    geometry
+        Rest geometry (``zeta0``, ``xi0``, ``V0``).
+    frames
+        ``(m, 3, 3)`` element frames (rows = axes).
+    material
+        See :func:`material_matrix`.
+    method
+        ``analytic`` (``k_s`` from the mean eigenvalue of ``R``), ``analytic-lsq`` (``k_s``
+        by least squares, see :func:`analytic_constants`) or ``nnls``.
+    """
+    m = geometry.V0.shape[0]
+    if is_transverse(material):
+        C_global = material_matrix(material, frames)
+        C_local = material_matrix(material)
+    else:  # isotropic: the same in every frame, no per-element copies
+        C_global = C_local = material_matrix(material)
+    C_local = np.broadcast_to(C_local, (m, 6, 6))
+    if method in ("analytic", "analytic-lsq"):
+        volume = "lsq" if method == "analytic-lsq" else "mean"
+        ka, kt, kv = analytic_constants(geometry, C_local, volume)
+    elif method == "nnls":
+        ka, kt, kv = nnls_constants(geometry, C_global)
+    else:
+        raise ValueError(f"calibration {method!r} is not one of analytic, analytic-lsq, nnls")
+    D = effective_matrix(geometry, ka, kt, kv)
+    return Calibrated(ka, kt, kv, calibration_mismatch(D, C_global))
+
+
+# --------------------------------------------------------------------------- W_k(F)
+
+
+def element_energy_from_F(
+    F: np.ndarray,
+    geometry: Any,
+    k_axial,
+    k_torsion,
+    k_volume,
+    axial_coefficients: tuple[float, float] = (0.0, 0.0),
+) -> np.ndarray:
+    """Energy ``W_k(F)`` of each spring element from its deformation gradient alone, ``(m,)``.
+
+    Energy forms only: axial polynomial ``k (d^2/2 + b2 d^3/(3 l0) + b3 d^4/(4 l0^2))``
+    (``b2 = b3 = 0`` is linear), torsion ``k/2 (c - c0)^2``, volume ``k_s/2 dL^2``. Nothing
+    here uses intersection points: ``zeta_l = F zeta_l^0`` and ``xi_j = F xi_j^0``.
+    """
+    m = geometry.V0.shape[0]
+    k = _stack_constants(k_axial, k_torsion, k_volume, m)
+    b2, b3 = axial_coefficients
+    zeta = geometry.zeta0 @ F.transpose(0, 2, 1)
+    l0 = np.linalg.norm(geometry.zeta0, axis=-1)
+    L = np.linalg.norm(zeta, axis=-1)
+    d = L - l0
+    W = np.sum(k[:, :3] * (d**2 / 2 + b2 * d**3 / (3 * l0) + b3 * d**4 / (4 * l0**2)), axis=1)
+    c = rest_cosines(zeta)
+    W += np.sum(0.5 * k[:, 3:6] * (c - rest_cosines(geometry.zeta0)) ** 2, axis=1)
+    xi = geometry.xi0 @ F.transpose(0, 2, 1)
+    dL = np.linalg.norm(xi, axis=-1).sum(1) - np.linalg.norm(geometry.xi0, axis=-1).sum(1)
+    W += 0.5 * k[:, 6] * dL**2
+    return W

@@ -1,0 +1,232 @@
+"""The spring model of a scene: rest data, fused kernel, loads, boundaries, solve.
+
+:class:`SpringModel` is a :class:`~springmodel.system.MechanicalSystem`: the solvers of
+:mod:`springmodel.solvers` drive it without knowing about springs. Only the parts the
+scene's ``[spring]`` section switches on are computed.
+
+Examples
+--------
+>>> from springmodel.scene import load_scene
+>>> from studies.cli import DEFAULT_SCENE
+>>> model = SpringModel(load_scene(DEFAULT_SCENE))
+>>> model.elements.n_elements
+3840
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import scipy.sparse as sp
+
+from .elements import SpringElements, build_spring_elements
+from .errors import SolverError
+from .kernels import ForceKernel
+from .loads import external_forces, has_follower_loads, lumped_masses, reactions
+from .options import SpringOptions
+from .result import Result, volume_summary
+from .scene import Scene
+from .springs import is_conservative, lms_update, volume_measures
+
+PARALLEL_MIN_TETS = 50_000
+
+
+class SpringModel:
+    """The anisotropic spring model on a scene's mesh.
+
+    Parameters
+    ----------
+    scene
+        Mesh, material, axes, boundaries and loads.
+    options
+        Overrides ``scene.spring`` (studies switch parts on and off this way).
+    parallel
+        Use the parallel fused kernel (both cores). ``None`` (default): parallel from
+        :data:`PARALLEL_MIN_TETS` tets up; below that the per-colour synchronisation costs
+        more than a serial pass (measured: 3840 tets, 0.75 ms serial vs tens of ms
+        parallel on a busy 2-core machine).
+    """
+
+    def __init__(
+        self, scene: Scene, options: SpringOptions | None = None, parallel: bool | None = None
+    ):
+        self.scene = scene
+        self.options = options or scene.spring
+        mesh = scene.mesh
+        self.elements: SpringElements = build_spring_elements(
+            mesh.points, mesh.tets, scene.frames, self.options, scene.material
+        )
+        if parallel is None:
+            parallel = mesh.n_tets >= PARALLEL_MIN_TETS
+        self.kernel = ForceKernel(self.elements, self.options, parallel=parallel)
+        self.x0 = mesh.points.copy()
+        self.masses = lumped_masses(scene)
+        self.fixed_dofs, self._fixed_values = scene.dirichlet()
+        self._follower = has_follower_loads(scene)
+        self._f_dead = external_forces(scene) if not self._follower else None
+        self._conservative = is_conservative(self.options) and not self._follower
+        self._hessian = None
+        if self._conservative:
+            try:
+                from .hessian import SpringHessian
+
+                self._hessian = SpringHessian(self.elements, self.options)
+            except ImportError:
+                self._hessian = None
+
+    # -- MechanicalSystem -------------------------------------------------------------
+
+    def prescribed(self, scale: float) -> np.ndarray:
+        return self.x0.ravel()[self.fixed_dofs] + scale * self._fixed_values
+
+    def external(self, x: np.ndarray, scale: float = 1.0) -> np.ndarray:
+        """External nodal force ``(n, 3)`` at positions ``x`` times ``scale``."""
+        if self._f_dead is not None:
+            return scale * self._f_dead
+        return external_forces(self.scene, x=x, scale=scale)
+
+    def internal(self, x: np.ndarray, v: np.ndarray | None = None) -> np.ndarray:
+        """Spring forces ``(n, 3)`` (fused kernel)."""
+        return self.kernel.forces(x, v)
+
+    def forces(self, x: np.ndarray, v: np.ndarray | None = None, scale: float = 1.0) -> np.ndarray:
+        return self.kernel.forces(x, v) + self.external(x, scale)
+
+    def energy(self, x: np.ndarray, scale: float = 1.0) -> float | None:
+        if not self._conservative:
+            return None
+        work = float(np.sum(self._f_dead * (x - self.x0))) * scale
+        return self.kernel.energy(x) - work
+
+    def stiffness(self, x: np.ndarray, scale: float = 1.0) -> sp.csr_matrix | None:
+        if self._hessian is None:
+            return None
+        return self._hessian.matrix(x)
+
+    def element_nodes(self) -> np.ndarray:
+        return self.elements.tets
+
+    def post_step(self, x: np.ndarray, dt: float) -> None:
+        """LMS adaptive volume stiffness (eq. 2.81), once per time step."""
+        lms = self.options.lms
+        if lms is None or not self.options.volume:
+            return
+        V, sum_xi = volume_measures(x, self.elements)
+        k = lms_update(
+            self.elements.k_volume, self.elements.k_volume0, V, self.elements.V0,
+            sum_xi, self.elements.L0, lms,
+        )  # fmt: skip
+        self.elements = self.elements.with_volume_stiffness(k)
+        self.kernel.set_volume_stiffness(k)
+        if self._hessian is not None:
+            self._hessian.set_volume_stiffness(k)
+
+    # -- outputs ----------------------------------------------------------------------
+
+    def cell_data(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """Per-element data for the VTU: axis strains, volume error, calibration residual."""
+        els = self.elements
+        zeta = np.einsum("kil,kic->klc", els.G, x[els.tets])
+        strain = np.linalg.norm(zeta, axis=2) / els.l0 - 1.0
+        V = self.scene.mesh.volumes(x)
+        return {
+            "axis_strain": strain,
+            "volume_error": (V - els.V0) / els.V0,
+            "calibration_mismatch": np.nan_to_num(els.mismatch),
+            "k_volume_ratio": els.k_volume / np.where(els.k_volume0 > 0, els.k_volume0, 1.0),
+        }
+
+
+@dataclass
+class SpringSolution:
+    """Spring-model outcome: result record, nodal displacement, VTU cell data, raw info."""
+
+    result: Result
+    u: np.ndarray
+    cell_data: dict[str, np.ndarray] = field(default_factory=dict)
+    info: object = None
+
+
+def variant_label(options: SpringOptions) -> str:
+    """Short description of the enabled spring parts, e.g. ``axial=linear,torsion=cosine``."""
+    parts = [f"axial={options.axial}", f"torsion={options.torsion}"]
+    parts.append(f"volume={options.volume_form}" if options.volume else "volume=off")
+    if options.lms is not None:
+        parts.append(f"lms={options.lms.rule}")
+    parts.append(f"calibration={options.calibration}")
+    return ",".join(parts)
+
+
+def solve_spring(
+    scene: Scene,
+    options: SpringOptions | None = None,
+    verbose: bool = False,
+    parallel: bool | None = None,
+) -> SpringSolution:
+    """Build the spring model of ``scene`` and run the solver its options ask for.
+
+    Raises
+    ------
+    SolverError
+        Blow-up or divergence; ``state`` holds the last good displacement ``(n, 3)``.
+    """
+    from .solvers import solve_with_options
+
+    t0 = time.perf_counter()
+    model = SpringModel(scene, options, parallel=parallel)
+    opts = model.options
+    try:
+        info = solve_with_options(model, opts, progress=verbose)
+    except SolverError as exc:
+        state = exc.state
+        if state is not None:
+            state = np.asarray(state).reshape(-1, 3) - model.x0
+        raise SolverError(str(exc), state=state) from None
+    wall = time.perf_counter() - t0
+    x = info.x
+    u = x - model.x0
+    residual = model.forces(x, None)
+    iterations = int(getattr(info, "iterations", 0) or getattr(info, "steps", 0))
+    extra = {
+        "solver": opts.solver,
+        "variant": variant_label(opts),
+        "calibration_mismatch_median": float(np.nanmedian(model.elements.mismatch))
+        if np.isfinite(model.elements.mismatch).any()
+        else None,
+        "message": getattr(info, "message", ""),
+        "dt": getattr(info, "dt", None),
+        "steps": int(getattr(info, "steps", 0) or 0),
+        "residual": float(info.residual_history[-1]) if info.residual_history else None,
+    }
+    result = Result(
+        scene=scene.name,
+        model="spring",
+        element="spring",
+        law=f"spring[{variant_label(opts)}]",
+        counts={
+            "nodes": scene.mesh.n_points,
+            "tets": scene.mesh.n_tets,
+            "dofs": 3 * scene.mesh.n_points,
+            "fixed_dofs": int(model.fixed_dofs.size),
+        },
+        probes=scene.probe_displacements(u),
+        volume=volume_summary(scene.mesh, u),
+        reactions=reactions(scene, residual),
+        wall_time=wall,
+        converged=bool(info.converged),
+        iterations=iterations,
+        info=extra,
+    )
+    if not info.converged:
+        raise SolverError(
+            f"spring model ({opts.solver}) did not converge: {getattr(info, 'message', '')}",
+            state=u,
+        )
+    return SpringSolution(result=result, u=u, cell_data=model.cell_data(x), info=info)
+
+
+def with_options(scene: Scene, **changes) -> Scene:
+    """A shallow copy of ``scene`` with ``[spring]`` options changed."""
+    return replace(scene, spring=replace(scene.spring, **changes))
