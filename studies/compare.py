@@ -1,0 +1,493 @@
+"""``springfem compare``: the spring model against FEM P1 and P2 on the same mesh.
+
+:func:`compare_scene` runs the models, picks the reference (the finest FEM solution: P2,
+neo-Hookean when the strains are large) and tabulates probe displacements, errors against
+the reference, volume change, reactions, wall time and convergence.
+:func:`cmd_compare` is the command: it prints the table and writes CSV, Markdown, a PNG of
+the deformed meshes coloured by their error and one ``result.json`` + VTU per model.
+
+Models (names used in tables and figures)
+-----------------------------------------
+``spring``  the spring model with the scene's ``[spring]`` options;
+``P1``, ``P2``  linear (small-strain) FEM with the scene's linear law (``linear`` or
+``transverse-linear``; ``linear`` with ``E, nu`` for a neo-Hookean scene);
+``P1-NH``, ``P2-NH``  neo-Hookean FEM (the scene's formulation), run when the scene's law is
+neo-Hookean or its strains are large (:data:`LARGE_STRAIN`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from springmodel.errors import InputError, SolverError
+from springmodel.result import _jsonable, write_result
+from springmodel.scene import Scene, load_scene
+
+from . import metrics
+from .solve import Solution
+
+MODELS = ("spring", "P1", "P2", "P1-NH", "P2-NH")
+REFERENCE_PREFERENCE = ("P2-NH", "P2", "P1-NH", "P1")
+LARGE_STRAIN = 0.05  # max |principal Green-Lagrange strain| of the P1 linear solution
+SPRING_PARALLEL_MIN_TETS = 200_000  # below this the serial spring kernel is faster
+COMPONENTS = "xyz"
+
+
+@dataclass
+class Comparison:
+    """The outcome of :func:`compare_scene`.
+
+    Attributes
+    ----------
+    scene
+        The scene that was solved.
+    table
+        One row per model (see :func:`comparison_table`).
+    solutions
+        Model name -> :class:`~studies.solve.Solution` (only the models that succeeded).
+    reference
+        Name of the reference solution (the finest FEM solution).
+    strain
+        Max |principal Green–Lagrange strain| of the P1 linear solution (nan if not run).
+    failures
+        Model name -> error message of models that failed.
+    notes
+        Sentences about the choices made (why neo-Hookean was or was not run).
+    """
+
+    scene: Scene
+    table: pd.DataFrame
+    solutions: dict[str, Solution]
+    reference: str
+    strain: float = float("nan")
+    failures: dict[str, str] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def same_mesh_p1(self) -> str | None:
+        """The P1 solution with the reference's law (for the spring model's *model* error)."""
+        name = "P1-NH" if self.reference.endswith("-NH") else "P1"
+        return name if name in self.solutions else None
+
+    def error_field(self, name: str, against: str | None = None) -> np.ndarray:
+        """Nodal error magnitude ``(n,)`` of ``name`` against ``against`` (the reference)."""
+        ref = self.solutions[against or self.reference].u
+        return metrics.nodal_error(self.solutions[name].u, ref)
+
+    def errors(self, name: str, against: str | None = None) -> dict[str, float]:
+        """Relative L2 and max nodal errors and relative probe errors of ``name``."""
+        nan = float("nan")
+        against = against or self.reference
+        if name not in self.solutions or against not in self.solutions:
+            return {"rel_l2": nan, "rel_max": nan}
+        u, ref = self.solutions[name], self.solutions[against]
+        out = {
+            "rel_l2": metrics.relative_l2_error(u.u, ref.u),
+            "rel_max": metrics.relative_max_error(u.u, ref.u),
+        }
+        for probe, err in metrics.probe_error(u.result.probes, ref.result.probes).items():
+            out[f"probe:{probe}"] = err
+        return out
+
+
+# ------------------------------------------------------------------------------ solving
+
+
+def bundled_scene_text(name: str, divisions: Sequence[int] | None = None) -> str:
+    """The TOML text of a bundled scene, optionally with other box ``divisions``.
+
+    Examples
+    --------
+    >>> "divisions = [20, 2, 2]" in bundled_scene_text("cantilever", [20, 2, 2])
+    True
+    """
+    from .cli import scene_path
+
+    text = scene_path(name).read_text(encoding="utf-8")
+    if divisions is None:
+        return text
+    new = "divisions = [" + ", ".join(str(int(d)) for d in divisions) + "]"
+    text, n = re.subn(r"(?m)^divisions\s*=\s*\[[^\]]*\]", new, text)
+    if n != 1:
+        raise InputError(f"scene {name}: no single 'divisions = [...]' line to replace")
+    return text
+
+
+def linear_law(scene: Scene) -> str:
+    """The small-strain law of the scene's material."""
+    return "transverse-linear" if scene.material.law == "transverse-linear" else "linear"
+
+
+def model_settings(scene: Scene, name: str) -> tuple[str, int | None, str | None]:
+    """``(model, order, law)`` of a model name for :func:`solve_model`."""
+    if name == "spring":
+        return "spring", None, None
+    if name in ("P1", "P2"):
+        return "fem", int(name[1]), linear_law(scene)
+    if name in ("P1-NH", "P2-NH"):
+        if scene.material.law == "transverse-linear":
+            raise InputError(
+                f"model {name}: reference_fem has no anisotropic hyperelastic law for the "
+                "transverse-linear material"
+            )
+        return "fem", int(name[1]), "neo-hookean"
+    raise InputError(f"unknown model {name!r}; valid models: {', '.join(MODELS)}")
+
+
+def solve_model(scene: Scene, name: str) -> Solution:
+    """Solve ``scene`` with one of :data:`MODELS`."""
+    model, order, law = model_settings(scene, name)
+    if model == "spring":
+        from springmodel.model import solve_spring
+
+        parallel = scene.mesh.n_tets >= SPRING_PARALLEL_MIN_TETS
+        sol = solve_spring(scene, parallel=parallel)
+        return Solution(sol.result, sol.u, dict(sol.cell_data))
+    import reference_fem
+
+    sol = reference_fem.solve(scene, order=order, law=law)
+    return Solution(sol.result, sol.u_vertices, dict(sol.cell_data))
+
+
+def max_principal_strain(scene: Scene, u: np.ndarray) -> float:
+    """Max |principal Green–Lagrange strain| over the P1 elements for vertex field ``u``.
+
+    The Green–Lagrange strain ``E = (H + Hᵀ + HᵀH) / 2`` of a small-strain solution also
+    flags large rotations (a rotation by θ gives ``E ≈ θ²/2``), which a linear solution
+    cannot represent either.
+    """
+    pts, tets = scene.mesh.points, scene.mesh.tets
+    u = np.asarray(u).reshape(-1, 3)
+    Dm = np.swapaxes(pts[tets[:, 1:]] - pts[tets[:, :1]], 1, 2)  # columns: rest edges
+    Du = np.swapaxes(u[tets[:, 1:]] - u[tets[:, :1]], 1, 2)
+    H = Du @ np.linalg.inv(Dm)
+    E = 0.5 * (H + np.swapaxes(H, 1, 2) + np.swapaxes(H, 1, 2) @ H)
+    return float(np.abs(np.linalg.eigvalsh(E)).max())
+
+
+def compare_scene(
+    scene: Scene,
+    models: Sequence[str] | None = None,
+    strain_limit: float = LARGE_STRAIN,
+    log: Callable[[str], None] | None = None,
+) -> Comparison:
+    """Solve ``scene`` with the spring model and FEM and compare them.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    models
+        Model names from :data:`MODELS`; default: ``spring``, ``P1``, ``P2`` and, when the
+        scene's law is neo-Hookean or the P1 strain exceeds ``strain_limit``,
+        ``P1-NH`` and ``P2-NH``.
+    strain_limit
+        Large-strain threshold on :func:`max_principal_strain` of the P1 solution.
+    log
+        Called with one line per finished model (progress).
+
+    Returns
+    -------
+    Comparison
+        Table, solutions and reference name.
+
+    Raises
+    ------
+    SolverError
+        When no FEM model succeeded (there is no reference).
+    """
+    say = log or (lambda _msg: None)
+    solutions: dict[str, Solution] = {}
+    failures: dict[str, str] = {}
+    notes: list[str] = []
+
+    def run(name: str) -> None:
+        t0 = time.perf_counter()
+        try:
+            solutions[name] = solve_model(scene, name)
+        except SolverError as exc:
+            failures[name] = str(exc)
+            say(f"  {name:<6} FAILED: {exc}")
+            return
+        say(f"  {name:<6} done in {time.perf_counter() - t0:.2f} s")
+
+    strain = float("nan")
+    if models is None:
+        run("P1")
+        if "P1" in solutions:
+            strain = max_principal_strain(scene, solutions["P1"].u)
+        large = bool(strain > strain_limit)
+        nh = scene.material.law == "neo-hookean" or large
+        if large and scene.material.law == "transverse-linear":
+            nh = False
+            notes.append(
+                f"the P1 strain reaches {strain:.1%} (> {strain_limit:.0%}) but reference_fem "
+                "has no anisotropic hyperelastic law: the reference is small-strain P2"
+            )
+        elif nh:
+            why = [f"P1 strain {strain:.1%} > {strain_limit:.0%}"] if large else []
+            if scene.material.law == "neo-hookean":
+                why.append("the scene's law is neo-Hookean")
+            notes.append(f"neo-Hookean P1/P2 run ({'; '.join(why)}); P2-NH is the reference")
+        else:
+            notes.append(f"small strains (max {strain:.2%} <= {strain_limit:.0%}): linear FEM")
+        models = ["spring", "P1", "P2"] + (["P1-NH", "P2-NH"] if nh else [])
+    for name in models:
+        model_settings(scene, name)  # validate names before any expensive solve
+    for name in models:
+        if name not in solutions and name not in failures:
+            run(name)
+    solutions = {n: solutions[n] for n in models if n in solutions}  # table order
+    reference = next((n for n in REFERENCE_PREFERENCE if n in solutions), None)
+    if reference is None:
+        raise SolverError(
+            f"{scene.name}: no FEM solution to compare against: "
+            + "; ".join(f"{k}: {v}" for k, v in failures.items())
+        )
+    cmp = Comparison(
+        scene=scene,
+        table=pd.DataFrame(),
+        solutions=solutions,
+        reference=reference,
+        strain=strain,
+        failures=failures,
+        notes=notes,
+    )
+    cmp.table = comparison_table(cmp, list(models))
+    return cmp
+
+
+# ------------------------------------------------------------------------------- table
+
+
+def comparison_table(cmp: Comparison, models: Sequence[str]) -> pd.DataFrame:
+    """One row per model: probes, errors against the reference, volume, reactions, time."""
+    ref = cmp.solutions[cmp.reference].result
+    main = {name: int(np.argmax(np.abs(u))) for name, u in ref.probes.items()}
+    regions = list(ref.reactions)
+    rows = []
+    for name in models:
+        row: dict[str, object] = {"model": name}
+        sol = cmp.solutions.get(name)
+        if sol is None:
+            row.update({"element": "", "law": "", "converged": False})
+            rows.append(row)
+            continue
+        r = sol.result
+        row["element"] = r.element
+        row["law"] = r.law
+        for probe, c in main.items():
+            u = np.asarray(r.probes.get(probe, [np.nan] * 3))
+            row[f"{probe} |u| (m)"] = float(np.linalg.norm(u))
+            row[f"{probe} u{COMPONENTS[c]} (m)"] = float(u[c])
+        err = cmp.errors(name)
+        for probe in main:
+            row[f"{probe} rel err"] = err.get(f"probe:{probe}", np.nan)
+        row["rel L2 err"] = err["rel_l2"]
+        row["rel max err"] = err["rel_max"]
+        row["volume change"] = r.volume.get("relative_change", np.nan)
+        for region in regions:
+            row[f"|R| {region} (N)"] = float(np.linalg.norm(r.reactions.get(region, np.nan)))
+        row["wall time (s)"] = r.wall_time
+        row["iterations"] = r.iterations
+        row["converged"] = bool(r.converged)
+        rows.append(row)
+    df = pd.DataFrame(rows)
+    df.insert(1, "reference", df["model"] == cmp.reference)
+    return df
+
+
+def summary_lines(cmp: Comparison) -> list[str]:
+    """Error sentences: model error (spring vs same-mesh P1), total and discretisation."""
+    lines = []
+    p1 = cmp.same_mesh_p1
+    if "spring" in cmp.solutions and p1 is not None:
+        e = cmp.errors("spring", p1)
+        lines.append(
+            f"model error (spring vs {p1}, same mesh): rel L2 {e['rel_l2']:.2%}, "
+            f"rel max {e['rel_max']:.2%}"
+        )
+    if "spring" in cmp.solutions:
+        e = cmp.errors("spring")
+        lines.append(
+            f"total error (spring vs {cmp.reference}): rel L2 {e['rel_l2']:.2%}, "
+            f"rel max {e['rel_max']:.2%}"
+        )
+    if p1 is not None and p1 != cmp.reference:
+        e = cmp.errors(p1)
+        lines.append(
+            f"discretisation error ({p1} vs {cmp.reference}): rel L2 {e['rel_l2']:.2%}, "
+            f"rel max {e['rel_max']:.2%}"
+        )
+    return lines
+
+
+def render_comparison(cmp: Comparison, path: str | Path) -> Path:
+    """The deformed meshes side by side, coloured by their error against the reference
+    (see :func:`figure_fields` for which solutions are drawn)."""
+    names = [n for n in cmp.table["model"] if n in cmp.solutions]
+    fields, note = figure_fields({n: cmp.solutions[n].u for n in names}, cmp.reference)
+    laws = {n: cmp.solutions[n].result.law for n in fields}
+    return error_figure(cmp.scene, fields, cmp.reference, path, laws=laws, note=note)
+
+
+MAX_DRAWN_ERROR = 0.5  # small-strain solutions further off than this are not drawn
+
+
+def figure_fields(
+    fields: dict[str, np.ndarray], reference: str
+) -> tuple[dict[str, np.ndarray], str | None]:
+    """The fields worth drawing next to a neo-Hookean reference, and a note on the rest.
+
+    Small-strain P1/P2 solutions whose largest nodal error exceeds
+    :data:`MAX_DRAWN_ERROR` × the largest reference displacement are left out (their
+    displacements can be many times the body's size and would flatten the shared colour
+    scale); the table keeps them.
+    """
+    if not reference.endswith("-NH"):
+        return dict(fields), None
+    ref = fields[reference]
+    omitted = [
+        n
+        for n in ("P1", "P2")
+        if n in fields and metrics.relative_max_error(fields[n], ref) > MAX_DRAWN_ERROR
+    ]
+    kept = {n: u for n, u in fields.items() if n not in omitted}
+    if not omitted:
+        return kept, None
+    return (
+        kept,
+        f"{', '.join(omitted)} (small strain, > {MAX_DRAWN_ERROR:.0%} off) in the table only",
+    )
+
+
+def error_figure(
+    scene: Scene,
+    fields: dict[str, np.ndarray],
+    reference: str,
+    path: str | Path,
+    laws: dict[str, str] | None = None,
+    note: str | None = None,
+) -> Path:
+    """Render vertex displacement ``fields`` (name -> ``(n, 3)``) of ``scene`` side by side,
+    coloured by their error magnitude against ``fields[reference]``, one colour scale."""
+    from .plots import Panel, nice_warp_factor, render_error_panels
+
+    ref_u = np.asarray(fields[reference]).reshape(-1, 3)
+    lo, hi = scene.mesh.bounding_box()
+    warp = nice_warp_factor(float(np.linalg.norm(ref_u, axis=1).max()), float((hi - lo).max()))
+    panels = []
+    for name, u in fields.items():
+        u = np.asarray(u).reshape(-1, 3)
+        if name == reference:
+            law = (laws or {}).get(name)
+            label = f"{name} ({law}): reference" if law else f"{name}: reference"
+        else:
+            l2 = metrics.relative_l2_error(u, ref_u)
+            mx = metrics.relative_max_error(u, ref_u)
+            label = f"{name}: rel L2 error {l2:.2%}, max {mx:.2%}"
+        panels.append(Panel(label, u, metrics.nodal_error(u, ref_u)))
+    scale = "true scale" if warp == 1.0 else f"displacements ×{warp:g}"
+    title = f"{scene.name}: deformed meshes ({scale}), coloured by |u − u_{reference}|"
+    title += "; grey: rest shape" + (f"; {note}" if note else "")
+    return render_error_panels(scene.mesh, panels, path, warp=warp, title=title)
+
+
+# -------------------------------------------------------------------------------- CLI
+
+
+def _format_cell(v: object) -> str:
+    if isinstance(v, (bool, np.bool_)):
+        return "yes" if v else "no"
+    if isinstance(v, (float, np.floating)):
+        return "nan" if not np.isfinite(v) else f"{v:.4g}"
+    return str(v)
+
+
+def printable(df: pd.DataFrame, width: int = 24) -> str:
+    """The table transposed (one column per model) as aligned text; cells longer than
+    ``width`` are replaced by a footnote mark and listed below."""
+    t = df.set_index("model").T.map(_format_cell)
+    notes: list[str] = []
+    for col in t.columns:
+        for row in t.index:
+            text = t.at[row, col]
+            if len(text) > width:
+                notes.append(f"[{len(notes) + 1}] {text}")
+                t.at[row, col] = f"[{len(notes)}]"
+    return "\n".join([t.to_string(), *notes])
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    """``springfem compare [SCENE] [--out DIR] [--json]``."""
+    from .cli import scene_path
+    from .tables import write_table
+
+    scene = load_scene(scene_path(args.scene))
+    quiet = bool(getattr(args, "json", False))
+    out = Path(args.out) if args.out else Path("out") / f"compare-{scene.name}"
+
+    def log(msg: str) -> None:
+        print(msg, file=sys.stderr if quiet else sys.stdout, flush=True)
+
+    for note in scene.mesh.notes:
+        print(f"note: {note}", file=sys.stderr)
+    log(
+        f"{scene.name}: {scene.mesh.n_points} nodes, {scene.mesh.n_tets} tets, "
+        f"law {scene.material.law}"
+    )
+    cmp = compare_scene(scene, log=log)
+    md = write_table(cmp.table, out / "compare")
+    for name, sol in cmp.solutions.items():
+        write_result(
+            out / name,
+            sol.result,
+            scene.mesh,
+            sol.u,
+            cell_data=sol.cell_data,
+            point_data={"error": cmp.error_field(name)},
+        )
+    png = None
+    try:
+        png = render_comparison(cmp, out / "compare.png")
+    except Exception as exc:  # noqa: BLE001 - a missing OpenGL must not lose the table
+        print(f"springfem: warning: figure not rendered: {type(exc).__name__}: {exc}",
+              file=sys.stderr)  # fmt: skip
+    files = {"csv": str(md.with_suffix(".csv")), "markdown": str(md)}
+    if png is not None:
+        files["png"] = str(png)
+    if quiet:
+        payload = {
+            "scene": scene.name,
+            "reference": cmp.reference,
+            "max_principal_strain_p1": cmp.strain,
+            "notes": cmp.notes,
+            "failures": cmp.failures,
+            "summary": summary_lines(cmp),
+            "rows": cmp.table.to_dict(orient="records"),
+            "files": files,
+        }
+        print(json.dumps(_jsonable(payload), indent=2))
+    else:
+        print()
+        print(printable(cmp.table))
+        print()
+        for note in cmp.notes:
+            print(f"note: {note}")
+        print(f"reference: {cmp.reference}")
+        for line in summary_lines(cmp):
+            print(line)
+        print("wrote " + ", ".join(files.values()) + f" and {out}/<model>/result.json + .vtu")
+    for name, msg in cmp.failures.items():
+        print(f"springfem: solver failure: {name}: {msg}", file=sys.stderr)
+    return 3 if cmp.failures else 0

@@ -1,0 +1,78 @@
+"""Error and cost metrics shared by the comparison and the studies.
+
+All displacement errors are measured at the mesh vertices (both models have them), so a
+spring solution, a P1 and a P2 solution on the same mesh compare node by node.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+
+def relative_l2_error(u: np.ndarray, u_ref: np.ndarray) -> float:
+    """``||u - u_ref|| / ||u_ref||`` over all vertex displacement components."""
+    u, u_ref = np.asarray(u, float).ravel(), np.asarray(u_ref, float).ravel()
+    den = np.linalg.norm(u_ref)
+    return float(np.linalg.norm(u - u_ref) / den) if den > 0 else float("nan")
+
+
+def relative_max_error(u: np.ndarray, u_ref: np.ndarray) -> float:
+    """Largest nodal error magnitude over the largest reference displacement magnitude."""
+    u, u_ref = np.asarray(u, float).reshape(-1, 3), np.asarray(u_ref, float).reshape(-1, 3)
+    den = np.linalg.norm(u_ref, axis=1).max()
+    err = np.linalg.norm(u - u_ref, axis=1).max()
+    return float(err / den) if den > 0 else float("nan")
+
+
+def nodal_error(u: np.ndarray, u_ref: np.ndarray) -> np.ndarray:
+    """Error magnitude per vertex ``(n,)``."""
+    return np.linalg.norm(np.asarray(u).reshape(-1, 3) - np.asarray(u_ref).reshape(-1, 3), axis=1)
+
+
+def probe_error(probes: dict[str, list[float]], ref: dict[str, list[float]]) -> dict[str, float]:
+    """Relative error of each probe's displacement vector against the reference."""
+    out = {}
+    for name, u in probes.items():
+        r = np.asarray(ref[name])
+        n = np.linalg.norm(r)
+        out[name] = float(np.linalg.norm(np.asarray(u) - r) / n) if n > 0 else float("nan")
+    return out
+
+
+def median_time(fn: Callable[[], object], repeats: int = 5, warmup: int = 1) -> float:
+    """Median wall time of ``fn()`` over ``repeats`` runs after ``warmup`` runs."""
+    for _ in range(warmup):
+        fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+def fitted_rate(h: np.ndarray, err: np.ndarray) -> float:
+    """Slope of ``log err`` against ``log h`` (``np.polyfit``), the convergence rate."""
+    h, err = np.asarray(h, float), np.asarray(err, float)
+    ok = (h > 0) & (err > 0) & np.isfinite(err)
+    if ok.sum() < 2:
+        return float("nan")
+    return float(np.polyfit(np.log(h[ok]), np.log(err[ok]), 1)[0])
+
+
+def timoshenko_tip_deflection(
+    force: float, length: float, width: float, height: float, E: float, nu: float
+) -> float:
+    """Tip deflection of a cantilever with a rectangular section under an end shear force.
+
+    Euler–Bernoulli bending ``F L^3 / (3 E I)`` plus Timoshenko shear ``F L / (k G A)``
+    with the rectangular-section shear coefficient ``k = 10 (1 + nu) / (12 + 11 nu)``.
+    """
+    inertia = width * height**3 / 12.0
+    area = width * height
+    G = E / (2.0 * (1.0 + nu))
+    k = 10.0 * (1.0 + nu) / (12.0 + 11.0 * nu)
+    return force * length**3 / (3.0 * E * inertia) + force * length / (k * G * area)
