@@ -249,7 +249,7 @@ def run(ctx: StudyContext) -> StudyOutput:
     )
 
     # 2. largest load survived
-    factors = [1, 10, 30, 100, 300] if q else [1, 3, 10, 30, 100, 300, 1000]
+    factors = [1, 100, 1000, 3000, 10000] if q else [1, 10, 100, 300, 1000, 3000, 10000, 30000]
     nx, ny = (10, 1) if q else (20, 2)
     lmethods = ["spring-energy", "spring-cosine", "fem-linear", "fem-neo-hookean"]
     cases = [
@@ -332,7 +332,7 @@ def run(ctx: StudyContext) -> StudyOutput:
     )
 
     # 4. failure map
-    lf = [1, 30, 300] if q else [1, 10, 100, 300, 1000]
+    lf = [1, 1000, 10000] if q else [1, 100, 1000, 3000, 10000, 30000]
     df_ = [0.5, 0.9, 1.1] if q else [0.3, 0.6, 0.9, 1.0, 1.1, 1.5]
     nx, ny = (10, 1)
     mmethods = ["spring-energy", "spring-cosine", "fem-neo-hookean"]
