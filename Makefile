@@ -5,6 +5,7 @@ BIN := $(VENV)/bin
 export PYVISTA_OFF_SCREEN := true
 export MPLBACKEND := Agg
 export OPENBLAS_NUM_THREADS ?= 1
+export OMP_WAIT_POLICY ?= passive
 
 .PHONY: demo test lint report quick-report bench clean
 

@@ -51,7 +51,7 @@ Damping = Literal["auto", "kinetic", "mass"]
 Scale = float | Callable[[float], float]
 
 #: Above this many free DOFs, ``linear_solver="auto"`` uses CG/GMRES + smoothed-aggregation AMG.
-AMG_THRESHOLD = 30_000
+AMG_THRESHOLD = 12_000
 #: Up to this many free DOFs, the critical time step uses a dense eigensolver.
 DENSE_EIG_THRESHOLD = 600
 #: Relative asymmetry ``|K - K^T| / |K|`` below which a tangent is treated as symmetric

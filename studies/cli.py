@@ -13,6 +13,9 @@ import os
 # One BLAS thread: multithreaded OpenBLAS on a busy 2-core machine is many times slower
 # for the small dense factorisations of the solvers (set before numpy is imported).
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+# Passive OpenMP waiting: spinning threads of the parallel kernels otherwise steal the
+# other core on a busy machine (measured 10-20x slower than serial).
+os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 import sys
 import traceback
 from collections.abc import Callable, Sequence
@@ -118,6 +121,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("what", choices=("forces", "fem", "step"))
     p.add_argument("--tets", type=int, default=None, help="approximate number of tets")
     p.add_argument("--repeats", type=int, default=7, help="repeats (median reported)")
+    p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_subcommand("studies.bench", "cmd_bench"))
     return parser
 
