@@ -24,7 +24,12 @@ Parallel scatter without races (``parallel=True``), two deterministic strategies
     summation order at every node is the colour order whatever the number of threads
     (bit-identical to a serial pass in colour order). One parallel region per colour
     (about 30 on box meshes): each is a barrier, which costs little on idle cores but a
-    lot on a busy machine.
+    lot on a busy machine (with OpenMP's default active wait, 10x slower than serial).
+
+Measured once (500k-tet six-split box, 2 cores, ``OMP_WAIT_POLICY=passive``, best of many
+calls on a shared machine), linear axial + cosine torsion + gradient volume springs: serial
+13.3 M tets/s, parallel ``buffer`` 25.7, ``colour`` 22.8, numpy oracle 0.31 (ratio 83x);
+cubic axial + energy torsion: 10.9 / 21.4 / 17.8 / 0.39.
 
 Everything is float64, compiled with ``fastmath=False`` and ``cache=True``.
 """

@@ -30,8 +30,6 @@ from .result import Result, volume_summary
 from .scene import Scene
 from .springs import is_conservative, lms_update, volume_measures
 
-PARALLEL_MIN_TETS = 50_000
-
 
 class SpringModel:
     """The anisotropic spring model on a scene's mesh.
@@ -43,10 +41,9 @@ class SpringModel:
     options
         Overrides ``scene.spring`` (studies switch parts on and off this way).
     parallel
-        Use the parallel fused kernel (both cores). ``None`` (default): parallel from
-        :data:`PARALLEL_MIN_TETS` tets up; below that the per-colour synchronisation costs
-        more than a serial pass (measured: 3840 tets, 0.75 ms serial vs tens of ms
-        parallel on a busy 2-core machine).
+        Use the parallel fused kernel (both cores). ``None`` (default): the kernel's own
+        choice, parallel from ``ForceKernel.PARALLEL_MIN_ELEMENTS`` elements up; below that
+        thread synchronisation costs more than a serial pass.
     """
 
     def __init__(
@@ -58,8 +55,6 @@ class SpringModel:
         self.elements: SpringElements = build_spring_elements(
             mesh.points, mesh.tets, scene.frames, self.options, scene.material
         )
-        if parallel is None:
-            parallel = mesh.n_tets >= PARALLEL_MIN_TETS
         self.kernel = ForceKernel(self.elements, self.options, parallel=parallel)
         self.x0 = mesh.points.copy()
         self.masses = lumped_masses(scene)

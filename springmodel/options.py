@@ -14,7 +14,7 @@ from typing import Literal, get_args
 AxialLaw = Literal["linear", "quadratic", "cubic", "stress-scaled"]
 TorsionLaw = Literal["off", "angle", "cosine", "cubic", "energy"]
 LMSRule = Literal["spec", "abs"]
-Calibration = Literal["analytic", "nnls"]
+Calibration = Literal["analytic", "analytic-lsq", "nnls"]
 SolverKind = Literal["static", "explicit", "implicit"]
 Integrator = Literal["symplectic-euler", "verlet"]
 VolumeForm = Literal["gradient", "spec"]
@@ -69,8 +69,10 @@ class SpringOptions:
     lms
         Adaptive volume stiffness, or ``None`` for off.
     calibration
-        ``analytic`` (match the small-strain element energy, DESIGN §4) or ``nnls``
-        (per-element non-negative least squares of the effective 6x6 matrix).
+        ``analytic`` (match the small-strain element energy, DESIGN §4), ``analytic-lsq``
+        (the same with a least-squares volume constant ``k_s = lam V tr(R)^2 / |R|^4``, equal
+        when ``R = rho I``) or ``nnls`` (per-element non-negative least squares of the
+        effective 6x6 matrix).
     k_axial, k_torsion, k_volume
         Explicit spring constants (N/m, N m, N/m) overriding the calibration.
     solver, integrator, dt, dt_safety, t_end, steps, mass_damping, tol, max_iter

@@ -34,21 +34,46 @@ from springmodel.result import _jsonable, atomic_write_text
 CACHE_VERSION = "1"
 
 
-def case_key(case: dict[str, Any]) -> str:
-    """Stable hash of a case's settings (JSON with sorted keys)."""
+def case_key(case: dict[str, Any], fingerprint: str = "") -> str:
+    """Stable hash of a case's settings (JSON with sorted keys) and a code fingerprint."""
     text = json.dumps(_jsonable(case), sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256((CACHE_VERSION + text).encode()).hexdigest()[:20]
+    return hashlib.sha256((CACHE_VERSION + fingerprint + text).encode()).hexdigest()[:20]
+
+
+def source_fingerprint(*paths: str | os.PathLike) -> str:
+    """Hash of the Python sources under ``paths`` (files or folders).
+
+    Part of every case key, so a change to the models or the study recomputes its cases
+    instead of reusing results of the old code.
+    """
+    h = hashlib.sha256()
+    for p in paths:
+        p = Path(p)
+        files = sorted(p.rglob("*.py")) if p.is_dir() else [p]
+        for f in files:
+            h.update(f.name.encode())
+            h.update(f.read_bytes())
+    return h.hexdigest()[:16]
 
 
 class CaseCache:
-    """A folder of finished cases of one study."""
+    """A folder of finished cases of one study.
 
-    def __init__(self, root: str | os.PathLike, study: str):
+    Parameters
+    ----------
+    root, study
+        Cases live in ``root/study``.
+    fingerprint
+        Code fingerprint mixed into every key (see :func:`source_fingerprint`).
+    """
+
+    def __init__(self, root: str | os.PathLike, study: str, fingerprint: str = ""):
         self.dir = Path(root) / study
         self.dir.mkdir(parents=True, exist_ok=True)
+        self.fingerprint = fingerprint
 
     def path(self, case: dict[str, Any]) -> Path:
-        return self.dir / f"{case_key(case)}.json"
+        return self.dir / f"{case_key(case, self.fingerprint)}.json"
 
     def get(self, case: dict[str, Any]) -> dict[str, Any] | None:
         p = self.path(case)

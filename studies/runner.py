@@ -19,7 +19,7 @@ from typing import Any
 from springmodel.errors import InputError
 from springmodel.result import _jsonable, atomic_write_text
 
-from .cache import CaseCache
+from .cache import CaseCache, source_fingerprint
 
 STUDIES = (
     "convergence",
@@ -92,7 +92,17 @@ def run_study(
     mod = importlib.import_module(_module_name(name))
     key = name.replace("-", "_")
     root = Path(out)
-    cache = CaseCache(root / ".cache", key)
+    import reference_fem
+    import springmodel
+
+    code = source_fingerprint(
+        Path(springmodel.__file__).parent,
+        Path(reference_fem.__file__).parent,
+        mod.__file__,
+        Path(__file__).parent / "metrics.py",
+        Path(__file__).parent / "compare.py",
+    )
+    cache = CaseCache(root / ".cache", key, fingerprint=code)
     ctx = StudyContext(key, root / key, quick, cache, progress)
     t0 = time.perf_counter()
     result: StudyOutput = mod.run(ctx)
