@@ -166,6 +166,7 @@ def box_mesh(
     if min(size) <= 0 or not np.all(np.isfinite(size)):
         raise MeshError(f"mesh size must be positive and finite, got {list(size)}")
     axes = [np.linspace(o, o + s, n + 1) for o, s, n in zip(origin, size, (nx, ny, nz))]
+    _check_box_axes(axes, size, origin, (nx, ny, nz))
     X, Y, Z = np.meshgrid(*axes, indexing="ij")
     points = np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
 
@@ -216,12 +217,54 @@ def box_mesh(
     return TetMesh(points=points, tets=tets, source=desc)
 
 
+#: Largest coordinate magnitude (m): squared lengths and volumes stay finite in float64.
+MAX_COORDINATE = 1e100
+#: Mean-ratio quality below which a tet is reported as a sliver (a note, not an error).
+SLIVER_QUALITY = 1e-2
+
+
+def _check_box_axes(axes: list[np.ndarray], size, origin, divisions) -> None:
+    """Refuse box parameters whose nodes float64 can't hold apart or whose tets it can't measure.
+
+    The same criteria as :func:`validate_mesh` (finite coordinates within
+    :data:`MAX_COORDINATE`, no zero-volume tet), checked on the grid lines before the mesh
+    is built.
+    """
+    desc = f"size {list(map(float, size))}, origin {list(map(float, origin))}"
+    for a, name in zip(axes, "xyz"):
+        if not np.isfinite(a).all() or np.abs(a).max() > MAX_COORDINATE:
+            raise MeshError(
+                f"mesh {desc}: {name} coordinates beyond ±{MAX_COORDINATE:g}; use other units"
+            )
+        if not (np.diff(a) > 0).all():
+            raise MeshError(
+                f"mesh {desc}, divisions {list(divisions)}: grid lines along {name} coincide in "
+                "float64 (cells too small for the coordinates); move the origin or coarsen"
+            )
+    h_min = np.array([np.diff(a).min() for a in axes])
+    h_max = np.array([np.diff(a).max() for a in axes])
+    v_min = float(np.prod(h_min)) / 6.0  # the smallest tet of a five or six split
+    if not (v_min >= np.finfo(float).tiny and v_min > 1e-12 * float(np.sum(h_max**2)) ** 1.5):
+        raise MeshError(
+            f"mesh {desc}, divisions {list(divisions)}: zero-volume tets (cells of "
+            f"{h_min.tolist()} m can't be measured in float64); use other units"
+        )
+
+
 def validate_mesh(mesh: TetMesh, name: str = "mesh", rel_volume_tol: float = 1e-12) -> TetMesh:
     """Check and repair a mesh in place; raise :class:`MeshError` for what can't be repaired.
 
-    Rejected: non-finite coordinates, no tets, node indices out of range, zero-volume tets,
-    duplicate tets, coincident nodes used by tets. Repaired (and noted in ``mesh.notes``):
-    inverted tets are reoriented, unreferenced nodes are removed.
+    Rejected: non-finite coordinates or coordinates beyond :data:`MAX_COORDINATE`, no tets,
+    node indices out of range, zero-volume tets (``|V| <= rel_volume_tol l^3`` with ``l``
+    the tet's longest edge), duplicate tets, coincident nodes used by tets, non-manifold
+    facets (a triangle shared by three or more tets) and folds (two tets on the same side of
+    their shared triangle): both mean overlapping tets.
+
+    Repaired or reported (in ``mesh.notes``): inverted tets are reoriented, unreferenced
+    nodes are removed; sliver tets (mean-ratio quality below :data:`SLIVER_QUALITY`),
+    disconnected parts and non-manifold nodes (parts touching only at a node or an edge)
+    are noted. Those three are legal meshes both models can solve, but each part needs its
+    own boundary conditions, and slivers lower the stable explicit time step.
     """
     pts, tets = mesh.points, mesh.tets
     if pts.ndim != 2 or pts.shape[1] != 3:
@@ -229,6 +272,12 @@ def validate_mesh(mesh: TetMesh, name: str = "mesh", rel_volume_tol: float = 1e-
     bad = np.flatnonzero(~np.isfinite(pts).all(axis=1))
     if bad.size:
         raise MeshError(f"{name}: non-finite coordinates at nodes {_ids(bad)}")
+    bad = np.flatnonzero((np.abs(pts) > MAX_COORDINATE).any(axis=1))
+    if bad.size:
+        raise MeshError(
+            f"{name}: coordinates beyond ±{MAX_COORDINATE:g} at nodes {_ids(bad)}; "
+            "use other units (mesh.scale)"
+        )
     if tets.ndim != 2 or tets.shape[1] != 4 or tets.shape[0] == 0:
         raise MeshError(f"{name}: contains no tetrahedra")
     if tets.min() < 0 or tets.max() >= len(pts):
@@ -247,8 +296,7 @@ def validate_mesh(mesh: TetMesh, name: str = "mesh", rel_volume_tol: float = 1e-
     if dup.size:
         raise MeshError(f"{name}: duplicate tets {_ids(dup)} (same four nodes)")
     vol = tet_volumes(pts, tets)
-    scale = np.ptp(pts, axis=0).max() ** 3 if len(pts) else 1.0
-    zero = np.flatnonzero(np.abs(vol) <= rel_volume_tol * scale)
+    zero = np.flatnonzero(np.abs(vol) <= rel_volume_tol * _longest_edges(pts, tets) ** 3)
     if zero.size:
         raise MeshError(f"{name}: zero-volume tets {_ids(zero)}")
     used = np.zeros(len(pts), dtype=bool)
@@ -268,6 +316,16 @@ def validate_mesh(mesh: TetMesh, name: str = "mesh", rel_volume_tol: float = 1e-
         tets = tets.copy()
         tets[inverted] = tets[inverted][:, [0, 2, 1, 3]]
         mesh.notes.append(f"{name}: reoriented {int(inverted.sum())} inverted tets")
+    mesh.notes.extend(_topology_notes(tets, name))
+    q = mean_ratio_quality(pts, tets)
+    slivers = np.flatnonzero(q < SLIVER_QUALITY)
+    if slivers.size:
+        worst = slivers[np.argsort(q[slivers], kind="stable")]
+        mesh.notes.append(
+            f"{name}: {slivers.size} sliver tet{'s' if slivers.size > 1 else ''} (mean-ratio "
+            f"quality below {SLIVER_QUALITY:g}, "
+            f"worst {q[worst[0]]:.2g}): {_ids(worst)}"
+        )
     if not used.all():
         n_unused = int((~used).sum())
         remap = -np.ones(len(pts), dtype=np.int64)
@@ -286,6 +344,101 @@ def validate_mesh(mesh: TetMesh, name: str = "mesh", rel_volume_tol: float = 1e-
     return mesh
 
 
+def _longest_edges(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """Longest edge length of each tet."""
+    x = points[tets]
+    l2 = [((x[:, a] - x[:, b]) ** 2).sum(axis=1) for a, b in _EDGES]
+    return np.sqrt(np.max(l2, axis=0))
+
+
+_EDGES = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
+
+
+def _row_keys(rows: np.ndarray) -> np.ndarray:
+    """One sortable key per row of small non-negative ints (fast ``np.unique``)."""
+    n = int(rows.max(initial=0)) + 1
+    if n ** rows.shape[1] < 2**63:
+        key = np.zeros(len(rows), dtype=np.int64)
+        for c in range(rows.shape[1]):
+            key = key * n + rows[:, c]
+        return key
+    return np.unique(rows, axis=0, return_inverse=True)[1].ravel()
+
+
+def _topology_notes(tets: np.ndarray, name: str) -> list[str]:
+    """Face-sharing topology: raise for non-manifold facets, note parts and bad nodes.
+
+    * A triangle shared by three or more tets, or by two tets on the same side of it,
+      means overlapping tets: :class:`MeshError` naming the triangle and the tets.
+    * Parts: tets connected through shared triangles. More than one is legal (several
+      bodies), so it is a note naming the parts' sizes and a tet of each.
+    * Non-manifold nodes: at a node, the tets around it fall into more than one group
+      connected through triangles at that node (parts touching at a node or an edge, a
+      "bow tie"). Legal, but such a hinge is rarely meant: a note naming the nodes.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    m = len(tets)
+    local = _FACES  # (4, 3) local node indices of the faces
+    faces = tets[:, local].reshape(-1, 3)  # face f of tet t at row 4 t + f
+    order = np.argsort(faces, axis=1, kind="stable")
+    key = np.take_along_axis(faces, order, axis=1)
+    _, inverse, counts = np.unique(_row_keys(key), return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    shared = counts[inverse]
+    if (shared > 2).any():
+        rows = np.flatnonzero(shared > 2)
+        first = key[rows[0]]
+        n_bad = int((counts > 2).sum())
+        raise MeshError(
+            f"{name}: non-manifold facets: triangle {first.tolist()} is shared by "
+            f"{int(shared[rows[0]])} tets ({_ids(rows[inverse[rows] == inverse[rows[0]]] // 4)})"
+            f"; {n_bad} non-manifold triangle{'s' if n_bad > 1 else ''} in all (overlapping tets)"
+        )
+    rows = np.flatnonzero(shared == 2)
+    rows = rows[np.argsort(inverse[rows], kind="stable")]
+    a, b = rows[0::2], rows[1::2]  # the two sides of each interior triangle
+    # outward faces of two neighbours run in opposite directions: the permutations that
+    # sort them have opposite parity; equal parity means both tets lie on the same side
+    even = (order[:, 1] - order[:, 0]) % 3 == 1
+    folded = np.flatnonzero(even[a] == even[b])
+    if folded.size:
+        f = folded[0]
+        raise MeshError(
+            f"{name}: folded mesh: tets {a[f] // 4} and {b[f] // 4} lie on the same side of "
+            f"their shared triangle {key[a[f]].tolist()}; {folded.size} such "
+            f"triangle{'s' if folded.size > 1 else ''} in all (overlapping tets)"
+        )
+    notes = []
+    graph = coo_matrix((np.ones(a.size), (a // 4, b // 4)), shape=(m, m))
+    n_parts, part = connected_components(graph, directed=False)
+    if n_parts > 1:
+        sizes = np.bincount(part)
+        firsts = [int(np.flatnonzero(part == k)[0]) for k in range(min(n_parts, 8))]
+        notes.append(
+            f"{name}: {n_parts} disconnected parts (no shared triangle between them) of "
+            f"{_ids(sizes)} tets, containing tets {_ids(np.array(firsts))}; each part needs "
+            "its own boundary conditions"
+        )
+    # corners of a tet: item 4 t + j is node tets[t, j]; an interior triangle joins, at each
+    # of its three nodes, the corner items of its two tets
+    ia = (a // 4)[:, None] * 4 + local[a % 4][np.arange(a.size)[:, None], order[a]]
+    ib = (b // 4)[:, None] * 4 + local[b % 4][np.arange(b.size)[:, None], order[b]]
+    corners = coo_matrix((np.ones(ia.size), (ia.ravel(), ib.ravel())), shape=(4 * m, 4 * m))
+    _, group = connected_components(corners, directed=False)
+    node = tets.ravel()
+    pairs = np.unique(node * np.int64(4 * m) + group)  # distinct (node, group) pairs
+    n_groups = np.bincount(pairs // (4 * m))
+    bad = np.flatnonzero(n_groups > 1)
+    if bad.size:
+        notes.append(
+            f"{name}: {bad.size} non-manifold node{'s' if bad.size > 1 else ''} (parts touch "
+            f"only at a node or an edge there): {_ids(bad)}"
+        )
+    return notes
+
+
 def _ids(idx: np.ndarray, limit: int = 8) -> str:
     idx = np.asarray(idx).ravel()
     shown = ", ".join(str(int(i)) for i in idx[:limit])
@@ -296,13 +449,15 @@ _TET_TYPES = {"tetra": 4, "tetra10": 10}
 _TRI_TYPES = {"triangle": 3, "triangle6": 6}
 
 
-def read_mesh(path: str | os.PathLike) -> TetMesh:
-    """Read a tetrahedral mesh with meshio and validate it.
+def read_mesh(path: str | os.PathLike, scale: float = 1.0) -> TetMesh:
+    """Read a tetrahedral mesh with meshio, scale its coordinates and validate it.
 
-    Tets (``tetra``, or ``tetra10`` reduced to its corners) are kept; other cells are
-    dropped with a note, except triangles, which become named boundary facet sets when a
-    gmsh physical group or cell set names them. Node sets (``point_sets``) and tet cell
-    sets become named regions; per-tet cell data (e.g. ``fiber``) is kept.
+    Tets (``tetra``, or ``tetra10`` reduced to its corners) are kept; lower-dimensional
+    cells (vertices, lines, triangles, quads) are dropped with a note, except triangles,
+    which become named boundary facet sets when a gmsh physical group or cell set names
+    them. Other volume cells (hexahedra, wedges, pyramids …) are an error: dropping them
+    would silently remove part of the body. Node sets (``point_sets``) and tet cell sets
+    become named regions; per-tet cell data (e.g. ``fiber``) is kept.
 
     Raises
     ------
@@ -325,19 +480,38 @@ def read_mesh(path: str | os.PathLike) -> TetMesh:
     except (Exception, SystemExit) as exc:  # meshio raises many types; report one line
         text = str(exc).strip() if not isinstance(exc, SystemExit) else chatter.getvalue()
         text = " ".join(text.split()) or type(exc).__name__
+        text = text if len(text) <= 200 else text[:199] + "…"
         raise MeshError(f"mesh file {path} could not be read: {text}") from None
-    return mesh_from_meshio(m, path)
+    return mesh_from_meshio(m, path, scale=scale)
 
 
-def mesh_from_meshio(m, name: str = "mesh") -> TetMesh:
+#: meshio cell types that fill a volume (besides tets): refused, not dropped.
+_VOLUME_TYPES = ("hexahedron", "wedge", "pyramid", "hexahedron20", "hexahedron27", "wedge15")
+_VOLUME_TYPES += ("pyramid13", "pyramid14", "wedge18", "hexahedron24", "polyhedron", "VTK_LAGRANGE")
+
+
+def mesh_from_meshio(m, name: str = "mesh", scale: float = 1.0) -> TetMesh:
     """Build a validated :class:`TetMesh` from a ``meshio.Mesh`` (see :func:`read_mesh`)."""
-    pts = np.asarray(m.points, dtype=np.float64)
+    try:
+        pts = np.asarray(m.points, dtype=np.float64) * scale
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"{name}: node coordinates are not numbers ({exc})") from None
     if pts.ndim != 2 or pts.shape[0] == 0:
         raise MeshError(f"{name}: contains no nodes")
     if pts.shape[1] == 2:
         raise MeshError(f"{name}: is two-dimensional; a tetrahedral mesh is needed")
     pts = pts[:, :3]
     tet_blocks, tri_blocks, dropped = [], [], {}
+    volume = {}
+    for block in m.cells:
+        if block.type.startswith(_VOLUME_TYPES):
+            volume[block.type] = volume.get(block.type, 0) + len(block.data)
+    if volume:
+        what = ", ".join(f"{n} {k}" for k, n in sorted(volume.items()))
+        raise MeshError(
+            f"{name}: contains volume cells other than tetrahedra ({what}); split them into "
+            "tets in the meshing tool (dropping them would remove part of the body)"
+        )
     for b, block in enumerate(m.cells):
         if block.type in _TET_TYPES:
             tet_blocks.append((b, np.asarray(block.data)[:, :4]))

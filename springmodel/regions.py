@@ -71,9 +71,11 @@ def resolve_region(mesh: TetMesh, spec: str | dict, where: str = "region") -> Re
             valid = list(BOX_FACES) + sorted(
                 set(mesh.facet_sets) | set(mesh.node_sets) | set(mesh.cell_sets)
             )
+            shown = ", ".join(valid[:20]) + (f" … ({len(valid)} in all)" if len(valid) > 20 else "")
+            name = repr(spec) if len(spec) <= 60 else repr(spec[:59]) + "…"
             raise InputError(
-                f"{where}: unknown region {spec!r}; valid names: {', '.join(valid)}, "
-                "or {{ box = [[x0,y0,z0],[x1,y1,z1]] }} or {{ point = [x,y,z] }}"
+                f"{where}: unknown region {name}; valid names: {shown}, "
+                "or { box = [[x0,y0,z0],[x1,y1,z1]] } or { point = [x,y,z] }"
             )
     elif "box" in spec:
         lo, hi = (np.asarray(c, dtype=float) for c in spec["box"])

@@ -39,6 +39,7 @@ from . import options as opt
 from .errors import InputError, SceneError
 from .mesh import Split, TetMesh, box_mesh, read_mesh
 from .regions import Region, locate_points, resolve_region
+from .result import safe_filename
 
 Law = Literal["linear", "transverse-linear", "neo-hookean"]
 LAWS = ("linear", "transverse-linear", "neo-hookean")
@@ -161,6 +162,7 @@ class _Reader:
         self.t, self.where, self.file, self.used = table, where, file, set()
 
     def _key(self, key: str) -> str:
+        key = _key_label(key)
         return f"{self.where}.{key}" if self.where else key
 
     def fail(self, key: str, msg: str) -> SceneError:
@@ -189,39 +191,49 @@ class _Reader:
             if not isinstance(v, str):
                 raise self.fail(key, f"must be a string, got {type(v).__name__}")
             if choices is not None and v not in choices:
-                raise self.fail(key, f"{v!r} is not one of {', '.join(map(str, choices))}")
+                raise self.fail(key, f"{_show(v)} is not one of {', '.join(map(str, choices))}")
             return v
         if kind == "bool":
             if not isinstance(v, bool):
-                raise self.fail(key, f"must be true or false, got {v!r}")
+                raise self.fail(key, f"must be true or false, got {_show(v)}")
             return v
         if kind in ("float", "int"):
             if isinstance(v, bool) or not isinstance(v, (int, float)):
                 raise self.fail(key, f"must be a number, got {type(v).__name__}")
             if kind == "int" and not isinstance(v, int):
-                raise self.fail(key, f"must be an integer, got {v!r}")
-            if not math.isfinite(v):
-                raise self.fail(key, f"must be finite, got {v!r}")
-            if positive and v <= 0:
-                raise self.fail(key, f"must be positive, got {v!r}")
-            if nonneg and v < 0:
-                raise self.fail(key, f"must not be negative, got {v!r}")
+                raise self.fail(key, f"must be an integer, got {_show(v)}")
+            self._check_number(key, v, kind == "int", positive, nonneg, v)
             return float(v) if kind == "float" else int(v)
         if kind in ("vec", "ivec"):
             if not isinstance(v, list) or (length is not None and len(v) != length):
                 n = f"{length} " if length else ""
-                raise self.fail(key, f"must be a list of {n}numbers, got {v!r}")
+                raise self.fail(key, f"must be a list of {n}numbers, got {_show(v)}")
             for x in v:
                 if isinstance(x, bool) or not isinstance(x, (int, float)):
-                    raise self.fail(key, f"must be a list of numbers, got {v!r}")
+                    raise self.fail(key, f"must be a list of numbers, got {_show(v)}")
                 if kind == "ivec" and not isinstance(x, int):
-                    raise self.fail(key, f"must be a list of integers, got {v!r}")
-                if not math.isfinite(x):
-                    raise self.fail(key, f"must be finite, got {v!r}")
-                if positive and x <= 0:
-                    raise self.fail(key, f"entries must be positive, got {v!r}")
+                    raise self.fail(key, f"must be a list of integers, got {_show(v)}")
+                self._check_number(key, x, kind == "ivec", positive, False, v, "entries ")
             return np.array(v, dtype=np.int64 if kind == "ivec" else float)
         raise AssertionError(kind)
+
+    def _check_number(self, key, x, integer, positive, nonneg, shown, what="") -> None:
+        """Finite, within :data:`MAX_MAGNITUDE` (or :data:`MAX_INT`), sign as required."""
+        if not math.isfinite(x):
+            raise self.fail(key, f"{what}must be finite, got {_show(shown)}")
+        if positive and x <= 0:
+            raise self.fail(key, f"{what}must be positive, got {_show(shown)}")
+        if nonneg and x < 0:
+            raise self.fail(key, f"{what}must not be negative, got {_show(shown)}")
+        if integer and abs(x) > MAX_INT:
+            raise self.fail(key, f"{what}must be at most {MAX_INT}, got {_show(shown)}")
+        if not integer and abs(x) > MAX_MAGNITUDE:
+            raise self.fail(key, f"{what}must lie within ±{MAX_MAGNITUDE:g}, got {_show(shown)}")
+        if not integer and x != 0 and abs(x) < MIN_MAGNITUDE:
+            raise self.fail(
+                key,
+                f"{what}must be 0 or at least {MIN_MAGNITUDE:g} in magnitude, got {_show(shown)}",
+            )
 
     def finish(self) -> None:
         extra = sorted(set(self.t) - self.used)
@@ -229,8 +241,58 @@ class _Reader:
             raise self.fail(extra[0], "unknown key")
 
 
+def _key_label(key: str) -> str:
+    """A key as written in a message: quoted when it holds spaces or control characters."""
+    return key if key and key.isprintable() and not any(c.isspace() for c in key) else repr(key)
+
+
+def _show(value: Any, limit: int = 60) -> str:
+    """``repr`` of a scene value, cut to ``limit`` characters (one readable line)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+#: Largest magnitude of a number in a scene. SI values of soft-tissue problems are many
+#: orders of magnitude inside it, and products of three such numbers (a volume, a force
+#: times a length) stay finite in float64.
+MAX_MAGNITUDE = 1e100
+#: Smallest non-zero magnitude of a number in a scene (cubes stay normal float64 numbers).
+MIN_MAGNITUDE = 1e-100
+#: Largest integer in a scene (divisions, steps, iterations).
+MAX_INT = 2**31 - 1
+
 MAX_TETS = 20_000_000
 BYTES_PER_TET = 2_000  # spring model + FEM P1 working set, measured order of magnitude
+
+
+def machine_memory() -> int | None:
+    """Physical memory of this machine in bytes, or ``None`` if the OS does not say."""
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES"))
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def check_mesh_size(n_tets: int) -> str | None:
+    """Why a mesh of ``n_tets`` tets is refused before it is built or solved, or ``None``.
+
+    The working set of the spring model and the P1 reference is estimated at
+    :data:`BYTES_PER_TET` per tet; a mesh is refused when that exceeds the machine's
+    physical memory or when it has more than :data:`MAX_TETS` tets.
+    """
+    need = n_tets * BYTES_PER_TET
+    mem = machine_memory()
+    if mem is not None and need > mem:
+        return (
+            f"{n_tets:.3g} tets would need about {need / 2**30:.3g} GiB; this machine has "
+            f"{mem / 2**30:.3g} GiB"
+        )
+    if n_tets > MAX_TETS:
+        return (
+            f"{n_tets:.3g} tets would need about {need / 2**30:.3g} GiB; the limit here is "
+            f"{MAX_TETS:.0e} tets"
+        )
+    return None
 
 
 def load_scene(path: str | os.PathLike) -> Scene:
@@ -261,6 +323,7 @@ def parse_scene(text: str, path: str | os.PathLike | None = None) -> Scene:
     base = Path(path).parent if path is not None else Path.cwd()
     top = _Reader(data, "", file)
     name = top.get("name", "str", default=Path(file).stem if path else "scene")
+    safe = safe_filename(name)  # the name becomes part of default output paths
     for section in ("mesh", "material"):
         if section not in data:
             raise SceneError(f"{file}: [{section}]: missing section (required)")
@@ -284,14 +347,19 @@ def parse_scene(text: str, path: str | os.PathLike | None = None) -> Scene:
     ]
     names = [p.name for p in probes]
     if len(set(names)) != len(names):
-        raise SceneError(f"{file}: probe: duplicate probe names in {names}")
+        dup = sorted({n for n in names if names.count(n) > 1})
+        raise SceneError(f"{file}: probe: duplicate probe name {_show(dup[0])}")
     top.used.update({"boundary", "load", "probe"})
     spring = _parse_spring(_Reader(data.get("spring", {}), "spring", file))
     fem = _parse_fem(_Reader(data.get("fem", {}), "fem", file))
     top.used.update({"spring", "fem"})
     top.finish()
+    if safe != name:
+        mesh.notes.append(
+            f"{file}: name {_show(name)} can't be part of a folder name; using {safe!r}"
+        )
     return Scene(
-        name=name,
+        name=safe,
         mesh=mesh,
         material=material,
         frames=frames,
@@ -322,11 +390,14 @@ def _parse_mesh(r: _Reader, base: Path) -> TetMesh:
         scale = r.get("scale", "float", default=1.0, positive=True)
         r.finish()
         try:
-            mesh = read_mesh(p)
+            mesh = read_mesh(p, scale=scale)
         except InputError as exc:
             raise SceneError(f"{r.file}: mesh.file: {exc}") from None
-        if scale != 1.0:
-            mesh.points = mesh.points * scale
+        # a file's size can't be judged before reading it; reading needs far less memory
+        # than solving, so the estimate is checked right after
+        too_big = check_mesh_size(mesh.n_tets)
+        if too_big:
+            raise r.fail("file", too_big)
         return mesh
     gen = r.get("generator", "str", choices=("box",))
     size = r.get("size", "vec", length=3, positive=True)
@@ -334,16 +405,15 @@ def _parse_mesh(r: _Reader, base: Path) -> TetMesh:
     split: Split = r.get("split", "str", default="six", choices=opt_splits())
     origin = r.get("origin", "vec", default=np.zeros(3), length=3)
     r.finish()
-    n_tets = int(np.prod(div)) * (6 if split.startswith("six") else 5)
-    if n_tets > MAX_TETS:
-        est = n_tets * BYTES_PER_TET / 2**30
-        raise r.fail(
-            "divisions",
-            f"{n_tets:.3g} tets would need about {est:.0f} GiB; the limit here is "
-            f"{MAX_TETS:.0e} tets",
-        )
+    n_tets = math.prod(int(d) for d in div) * (6 if split.startswith("six") else 5)
+    too_big = check_mesh_size(n_tets)
+    if too_big:
+        raise r.fail("divisions", too_big)
     assert gen == "box"
-    return box_mesh(tuple(size), tuple(int(d) for d in div), split, tuple(origin))
+    try:
+        return box_mesh(tuple(size), tuple(int(d) for d in div), split, tuple(origin))
+    except InputError as exc:
+        raise r.fail("size", str(exc)) from None
 
 
 def opt_splits() -> tuple[str, ...]:
@@ -378,8 +448,8 @@ def _parse_material(r: _Reader) -> Material:
                 raise r.fail("mu", "give either E and nu, or mu and kappa")
             mu = r.get("mu", "float", positive=True)
             kappa = r.get("kappa", "float", positive=True)
-            kw["E"] = 9 * kappa * mu / (3 * kappa + mu)
-            kw["nu"] = (3 * kappa - 2 * mu) / (2 * (3 * kappa + mu))
+            kw["E"] = 9 * mu / (3 + mu / kappa)  # = 9 kappa mu / (3 kappa + mu), no overflow
+            kw["nu"] = (3 - 2 * mu / kappa) / (2 * (3 + mu / kappa))
         else:
             kw["E"] = r.get("E", "float", positive=True)
             kw["nu"] = r.get("nu", "float")
@@ -403,7 +473,9 @@ def _parse_axes(r: _Reader, mesh: TetMesh) -> np.ndarray:
             r.finish()
             if fkey not in mesh.cell_data:
                 have = ", ".join(sorted(mesh.cell_data)) or "none"
-                raise r.fail("fiber_data", f"mesh has no cell data {fkey!r} (has: {have})")
+                raise r.fail(
+                    "fiber_data", f"mesh has no cell data {_show(fkey)} (has: {_show(have)})"
+                )
             fib = np.asarray(mesh.cell_data[fkey], dtype=float).reshape(mesh.n_tets, -1)[:, :3]
             sh = mesh.cell_data.get(skey)
             sh = None if sh is None else np.asarray(sh, float).reshape(mesh.n_tets, -1)[:, :3]
@@ -425,6 +497,16 @@ def _parse_axes(r: _Reader, mesh: TetMesh) -> np.ndarray:
         if isinstance(exc, SceneError):
             raise
         raise SceneError(f"{r.file}: axes: {exc}") from None
+
+
+def _coordinate(x: Any) -> bool:
+    """A number usable as a coordinate: finite and within :data:`MAX_MAGNITUDE`."""
+    return (
+        isinstance(x, (int, float))
+        and not isinstance(x, bool)
+        and math.isfinite(x)
+        and abs(x) <= MAX_MAGNITUDE
+    )
 
 
 def _parse_region(r: _Reader, mesh: TetMesh, key: str = "region") -> Region:
@@ -449,18 +531,11 @@ def _parse_region(r: _Reader, mesh: TetMesh, key: str = "region") -> Region:
                 )
             )
             if not ok:
-                raise r.fail(key, "box must be [[x0, y0, z0], [x1, y1, z1]]")
+                raise r.fail(key, "box must be [[x0, y0, z0], [x1, y1, z1]] (finite numbers)")
         elif set(spec) == {"point"}:
             p = spec["point"]
-            if not (
-                isinstance(p, list)
-                and len(p) == 3
-                and all(
-                    isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
-                    for x in p
-                )
-            ):
-                raise r.fail(key, "point must be [x, y, z]")
+            if not (isinstance(p, list) and len(p) == 3 and all(_coordinate(x) for x in p)):
+                raise r.fail(key, "point must be [x, y, z] (finite numbers)")
         else:
             raise r.fail(key, "must be a name, { box = [[..],[..]] } or { point = [x,y,z] }")
     elif not isinstance(spec, str):
@@ -477,7 +552,7 @@ def _parse_boundary(r: _Reader, mesh: TetMesh) -> Boundary:
         fix = r.t["fix"]
         r.used.add("fix")
         if not isinstance(fix, list) or not fix or not all(c in COMPONENTS for c in fix):
-            raise r.fail("fix", f'must be a non-empty list of "x", "y", "z", got {fix!r}')
+            raise r.fail("fix", f'must be a non-empty list of "x", "y", "z", got {_show(fix)}')
         comps = tuple(sorted({COMPONENTS.index(c) for c in fix}))
     else:
         comps = (0, 1, 2)
@@ -515,7 +590,7 @@ def _parse_probe(r: _Reader, mesh: TetMesh) -> Probe:
         lo, hi = mesh.bounding_box()
         raise r.fail(
             "point",
-            f"probe {name!r} at {point.tolist()} is outside the mesh "
+            f"probe {_show(name)} at {point.tolist()} is outside the mesh "
             f"(bounding box {lo.tolist()} – {hi.tolist()})",
         )
     return Probe(name=name, point=point, tet=int(tet[0]), bary=bary[0])

@@ -29,7 +29,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from springmodel.result import _jsonable, atomic_write_text
+from springmodel.result import _jsonable, atomic_write_text, remove_stale_temp_files
 
 CACHE_VERSION = "1"
 
@@ -71,6 +71,7 @@ class CaseCache:
         self.dir = Path(root) / study
         self.dir.mkdir(parents=True, exist_ok=True)
         self.fingerprint = fingerprint
+        remove_stale_temp_files(self.dir)  # left by a run killed mid-write
 
     def path(self, case: dict[str, Any]) -> Path:
         return self.dir / f"{case_key(case, self.fingerprint)}.json"
@@ -80,8 +81,8 @@ class CaseCache:
         if not p.is_file():
             return None
         try:
-            return json.loads(p.read_text())["result"]
-        except (ValueError, KeyError):  # a damaged entry is recomputed
+            return json.loads(p.read_text(encoding="utf-8"))["result"]
+        except (ValueError, KeyError, TypeError):  # a damaged entry is recomputed
             return None
 
     def put(self, case: dict[str, Any], result: dict[str, Any]) -> None:

@@ -73,8 +73,15 @@ def _subcommand(module: str, func: str) -> Callable[[argparse.Namespace], int]:
     return run
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with usage errors as one line (exit 2), like every other bad input."""
+
+    def error(self, message: str):
+        self.exit(2, f"springfem: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="springfem",
         description="Anisotropic spring model vs FEM on the same tetrahedral mesh.",
     )

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from springmodel.errors import InputError
-from springmodel.result import _jsonable, atomic_write_text
+from springmodel.result import _jsonable, atomic_write_text, remove_stale_temp_files
 
 from .cache import CaseCache, source_fingerprint
 
@@ -104,6 +104,7 @@ def run_study(
     )
     cache = CaseCache(root / ".cache", key, fingerprint=code)
     ctx = StudyContext(key, root / key, quick, cache, progress)
+    remove_stale_temp_files(ctx.out)  # tables/figures of a run killed mid-write
     t0 = time.perf_counter()
     result: StudyOutput = mod.run(ctx)
     result.seconds = time.perf_counter() - t0
