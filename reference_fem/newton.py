@@ -103,11 +103,17 @@ def newton_step(
         gap = np.abs(u[problem.fixed_dofs] - target).max(initial=0.0)
         _log(opts, f"  {label} iteration {it:2d}  |R|/|f| = {rel:.3e}")
         if not np.isfinite(rel):
-            raise _StepFailed("non-finite residual")
+            bad = np.flatnonzero(~np.isfinite(R[free]))
+            where = f" at FE node {int(free[bad[0]]) // 3}" if bad.size else ""
+            raise _StepFailed(f"non-finite residual{where}")
         if rel <= opts.tol and gap == 0.0:
             return u, history, it
         if it == opts.max_iter:
-            raise _StepFailed(f"no convergence in {opts.max_iter} iterations (|R|/|f| = {rel:.2e})")
+            worst = int(free[np.argmax(np.abs(R[free]))])
+            raise _StepFailed(
+                f"no convergence in {opts.max_iter} iterations (|R|/|f| = {rel:.2e}; largest "
+                f"residual at FE node {worst // 3}, component {'xyz'[worst % 3]})"
+            )
         if r0 is None:
             r0 = rel
         elif rel > 1e6 * max(r0, opts.tol):
