@@ -69,16 +69,12 @@ def applied_stress(scene: Scene) -> float:
 
 def compliance_voigt(mat: Material) -> np.ndarray:
     """6×6 compliance (Voigt xx, yy, zz, yz, xz, xy; engineering shear) in the material frame
-    (axis 0 = fiber)."""
-    Ef, Ec, nfc, nc, Gf = mat.E_fiber, mat.E_cross, mat.nu_fiber_cross, mat.nu_cross, mat.G_fiber
-    S = np.zeros((6, 6))
-    S[0, 0] = 1.0 / Ef
-    S[1, 1] = S[2, 2] = 1.0 / Ec
-    S[0, 1] = S[1, 0] = S[0, 2] = S[2, 0] = -nfc / Ef
-    S[1, 2] = S[2, 1] = -nc / Ec
-    S[3, 3] = 2.0 * (1.0 + nc) / Ec
-    S[4, 4] = S[5, 5] = 1.0 / Gf
-    return S
+    (axis 0 = fiber), as the FEM reference builds it."""
+    from reference_fem.materials import transverse_compliance
+
+    return transverse_compliance(
+        mat.E_fiber, mat.E_cross, mat.nu_fiber_cross, mat.nu_cross, mat.G_fiber
+    )
 
 
 _VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
