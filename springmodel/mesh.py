@@ -455,8 +455,9 @@ def read_mesh(path: str | os.PathLike, scale: float = 1.0) -> TetMesh:
     Tets (``tetra``, or ``tetra10`` reduced to its corners) are kept; lower-dimensional
     cells (vertices, lines, triangles, quads) are dropped with a note, except triangles,
     which become named boundary facet sets when a gmsh physical group or cell set names
-    them. Other volume cells (hexahedra, wedges, pyramids …) are an error: dropping them
-    would silently remove part of the body. Node sets (``point_sets``) and tet cell sets
+    them. Other volume cells (hexahedra, wedges, pyramids …) are dropped too, and the note
+    says so and that the body lost that part (split them into tets in the meshing tool to
+    keep it). Node sets (``point_sets``) and tet cell sets
     become named regions; per-tet cell data (e.g. ``fiber``) is kept.
 
     Raises
@@ -485,7 +486,7 @@ def read_mesh(path: str | os.PathLike, scale: float = 1.0) -> TetMesh:
     return mesh_from_meshio(m, path, scale=scale)
 
 
-#: meshio cell types that fill a volume (besides tets): refused, not dropped.
+#: meshio cell types that fill a volume (besides tets): dropped with a warning note.
 _VOLUME_TYPES = ("hexahedron", "wedge", "pyramid", "hexahedron20", "hexahedron27", "wedge15")
 _VOLUME_TYPES += ("pyramid13", "pyramid14", "wedge18", "hexahedron24", "polyhedron", "VTK_LAGRANGE")
 
@@ -506,12 +507,6 @@ def mesh_from_meshio(m, name: str = "mesh", scale: float = 1.0) -> TetMesh:
     for block in m.cells:
         if block.type.startswith(_VOLUME_TYPES):
             volume[block.type] = volume.get(block.type, 0) + len(block.data)
-    if volume:
-        what = ", ".join(f"{n} {k}" for k, n in sorted(volume.items()))
-        raise MeshError(
-            f"{name}: contains volume cells other than tetrahedra ({what}); split them into "
-            "tets in the meshing tool (dropping them would remove part of the body)"
-        )
     for b, block in enumerate(m.cells):
         if block.type in _TET_TYPES:
             tet_blocks.append((b, np.asarray(block.data)[:, :4]))
@@ -583,7 +578,13 @@ def mesh_from_meshio(m, name: str = "mesh", scale: float = 1.0) -> TetMesh:
     )
     if dropped:
         what = ", ".join(f"{n} {k}" for k, n in sorted(dropped.items()))
-        mesh.notes.append(f"{name}: kept {len(tets)} tets, dropped {what}")
+        warn = (
+            "; the dropped volume cells are missing from the body (split them into tets in "
+            "the meshing tool to keep them)"
+            if volume
+            else ""
+        )
+        mesh.notes.append(f"{name}: kept {len(tets)} tets, dropped {what}{warn}")
     return validate_mesh(mesh, name)
 
 

@@ -14,7 +14,7 @@ disconnected parts      note         several bodies are legal; each needs its ow
 non-manifold nodes      note         parts touching at a node/edge are solvable (a hinge)
 non-manifold facets     error        a triangle in three tets means overlapping tets
 folded tets             error        two tets on one side of their triangle overlap
-other volume cells      error        dropping hexahedra would remove part of the body
+other volume cells      note         dropped as issue 2 asks; the note warns the body lost them
 surface/line cells      note         boundary decoration, dropped (named triangles kept)
 empty region            error        a boundary or load on nothing is a scene mistake
 ======================  ===========  =====================================================
@@ -197,17 +197,18 @@ def test_tets_folded_onto_the_same_side_of_a_triangle_are_refused():
     )
 
 
-def test_hexahedra_next_to_tets_are_refused_not_dropped(tmp_path):
+def test_hexahedra_next_to_tets_are_dropped_with_a_warning_note(tmp_path):
+    """Issue 2: non-tet cells - tets are kept, and the note says what was dropped."""
     cube = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
     p = np.vstack([cube, CORNERS + [2.0, 0.0, 0.0]])
     write(tmp_path / "mixed.vtu", p, [("tetra", TET + 8), ("hexahedron", np.arange(8)[None])])
-    with pytest.raises(MeshError) as info:
-        read_mesh(tmp_path / "mixed.vtu")
-    assert str(info.value) == (
-        f"{tmp_path / 'mixed.vtu'}: contains volume cells other than tetrahedra "
-        "(1 hexahedron); split them into tets in the meshing tool (dropping them would "
-        "remove part of the body)"
-    )
+    m = read_mesh(tmp_path / "mixed.vtu")
+    assert m.n_tets == len(TET)
+    assert (
+        f"{tmp_path / 'mixed.vtu'}: kept {len(TET)} tets, dropped 1 hexahedron; the dropped "
+        "volume cells are missing from the body (split them into tets in the meshing tool "
+        "to keep them)"
+    ) in m.notes
 
 
 def test_lines_and_quads_are_dropped_with_a_note(tmp_path):
