@@ -16,9 +16,10 @@ force is zero by construction). The energies are those of :mod:`reference_fem.hy
 elasticity; per element the kernel reads 4 node ids and one row of 10 floats (three shape
 gradients and the rest volume).
 
-Parallel scatter without races uses the spring kernel's two strategies, written here again
-(``reference_fem`` does not import spring internals, DESIGN §2), so the two kernels are
-compared like for like:
+Parallel scatter without races uses the spring kernel's two strategies (the scatter loops
+are written here again since ``reference_fem`` does not import spring internals, DESIGN §2;
+the element colouring is the shared :func:`springmodel.mesh.element_colouring`), so the two
+kernels are compared like for like:
 
 ``buffer`` (default, as the spring kernel's)
     Static contiguous chunks of elements, one per numba thread, each adding into its own
@@ -60,7 +61,7 @@ from numba import njit, prange
 
 from springmodel.errors import InputError, SolverError
 from springmodel.loads import external_forces, has_follower_loads, lumped_masses
-from springmodel.mesh import tet_volumes
+from springmodel.mesh import element_colouring, tet_volumes
 from springmodel.scene import Scene
 
 from .space import p1_gradients
@@ -251,54 +252,6 @@ def _energy_serial(x, tets, D, mu, lam, law):  # pragma: no cover - compiled
     return total
 
 
-@njit(cache=True)
-def _greedy_colours(tets, n_points, words):  # pragma: no cover - compiled
-    """Smallest colour not yet used at any of the element's nodes (bit masks per node)."""
-    m = tets.shape[0]
-    used = np.zeros((n_points, words), dtype=np.uint64)
-    colour = np.empty(m, dtype=np.int64)
-    one = np.uint64(1)
-    for k in range(m):
-        c = -1
-        for w in range(words):
-            busy = used[tets[k, 0], w] | used[tets[k, 1], w] | used[tets[k, 2], w]
-            busy |= used[tets[k, 3], w]
-            if busy != ~np.uint64(0):
-                for bit in range(64):
-                    if (busy >> np.uint64(bit)) & one == 0:
-                        c = 64 * w + bit
-                        break
-                break
-        if c < 0:
-            return colour, False
-        colour[k] = c
-        mask = one << np.uint64(c % 64)
-        for a in range(4):
-            used[tets[k, a], c // 64] |= mask
-    return colour, True
-
-
-def element_colours(tets: np.ndarray, n_points: int) -> np.ndarray:
-    """Greedy element colouring: elements of one colour share no node.
-
-    A greedy colouring needs at most ``4 (v - 1) + 1`` colours, ``v`` the largest number
-    of elements at a node; each node keeps a bit mask of the colours used around it.
-
-    Examples
-    --------
-    >>> element_colours(np.array([[0, 1, 2, 3], [1, 2, 3, 4], [5, 6, 7, 8]]), 9).tolist()
-    [0, 1, 0]
-    """
-    tets = np.ascontiguousarray(tets, dtype=np.int64)
-    if tets.size == 0:
-        return np.zeros(0, dtype=np.int64)
-    valence = int(np.bincount(tets.ravel(), minlength=n_points).max())
-    words = max(1, -(-(4 * (valence - 1) + 1) // 64))
-    colour, ok = _greedy_colours(tets, int(n_points), words)
-    assert ok, "colour bound exceeded"  # cannot happen: the bound above is sufficient
-    return colour
-
-
 # --------------------------------------------------------------------------- the system
 
 
@@ -396,7 +349,7 @@ class ExplicitFem:
         self._ptr = np.array([0, m], dtype=np.int64)
         self._buf = np.zeros((0, 0, 3))
         if self.scatter == "colour":
-            colour = element_colours(self.tets, self.n_points)
+            colour = element_colouring(self.tets, self.n_points)
             self._perm = np.argsort(colour, kind="stable")
             counts = np.bincount(colour)
             self._ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)

@@ -44,6 +44,7 @@ import numpy as np
 from numba import njit, prange
 
 from .elements import SpringElements
+from .mesh import element_colouring
 from .options import SpringOptions
 
 AXIAL_CODES = {"linear": 0, "quadratic": 1, "cubic": 1, "stress-scaled": 2}
@@ -295,43 +296,6 @@ def _forces_buffer(x, v, tets, G, P, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvo
             for t in range(nchunk):
                 s += buf[t, i, d]
             out[i, d] = s
-
-
-@njit(cache=True)
-def _greedy_colouring(tets, node_ptr, node_elems):
-    """Smallest colour not used by an already coloured element sharing a node."""
-    m = tets.shape[0]
-    colour = np.full(m, -1, dtype=np.int64)
-    mark = np.full(m + 1, -1, dtype=np.int64)  # mark[c] == k: colour c is taken near k
-    for k in range(m):
-        for a in range(4):
-            node = tets[k, a]
-            for p in range(node_ptr[node], node_ptr[node + 1]):
-                c = colour[node_elems[p]]
-                if c >= 0:
-                    mark[c] = k
-        c = 0
-        while mark[c] == k:
-            c += 1
-        colour[k] = c
-    return colour
-
-
-def element_colouring(tets: np.ndarray, n_points: int) -> np.ndarray:
-    """Greedy colouring: ``colour[k]`` such that elements of one colour share no node.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(m,)`` int64 colours ``0 .. n_colours - 1``.
-    """
-    tets = np.ascontiguousarray(tets, dtype=np.int64)
-    flat = tets.ravel()
-    order = np.argsort(flat, kind="stable")
-    node_elems = (order // 4).astype(np.int64)
-    node_ptr = np.zeros(n_points + 1, dtype=np.int64)
-    np.cumsum(np.bincount(flat, minlength=n_points), out=node_ptr[1:])
-    return _greedy_colouring(tets, node_ptr, node_elems)
 
 
 # --------------------------------------------------------------------------- public API

@@ -22,14 +22,14 @@ from scipy.spatial.transform import Rotation
 
 from reference_fem import element_stiffness_p1, solve
 from reference_fem.assembly import assemble_vector, hyperelastic_element_arrays
-from reference_fem.explicit import ExplicitFem, _forces_serial, element_colours
+from reference_fem.explicit import ExplicitFem, _forces_serial
 from reference_fem.hyperelastic import NeoHookean
 from reference_fem.materials import isotropic_matrix
 from reference_fem.scenes import make_scene
 from reference_fem.space import Space, p1_gradients
 from springmodel.coloring import fd_jacobian
 from springmodel.errors import InputError, SolverError
-from springmodel.mesh import box_mesh
+from springmodel.mesh import box_mesh, element_colouring
 from springmodel.scene import Material, parse_scene
 from springmodel.solvers import explicit, explicit_static, stable_time_step
 from springmodel.system import MechanicalSystem
@@ -165,7 +165,7 @@ def test_parallel_equals_serial(scene, law):
 
 def test_colouring_separates_elements(scene):
     tets = scene.mesh.tets
-    colour = element_colours(tets, scene.mesh.n_points)
+    colour = element_colouring(tets, scene.mesh.n_points)
     for c in np.unique(colour):
         nodes = tets[colour == c].ravel()
         assert np.unique(nodes).size == nodes.size
