@@ -26,6 +26,7 @@ material_matrix(material, frames) -> (m, 6, 6) Voigt stiffness
 element_stiffness_p1(points, tets, Cmat) -> (m, 12, 12)
 """
 
+from . import options as _options  # noqa: F401  (registers the [fem] scene section)
 from .assembly import element_stiffness_p1
 from .bench import bench
 from .hyperelastic import NeoHookean

@@ -7,8 +7,8 @@ times faster than ``coo_matrix(...).tocsr()`` and hands pyamg the block structur
 
 Examples
 --------
->>> from springmodel.mesh import box_mesh
->>> from reference_fem.materials import isotropic_matrix
+>>> from springfem.mesh import box_mesh
+>>> from springfem.materials import isotropic_matrix
 >>> m = box_mesh((1.0, 1.0, 1.0), (1, 1, 1))
 >>> K = element_stiffness_p1(m.points, m.tets, isotropic_matrix(1.0, 0.3))
 >>> K.shape, bool(abs(K.sum(axis=2)).max() < 1e-12)  # translations carry no force
@@ -20,7 +20,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .materials import voigt_to_tensor
+from springfem.materials import voigt_to_tensor
+
 from .space import Space, p1_gradients
 
 #: Elements per chunk when quadrature-point arrays would otherwise get large.

@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from springmodel.scene import Scene
+from springfem.scene import Scene
 
 from .scenes import bench_scene
 

@@ -4,7 +4,7 @@ A scene boundary prescribes components of a constant displacement on a region's 
 (:meth:`Scene.dirichlet`); on P2 the same value goes to every edge node whose two vertices
 are in the region. Later boundaries override earlier ones on shared DOFs, as in the scene.
 
-Reactions follow :func:`springmodel.loads.reactions`: the support force on a constrained
+Reactions follow :func:`springfem.loads.reactions`: the support force on a constrained
 DOF is ``-(f_ext - f_int) = R`` with the residual ``R = f_int - f_ext``, summed per
 boundary region (key ``boundary.region.name``).
 """
@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 
-from springmodel.errors import SolverError
-from springmodel.scene import Scene
+from springfem.errors import SolverError
+from springfem.scene import Scene
 
 from .space import Space
 

@@ -18,7 +18,7 @@ gradients and the rest volume).
 
 Parallel scatter without races uses the spring kernel's two strategies (the scatter loops
 are written here again since ``reference_fem`` does not import spring internals, DESIGN §2;
-the element colouring is the shared :func:`springmodel.mesh.element_colouring`), so the two
+the element colouring is the shared :func:`springfem.mesh.element_colouring`), so the two
 kernels are compared like for like:
 
 ``buffer`` (default, as the spring kernel's)
@@ -34,7 +34,7 @@ kernels are compared like for like:
 ``ExplicitFem(parallel=False)`` runs one serial pass in mesh order.
 
 Inverted elements (``J <= 0``) get no force from the kernel and are counted; for the
-neo-Hookean law :class:`ExplicitFem` then raises a :class:`~springmodel.errors.SolverError`
+neo-Hookean law :class:`ExplicitFem` then raises a :class:`~springfem.errors.SolverError`
 naming the element and the step ("inverted element k at step n") instead of letting NaN
 propagate, or (``on_inverted="nan"``) returns NaN at the element's nodes so a Newton line
 search can back off.
@@ -59,10 +59,10 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit, prange
 
-from springmodel.errors import InputError, SolverError
-from springmodel.loads import external_forces, has_follower_loads, lumped_masses
-from springmodel.mesh import element_colouring, tet_volumes
-from springmodel.scene import Scene
+from springfem.errors import InputError, SolverError
+from springfem.loads import external_forces, has_follower_loads, lumped_masses
+from springfem.mesh import element_colouring, tet_volumes
+from springfem.scene import Scene
 
 from .space import p1_gradients
 
@@ -273,12 +273,12 @@ def _parse_law(scene: Scene, law: str) -> int:
 
 
 class ExplicitFem:
-    """P1 FEM of a scene as a :class:`~springmodel.system.MechanicalSystem`.
+    """P1 FEM of a scene as a :class:`~springfem.mechanics.system.MechanicalSystem`.
 
-    The solvers of :mod:`springmodel.solvers` (``explicit``, ``explicit_static``,
+    The solvers of :mod:`springfem.mechanics.solvers` (``explicit``, ``explicit_static``,
     ``stable_time_step``, ``static``) drive it as they drive the spring model: lumped masses
     ``rho V / 4``, the scene's Dirichlet conditions and P1 nodal loads
-    (:func:`springmodel.loads.external_forces`), forces from the fused kernel.
+    (:func:`springfem.loads.external_forces`), forces from the fused kernel.
 
     Parameters
     ----------
@@ -296,7 +296,7 @@ class ExplicitFem:
         colouring), see the module docstring.
     on_inverted
         What a neo-Hookean force evaluation does when elements have ``J <= 0``: ``raise``
-        a :class:`~springmodel.errors.SolverError` naming the first inverted element and the
+        a :class:`~springfem.errors.SolverError` naming the first inverted element and the
         step (counted by :meth:`post_step`), return ``nan`` forces at the inverted elements'
         nodes (lets a Newton line search back off), or ``ignore`` (the inverted elements
         contribute nothing). The linear law is defined for any ``F``; it only counts them.
@@ -470,9 +470,10 @@ class ExplicitFem:
         """
         if self._follower:
             return None
+        from springfem.materials import isotropic_matrix
+
         from .assembly import BlockPattern, hyperelastic_element_arrays, stiffness_matrix
         from .hyperelastic import NeoHookean
-        from .materials import isotropic_matrix
         from .space import Space
 
         if self._assembly is None:

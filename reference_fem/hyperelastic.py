@@ -26,8 +26,8 @@ from typing import Literal
 
 import numpy as np
 
-from springmodel.errors import InputError
-from springmodel.scene import FORMULATIONS, VOLUMETRIC, Material
+from springfem.errors import InputError
+from springfem.scene import FORMULATIONS, VOLUMETRIC, Material
 
 Formulation = Literal["coupled", "uncoupled"]
 Volumetric = Literal["log", "quadratic", "simo-taylor"]

@@ -4,7 +4,7 @@ Constrained DOFs are eliminated symmetrically (their rows and columns zeroed, a 
 diagonal, zero right-hand side), which keeps the 3x3 block structure that pyamg's smoothed
 aggregation uses together with the rigid-body modes as near-nullspace (DESIGN §5).
 Failures (a singular factor, a Krylov method that does not converge, non-finite numbers)
-raise :class:`~springmodel.errors.SolverError`.
+raise :class:`~springfem.errors.SolverError`.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
-from springmodel.errors import InputError, SolverError
+from springfem.errors import InputError, SolverError
 
 #: ``auto`` uses SuperLU up to this many DOFs (3D fill-in makes it slow beyond: about
 #: 1.3 s for the 19683 P2 DOFs of the bundled cantilever, 36 s for 54k P1 DOFs).

@@ -1,6 +1,6 @@
 """Consistent FE load vectors for the scene's loads, and the pressure load stiffness.
 
-Conventions are those of :mod:`springmodel.loads`: tractions are dead loads on the
+Conventions are those of :mod:`springfem.loads`: tractions are dead loads on the
 reference surface, pressure is a follower load ``t = -p n`` on the current surface, gravity
 is ``rho g`` per unit reference volume, and a total force is spread over its region by
 facet area (a uniform traction ``F / A``), or equally over its nodes when the region has no
@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from springmodel.scene import Scene
+from springfem.scene import Scene
 
 from .assembly import BlockPattern, assemble_vector
 from .space import Space

@@ -4,7 +4,7 @@ The load factor ``lambda`` scales every load and every prescribed displacement. 
 that fails (too many iterations, a growing or non-finite residual, an inverted element, a
 failed linear solve) is retried with a quarter of the increment; a step that converges in
 few iterations lets the next one grow by half. When the increment falls below
-``min_increment`` the solve stops with :class:`~springmodel.errors.SolverError` carrying
+``min_increment`` the solve stops with :class:`~springfem.errors.SolverError` carrying
 the last converged displacement.
 
 Convergence: ``|R_free| <= tol * max(|f_int|, |f_ext|)`` with the prescribed values reached.
@@ -18,7 +18,7 @@ from typing import Protocol
 
 import numpy as np
 
-from springmodel.errors import SolverError
+from springfem.errors import SolverError
 
 
 class InvertedElements(Exception):

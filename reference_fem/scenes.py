@@ -1,6 +1,6 @@
 """Scenes built in code: verification problems that no bundled TOML file describes.
 
-:func:`make_scene` assembles a :class:`~springmodel.scene.Scene` from a mesh and short
+:func:`make_scene` assembles a :class:`~springfem.scene.Scene` from a mesh and short
 specs (regions as in scene files: box-face names, mesh sets, ``{"box": ...}``,
 ``{"point": ...}``). :func:`thick_cylinder_scene` maps a box mesh to a quarter of a thick
 cylinder (Lamé's problem in plane strain); :func:`bench_scene` is the speed benchmark.
@@ -18,12 +18,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from springmodel.axes import uniform_frames
-from springmodel.errors import InputError
-from springmodel.mesh import TetMesh, boundary_facets, box_mesh
-from springmodel.options import FemOptions
-from springmodel.regions import locate_points, resolve_region
-from springmodel.scene import Boundary, Load, Material, Probe, Scene
+from springfem.axes import uniform_frames
+from springfem.errors import InputError
+from springfem.mesh import TetMesh, boundary_facets, box_mesh
+from springfem.regions import locate_points, resolve_region
+from springfem.scene import Boundary, Load, Material, Probe, Scene
+
+from .options import FemOptions
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -80,7 +81,7 @@ def make_scene(
         boundaries=bnd,
         loads=lds,
         probes=prb,
-        fem=fem or FemOptions(),
+        options={"fem": fem or FemOptions()},
     )
 
 

@@ -1,4 +1,4 @@
-"""The FEM reference solve: a scene in, a :class:`~springmodel.result.Result` out.
+"""The FEM reference solve: a scene in, a :class:`~springfem.result.Result` out.
 
 :class:`FemProblem` gathers the space (P1 or P2 on the scene's vertices), the material
 law, the constraints and the loads, and evaluates residual ``R = f_int - f_ext`` and
@@ -7,7 +7,7 @@ stepping (neo-Hookean) and fills the result contract of DESIGN §6.
 
 Examples
 --------
->>> from springmodel.scene import parse_scene
+>>> from springfem.scene import parse_scene
 >>> scene = parse_scene('''
 ... [mesh]
 ... generator = "box"
@@ -42,9 +42,10 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
-from springmodel.errors import InputError, SolverError
-from springmodel.result import Result, volume_summary
-from springmodel.scene import FORMULATIONS, VOLUMETRIC, Scene
+from springfem.errors import InputError, SolverError
+from springfem.materials import voigt_to_tensor
+from springfem.result import Result, volume_summary
+from springfem.scene import FORMULATIONS, VOLUMETRIC, Scene
 
 from .assembly import (
     BlockPattern,
@@ -56,8 +57,9 @@ from .constraints import check_rigid_motions, dirichlet, rigid_body_modes
 from .hyperelastic import NeoHookean, _det
 from .linsolve import LinearSolver
 from .loads import ExternalLoads
-from .materials import material_groups, voigt_to_tensor
+from .materials import material_groups
 from .newton import InvertedElements, NewtonOptions, solve_nonlinear
+from .options import FemOptions
 from .space import Space, default_intorder
 
 LINEAR_LAWS = ("linear", "transverse-linear")
@@ -110,7 +112,7 @@ class FemProblem:
     scene
         The scene.
     order
-        1 or 2 (default ``scene.fem.order``).
+        1 or 2 (default ``FemOptions.of(scene).order``).
     law
         Law name (default ``scene.material.law``), see :func:`parse_law`.
     intorder
@@ -125,7 +127,7 @@ class FemProblem:
         intorder: int | None = None,
     ):
         self.scene = scene
-        self.order = int(scene.fem.order if order is None else order)
+        self.order = int(FemOptions.of(scene).order if order is None else order)
         self.kind, self.law = parse_law(scene, law)
         self.nonlinear = self.law is not None
         self.law_name = self.law.name if self.law is not None else self.kind
@@ -135,7 +137,8 @@ class FemProblem:
         self.bc = dirichlet(scene, self.space)
         self.loads = ExternalLoads.from_scene(scene, self.space, follower=self.nonlinear)
         self.linear_solver = LinearSolver(
-            scene.fem.linear_solver, near_nullspace=rigid_body_modes(self.space.node_coordinates)
+            FemOptions.of(scene).linear_solver,
+            near_nullspace=rigid_body_modes(self.space.node_coordinates),
         )
         if not self.nonlinear:
             self.D_groups, self.group = material_groups(scene.material, scene.frames, self.kind)
@@ -250,7 +253,7 @@ class FemSolution:
     Attributes
     ----------
     result
-        :class:`~springmodel.result.Result` (``model = "fem"``).
+        :class:`~springfem.result.Result` (``model = "fem"``).
     u_vertices
         ``(n_vertices, 3)`` displacement at the mesh vertices.
     u
@@ -287,7 +290,7 @@ def solve(
     scene
         The scene (mesh, material, boundaries, loads, probes, ``[fem]`` options).
     order
-        1 (P1) or 2 (P2); default ``scene.fem.order``.
+        1 (P1) or 2 (P2); default ``FemOptions.of(scene).order``.
     law
         ``linear``, ``transverse-linear``, ``neo-hookean`` (with the material's formulation),
         ``neo-hookean/coupled`` or ``neo-hookean/uncoupled/<log|quadratic|simo-taylor>``;
@@ -327,7 +330,7 @@ def _solve(problem: FemProblem, verbose: bool, t0: float) -> FemSolution:
         if problem.loads.pressures:
             info["pressure"] = "reference surface (small-strain law)"
     else:
-        fem = scene.fem
+        fem = FemOptions.of(scene)
         opts = NewtonOptions(
             tol=fem.tol, max_iter=fem.max_iter, load_steps=fem.load_steps, verbose=verbose
         )

@@ -12,7 +12,7 @@ scikit-fem :class:`~skfem.CellBasis`.
 
 Examples
 --------
->>> from springmodel.mesh import box_mesh
+>>> from springfem.mesh import box_mesh
 >>> s = Space(box_mesh((1.0, 1.0, 1.0), (2, 2, 2)), order=2)
 >>> s.n_nodes, s.n_dofs, s.grads.shape
 (125, 375, (48, 4, 10, 3))
@@ -25,8 +25,8 @@ from functools import cached_property
 import numpy as np
 import skfem
 
-from springmodel.errors import InputError
-from springmodel.mesh import TetMesh
+from springfem.errors import InputError
+from springfem.mesh import TetMesh
 
 
 def p1_gradients(points: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

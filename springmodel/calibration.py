@@ -49,18 +49,23 @@ The mismatch (:func:`calibration_mismatch`) is ``||D_k - C|| / ||C||`` in that s
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from typing import Any, Literal, NamedTuple
 
 import numpy as np
 from scipy.optimize import nnls as _scipy_nnls
 
+from springfem.materials import (
+    is_transverse,
+    material_matrix,
+    sym_to_mandel,
+    to_mandel,
+    voigt_vector,
+)
+
 # Voigt order xx, yy, zz, yz, xz, xy (engineering shear strains).
-VOIGT_PAIRS = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
 # Torsion spring pairs (l, m) and the Voigt index of the shear they carry.
 TORSION_PAIRS = ((0, 1), (0, 2), (1, 2))
 TORSION_VOIGT = (5, 4, 3)
-_MANDEL_W = np.array([1.0, 1.0, 1.0, np.sqrt(2.0), np.sqrt(2.0), np.sqrt(2.0)])
 
 
 class RestGeometry(NamedTuple):
@@ -91,170 +96,6 @@ class Calibrated(NamedTuple):
 
 
 # --------------------------------------------------------------------------- tensors
-
-
-def voigt_vector(A: np.ndarray) -> np.ndarray:
-    """Stress-like Voigt vector ``[A00, A11, A22, A12, A02, A01]`` of symmetric ``A``.
-
-    With engineering shear strains ``g``, ``A : eps = voigt_vector(A) . g``.
-    """
-    return np.stack([A[..., i, j] for i, j in VOIGT_PAIRS], axis=-1)
-
-
-def sym_to_mandel(A: np.ndarray) -> np.ndarray:
-    """Mandel vector ``[A00, A11, A22, √2 A12, √2 A02, √2 A01]`` of symmetric ``A``."""
-    return voigt_vector(A) * _MANDEL_W
-
-
-def strain_voigt(eps: np.ndarray) -> np.ndarray:
-    """Engineering Voigt strain ``[e00, e11, e22, 2 e12, 2 e02, 2 e01]`` of symmetric ``eps``."""
-    v = voigt_vector(eps)
-    return v * np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0])
-
-
-def strain_tensor(g: np.ndarray) -> np.ndarray:
-    """Symmetric strain tensor of an engineering Voigt strain ``g`` (inverse of strain_voigt)."""
-    g = np.asarray(g, dtype=float)
-    eps = np.zeros((*g.shape[:-1], 3, 3))
-    for a, (i, j) in enumerate(VOIGT_PAIRS):
-        val = g[..., a] if i == j else 0.5 * g[..., a]
-        eps[..., i, j] = val
-        eps[..., j, i] = val
-    return eps
-
-
-def to_mandel(D: np.ndarray) -> np.ndarray:
-    """Mandel form ``W D W`` of a Voigt stiffness (engineering strains), ``W = diag(1,1,1,√2..)``.
-
-    The Frobenius norm of the Mandel form is the norm of the fourth-order tensor, so it does
-    not depend on the frame.
-    """
-    return D * _MANDEL_W[:, None] * _MANDEL_W[None, :]
-
-
-def from_mandel(M: np.ndarray) -> np.ndarray:
-    """Inverse of :func:`to_mandel`."""
-    return M / (_MANDEL_W[:, None] * _MANDEL_W[None, :])
-
-
-def _mandel_rotation(frames: np.ndarray) -> np.ndarray:
-    """Orthogonal 6x6 maps ``m_local = Qm @ m_global`` of Mandel strain vectors, ``(m, 6, 6)``.
-
-    ``frames[k]`` has the local unit axes as rows, so local components are ``Q @ v``.
-    """
-    Q = np.asarray(frames, dtype=float)
-    basis = np.zeros((6, 3, 3))
-    for a, (i, j) in enumerate(VOIGT_PAIRS):
-        if i == j:
-            basis[a, i, i] = 1.0
-        else:
-            basis[a, i, j] = basis[a, j, i] = 1.0 / np.sqrt(2.0)
-    rotated = Q[:, None] @ basis[None] @ Q.transpose(0, 2, 1)[:, None]  # Q E_a Q^T
-    # Mandel components of the rotated basis tensors are the columns of Qm
-    return sym_to_mandel(rotated).transpose(0, 2, 1)
-
-
-def rotate_to_global(C_local: np.ndarray, frames: np.ndarray) -> np.ndarray:
-    """Voigt matrix given in each element's frame -> global Voigt matrix, ``(m, 6, 6)``."""
-    Qm = _mandel_rotation(frames)
-    M = Qm.transpose(0, 2, 1) @ to_mandel(np.asarray(C_local, float)) @ Qm
-    return from_mandel(M)
-
-
-def rotate_to_local(C_global: np.ndarray, frames: np.ndarray) -> np.ndarray:
-    """Global Voigt matrix (or ``(m, 6, 6)`` stack) -> each element's frame, ``(m, 6, 6)``."""
-    Qm = _mandel_rotation(frames)
-    M = to_mandel(np.asarray(C_global, float))
-    if M.ndim == 2:
-        M = np.broadcast_to(M, (Qm.shape[0], 6, 6))
-    return from_mandel(Qm @ M @ Qm.transpose(0, 2, 1))
-
-
-# --------------------------------------------------------------------------- material
-
-
-def _param(material: Any, name: str) -> Any:
-    if isinstance(material, Mapping):
-        return material.get(name)
-    return getattr(material, name, None)
-
-
-def is_transverse(material: Any) -> bool:
-    """True for a transversely isotropic material (``law = "transverse-linear"``, or no law
-    and ``E_fiber`` given)."""
-    law = _param(material, "law")
-    if law is not None:
-        return "transverse" in str(law)
-    return _param(material, "E_fiber") is not None
-
-
-def isotropic_matrix(mu: float, lam: float) -> np.ndarray:
-    """Isotropic Voigt matrix (engineering shear strains), ``(6, 6)``."""
-    C = np.zeros((6, 6))
-    C[:3, :3] = lam
-    C[[0, 1, 2], [0, 1, 2]] = lam + 2.0 * mu
-    C[[3, 4, 5], [3, 4, 5]] = mu
-    return C
-
-
-def transverse_matrix(
-    E_fiber: float, E_cross: float, nu_fiber_cross: float, nu_cross: float, G_fiber: float
-) -> np.ndarray:
-    """Transversely isotropic Voigt matrix in the fibre frame (fiber = axis 0), ``(6, 6)``.
-
-    Inverts the compliance with ``S_01 = -nu_fiber_cross / E_fiber`` (contraction across the
-    fiber under fiber tension), ``S_12 = -nu_cross / E_cross``, in-plane cross shear modulus
-    ``E_cross / (2 (1 + nu_cross))`` (Voigt index 3, ``yz``) and ``G_fiber`` for the two
-    shears containing the fiber (``xz``, ``xy``).
-    """
-    Ef, Ec, nfc, nc, Gf = (float(v) for v in (E_fiber, E_cross, nu_fiber_cross, nu_cross, G_fiber))
-    S = np.zeros((6, 6))
-    S[0, 0] = 1.0 / Ef
-    S[1, 1] = S[2, 2] = 1.0 / Ec
-    S[0, 1] = S[1, 0] = S[0, 2] = S[2, 0] = -nfc / Ef
-    S[1, 2] = S[2, 1] = -nc / Ec
-    S[3, 3] = 2.0 * (1.0 + nc) / Ec
-    S[4, 4] = S[5, 5] = 1.0 / Gf
-    return np.linalg.inv(S)
-
-
-def material_matrix(material: Any, frames: np.ndarray | None = None) -> np.ndarray:
-    """Voigt matrix ``C`` (engineering shear, order xx, yy, zz, yz, xz, xy) in the global frame.
-
-    Parameters
-    ----------
-    material
-        Any object or mapping with ``law`` and either isotropic ``E, nu`` (or ``mu, lam``)
-        or transverse ``E_fiber, E_cross, nu_fiber_cross, nu_cross, G_fiber``. Neo-Hookean
-        materials give their small-strain (isotropic) matrix.
-    frames
-        ``(m, 3, 3)`` element frames (rows = axes, fiber first). Needed to rotate a
-        transverse material; if given, the result is stacked per element.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(6, 6)`` without frames, ``(m, 6, 6)`` with frames.
-    """
-    if is_transverse(material):
-        names = ("E_fiber", "E_cross", "nu_fiber_cross", "nu_cross", "G_fiber")
-        vals = [_param(material, n) for n in names]
-        if any(v is None for v in vals):
-            missing = [n for n, v in zip(names, vals, strict=True) if v is None]
-            raise ValueError(f"transverse material needs {', '.join(missing)}")
-        C = transverse_matrix(*vals)
-        return C if frames is None else rotate_to_global(C, frames)
-    mu, lam = _param(material, "mu"), _param(material, "lam")
-    if mu is None or lam is None:
-        E, nu = _param(material, "E"), _param(material, "nu")
-        if E is None or nu is None:
-            raise ValueError("isotropic material needs E and nu (or mu and lam)")
-        mu = E / (2.0 * (1.0 + nu))
-        lam = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
-    C = isotropic_matrix(float(mu), float(lam))
-    if frames is None:
-        return C
-    return np.broadcast_to(C, (np.asarray(frames).shape[0], 6, 6)).copy()
 
 
 # --------------------------------------------------------------------------- spring element

@@ -320,7 +320,7 @@ class SpringHessian:
 
     Examples
     --------
-    >>> from springmodel.mesh import box_mesh
+    >>> from springfem.mesh import box_mesh
     >>> from springmodel.elements import build_spring_elements
     >>> mesh = box_mesh((1.0, 1.0, 1.0), (1, 1, 1))
     >>> frames = np.broadcast_to(np.eye(3), (mesh.n_tets, 3, 3))

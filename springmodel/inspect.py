@@ -6,8 +6,10 @@ from typing import Any
 
 import numpy as np
 
+from springfem.scene import Scene
+
 from .intersections import axis_vectors, cast_rays
-from .scene import Scene
+from .options import SpringOptions
 
 
 def inspect_scene(scene: Scene, calibration: bool = True) -> dict[str, Any]:
@@ -51,7 +53,7 @@ def _calibration_stats(scene: Scene) -> dict[str, Any]:
     model = SpringModel(scene)
     mm = np.asarray(model.elements.mismatch)
     return {
-        "calibration": scene.spring.calibration,
+        "calibration": SpringOptions.of(scene).calibration,
         "calibration_mismatch_min": float(mm.min()),
         "calibration_mismatch_median": float(np.median(mm)),
         "calibration_mismatch_max": float(mm.max()),

@@ -38,7 +38,7 @@ from typing import NamedTuple
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import MeshError
+from springfem.errors import MeshError
 
 #: A tet is degenerate when ``|det[x1-x0, x2-x0, x3-x0]| <= DEGENERATE_TOL * L^3``, with
 #: ``L`` the longest edge from vertex 0 (the determinant is ``6 V``).
@@ -112,7 +112,7 @@ def cast_rays(points: np.ndarray, tets: np.ndarray, frames: np.ndarray) -> RayCa
     Raises
     ------
     ValueError
-        For degenerate tets (:class:`~springmodel.errors.MeshError`, naming them), frames of
+        For degenerate tets (:class:`~springfem.errors.MeshError`, naming them), frames of
         the wrong shape, and zero or non-finite axes (naming the elements).
     """
     points, tets = _as_mesh(points, tets)

@@ -43,8 +43,9 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from springfem.mesh import element_colouring
+
 from .elements import SpringElements
-from .mesh import element_colouring
 from .options import SpringOptions
 
 AXIAL_CODES = {"linear": 0, "quadratic": 1, "cubic": 1, "stress-scaled": 2}

@@ -1,12 +1,12 @@
 """The spring model of a scene: rest data, fused kernel, loads, boundaries, solve.
 
-:class:`SpringModel` is a :class:`~springmodel.system.MechanicalSystem`: the solvers of
-:mod:`springmodel.solvers` drive it without knowing about springs. Only the parts the
+:class:`SpringModel` is a :class:`~springfem.mechanics.system.MechanicalSystem`: the solvers of
+:mod:`springfem.mechanics.solvers` drive it without knowing about springs. Only the parts the
 scene's ``[spring]`` section switches on are computed.
 
 Examples
 --------
->>> from springmodel.scene import load_scene
+>>> from springfem.scene import load_scene
 >>> from studies.cli import DEFAULT_SCENE
 >>> model = SpringModel(load_scene(DEFAULT_SCENE))
 >>> model.elements.n_elements
@@ -21,13 +21,14 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.sparse as sp
 
+from springfem.errors import SolverError
+from springfem.loads import external_forces, has_follower_loads, lumped_masses, reactions
+from springfem.result import Result, volume_summary
+from springfem.scene import Scene
+
 from .elements import SpringElements, build_spring_elements
-from .errors import SolverError
 from .kernels import ForceKernel
-from .loads import external_forces, has_follower_loads, lumped_masses, reactions
 from .options import SpringOptions
-from .result import Result, volume_summary
-from .scene import Scene
 from .springs import is_conservative, lms_update, volume_measures
 
 
@@ -39,7 +40,7 @@ class SpringModel:
     scene
         Mesh, material, axes, boundaries and loads.
     options
-        Overrides ``scene.spring`` (studies switch parts on and off this way).
+        Overrides ``SpringOptions.of(scene)`` (studies switch parts on and off this way).
     parallel
         Use the parallel fused kernel (both cores). ``None`` (default): the kernel's own
         choice, parallel from ``ForceKernel.PARALLEL_MIN_ELEMENTS`` elements up; below that
@@ -50,7 +51,7 @@ class SpringModel:
         self, scene: Scene, options: SpringOptions | None = None, parallel: bool | None = None
     ):
         self.scene = scene
-        self.options = options or scene.spring
+        self.options = options or SpringOptions.of(scene)
         mesh = scene.mesh
         self.elements: SpringElements = build_spring_elements(
             mesh.points, mesh.tets, scene.frames, self.options, scene.material
@@ -167,7 +168,7 @@ def solve_spring(
     SolverError
         Blow-up or divergence; ``state`` holds the last good displacement ``(n, 3)``.
     """
-    from .solvers import solve_with_options
+    from .solve import solve_with_options
 
     t0 = time.perf_counter()
     model = SpringModel(scene, options, parallel=parallel)
@@ -224,4 +225,4 @@ def solve_spring(
 
 def with_options(scene: Scene, **changes) -> Scene:
     """A shallow copy of ``scene`` with ``[spring]`` options changed."""
-    return replace(scene, spring=replace(scene.spring, **changes))
+    return scene.with_options(spring=replace(SpringOptions.of(scene), **changes))

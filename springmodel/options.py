@@ -1,7 +1,7 @@
 """Spring-model options: what a scene's ``[spring]`` section switches on.
 
 "Model no more than a scene needs": every part of the spring model is named here and is
-computed only when it is on. :func:`springmodel.scene.load_scene` validates the TOML section
+computed only when it is on. :func:`springfem.scene.load_scene` validates the TOML section
 and builds a :class:`SpringOptions`; code that builds models programmatically constructs
 one directly.
 """
@@ -9,7 +9,9 @@ one directly.
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
-from typing import Literal, get_args
+from typing import Any, Literal, get_args
+
+from springfem.scene import Scene, TableReader, register_section
 
 AxialLaw = Literal["linear", "quadratic", "cubic", "stress-scaled"]
 TorsionLaw = Literal["off", "angle", "cosine", "cubic", "energy"]
@@ -18,7 +20,6 @@ Calibration = Literal["analytic", "analytic-lsq", "nnls"]
 SolverKind = Literal["static", "explicit", "implicit"]
 Integrator = Literal["symplectic-euler", "verlet"]
 VolumeForm = Literal["gradient", "spec"]
-LinearSolver = Literal["auto", "direct", "amg"]
 
 
 @dataclass(frozen=True)
@@ -118,36 +119,68 @@ class SpringOptions:
         return get_args(hints[name]) if name in hints else ()
 
     @classmethod
+    def of(cls, scene: Scene) -> SpringOptions:
+        """The ``[spring]`` options of ``scene`` (defaults when the section is absent)."""
+        return scene.section("spring", parse_spring_options)
+
+    @classmethod
     def keys(cls) -> tuple[str, ...]:
         """Names of the scene keys accepted in ``[spring]``."""
         return tuple(f.name for f in fields(cls))
 
 
-@dataclass(frozen=True)
-class FemOptions:
-    """FEM reference settings: a scene's ``[fem]`` section.
+def parse_spring_options(r: TableReader) -> SpringOptions:
+    """Validate a scene's ``[spring]`` table into :class:`SpringOptions`.
 
-    Attributes
+    Parameters
     ----------
-    order
-        1 (P1, linear tets) or 2 (P2, quadratic tets on the same vertices).
-    linear_solver
-        ``direct`` (SuperLU/UMFPACK), ``amg`` (CG + pyamg smoothed aggregation with
-        rigid-body modes) or ``auto`` (direct below a size threshold).
-    tol
-        Newton tolerance on the relative residual norm.
-    max_iter
-        Newton iterations per load step.
-    load_steps
-        Initial number of load steps (adapted: cut back on divergence, grown on easy steps).
+    r
+        Reader over the table; every error names the file and key.
+
+    Returns
+    -------
+    SpringOptions
     """
+    kw: dict[str, Any] = {}
+    S = SpringOptions
+    for key in ("axial", "torsion", "calibration", "solver", "integrator"):
+        if r.has(key):
+            kw[key] = r.get(key, "str", choices=S.choices(key))
+    if r.has("volume_form"):
+        kw["volume_form"] = r.get("volume_form", "str", choices=S.choices("volume_form"))
+    if r.has("volume"):
+        kw["volume"] = r.get("volume", "bool")
+    for key in ("volume_damping", "axial_damping", "mass_damping", "torsion_cubic"):
+        if r.has(key):
+            kw[key] = r.get(key, "float", nonneg=key != "torsion_cubic")
+    for key in ("k_axial", "k_torsion", "k_volume", "dt", "t_end", "tol"):
+        if r.has(key):
+            kw[key] = r.get(key, "float", positive=True)
+    if r.has("dt_safety"):
+        kw["dt_safety"] = r.get("dt_safety", "float", positive=True)
+    for key in ("steps", "max_iter"):
+        if r.has(key):
+            kw[key] = r.get(key, "int", positive=True)
+    if r.has("axial_coefficients"):
+        kw["axial_coefficients"] = tuple(r.get("axial_coefficients", "vec", length=2))
+    if r.has("lms"):
+        r.used.add("lms")
+        lr = TableReader(r.t["lms"], "spring.lms", r.file)
+        lk: dict[str, Any] = {}
+        if lr.has("mu"):
+            lk["mu"] = lr.get("mu", "float", nonneg=True)
+        for key in ("k_min", "k_max"):
+            if lr.has(key):
+                lk[key] = lr.get(key, "float", positive=True)
+        if lr.has("rule"):
+            lk["rule"] = lr.get("rule", "str", choices=("spec", "abs"))
+        lr.finish()
+        lms = LMSOptions(**lk)
+        if lms.k_min > lms.k_max:
+            raise lr.fail("k_min", f"{lms.k_min} is larger than k_max = {lms.k_max}")
+        kw["lms"] = lms
+    r.finish()
+    return SpringOptions(**kw)
 
-    order: int = 1
-    linear_solver: LinearSolver = "auto"
-    tol: float = 1e-10
-    max_iter: int = 25
-    load_steps: int = 1
 
-    @classmethod
-    def choices(cls, name: str) -> tuple[str, ...]:
-        return get_args(LinearSolver) if name == "linear_solver" else ()
+register_section("spring", parse_spring_options)

@@ -10,7 +10,8 @@
     :func:`reference_fem.bench`: assembly, solve, scikit-fem defaults, one Newton iteration.
 ``step``
     One whole explicit step (forces + symplectic-Euler update, through
-    :func:`springmodel.solvers.explicit`) of a 100k-tet scene, spring model and explicit FEM.
+    :func:`springfem.mechanics.solvers.explicit`) of a 100k-tet scene, spring model and
+    explicit FEM.
 
 Speeds are compared only as ratios measured in the same run (DESIGN §8); the machine's load
 average is printed because other processes on a shared machine change every number.
@@ -25,6 +26,8 @@ import sys
 import time
 
 import numpy as np
+
+from springmodel.options import SpringOptions
 
 # OpenMP's default (active) wait makes threads spin at every barrier; on a machine shared
 # with other processes a spinning thread waits for a descheduled peer, and the colour-ordered
@@ -100,7 +103,7 @@ def bench_forces(n_tets: int = 500_000, repeats: int = 7, oracle_repeats: int | 
 
     t0 = time.perf_counter()
     scene = bench_scene(n_tets)
-    mesh, options = scene.mesh, scene.spring
+    mesh, options = scene.mesh, SpringOptions.of(scene)
     m = mesh.n_tets
     t1 = time.perf_counter()
     elements = build_spring_elements(mesh.points, mesh.tets, scene.frames, options, scene.material)
@@ -200,12 +203,12 @@ class WithoutEnergy:
 def step_time(system, steps: int = STEP_COUNT, repeats: int = 5) -> tuple[float, float]:
     """Median wall and CPU seconds per explicit step (symplectic Euler, through the solver).
 
-    A step is what :func:`springmodel.solvers.explicit` does per step: one force evaluation,
+    A step is what :func:`springfem.mechanics.solvers.explicit` does per step: one force evaluation,
     the velocity and position updates, constraints, the kinetic energy and blow-up check and
     ``post_step``. The time step is tiny (the state barely moves, so no run can blow up);
     the cost of a step does not depend on it. No energies are recorded.
     """
-    from springmodel.solvers import explicit
+    from springfem.mechanics.solvers import explicit
 
     plain = WithoutEnergy(system)
     wall, cpu = timed(lambda: explicit(plain, dt=1e-9, steps=steps, record_every=steps), repeats)
@@ -351,7 +354,7 @@ def print_step(res: dict, file=None) -> None:
 
 def cmd_bench(args: argparse.Namespace) -> int:
     """Entry point of ``springfem bench``."""
-    from springmodel.errors import InputError
+    from springfem.errors import InputError
 
     what = args.what
     n = args.tets if args.tets is not None else DEFAULT_TETS[what]
@@ -381,7 +384,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     else:  # argparse restricts the choices
         raise InputError(f"unknown benchmark {what!r}; valid: forces, fem, step")
     if as_json:
-        from springmodel.result import _jsonable
+        from springfem.result import _jsonable
 
         print(json.dumps(_jsonable(res), indent=2, sort_keys=True))
     return 0

@@ -29,7 +29,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from springmodel.result import _jsonable, atomic_write_text, remove_stale_temp_files
+from springfem.result import _jsonable, atomic_write_text, remove_stale_temp_files
 
 CACHE_VERSION = "1"
 

@@ -21,7 +21,7 @@ import traceback
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from springmodel.errors import InputError, SpringFemError
+from springfem.errors import InputError, SpringFemError
 
 SCENES = Path(__file__).resolve().parent / "scenes"
 DEFAULT_SCENE = SCENES / "cantilever.toml"
@@ -46,8 +46,8 @@ def _print_json(obj) -> None:
 
 
 def cmd_inspect(args: argparse.Namespace) -> int:
+    from springfem.scene import load_scene
     from springmodel.inspect import inspect_scene
-    from springmodel.scene import load_scene
 
     scene = load_scene(scene_path(args.scene))
     report = inspect_scene(scene)

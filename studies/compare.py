@@ -29,9 +29,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from springmodel.errors import InputError, SolverError
-from springmodel.result import _jsonable, write_result
-from springmodel.scene import Scene, load_scene
+from springfem.errors import InputError, SolverError
+from springfem.result import _jsonable, write_result
+from springfem.scene import Scene, load_scene
 
 from . import metrics
 from .solve import Solution

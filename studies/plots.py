@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from springmodel.mesh import TetMesh
+from springfem.mesh import TetMesh
 
 from .tables import save_figure
 

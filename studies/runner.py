@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from springmodel.errors import InputError
-from springmodel.result import _jsonable, atomic_write_text, remove_stale_temp_files
+from springfem.errors import InputError
+from springfem.result import _jsonable, atomic_write_text, remove_stale_temp_files
 
 from .cache import CaseCache, source_fingerprint
 

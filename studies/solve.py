@@ -9,9 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from springmodel.errors import InputError, SolverError
-from springmodel.result import Result, safe_filename, volume_summary, write_result
-from springmodel.scene import Scene, load_scene
+from reference_fem.options import FemOptions
+from springfem.errors import InputError, SolverError
+from springfem.result import Result, safe_filename, volume_summary, write_result
+from springfem.scene import Scene, load_scene
 
 
 @dataclass
@@ -92,7 +93,9 @@ def cmd_solve(args: argparse.Namespace) -> int:
     scene = load_scene(scene_path(args.scene))
     for note in scene.mesh.notes:
         print(f"note: {note}", file=sys.stderr)
-    tag = args.model if args.model == "spring" else f"fem-p{args.order or scene.fem.order}"
+    tag = (
+        args.model if args.model == "spring" else f"fem-p{args.order or FemOptions.of(scene).order}"
+    )
     out = Path(args.out) if args.out else default_out(scene.name, tag)
     try:
         sol = solve_scene(scene, args.model, args.order, args.law, args.verbose)

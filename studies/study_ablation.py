@@ -43,9 +43,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from springmodel.errors import SolverError
+from springfem.errors import SolverError
+from springfem.scene import Scene, parse_scene
 from springmodel.options import LMSOptions, SpringOptions
-from springmodel.scene import Scene, parse_scene
 
 from .cli import SCENES
 from .metrics import median_time, relative_l2_error
@@ -100,7 +100,7 @@ def variant_options(scene: Scene, variant: str) -> SpringOptions:
     rule = changes.pop("lms", None)
     if rule is not None:
         changes["lms"] = LMSOptions(rule=rule)
-    return replace(scene.spring, **changes)
+    return replace(SpringOptions.of(scene), **changes)
 
 
 # ------------------------------------------------------------------------------ cases
@@ -143,8 +143,8 @@ def spring_case(case: dict[str, Any]) -> dict[str, Any]:
     ``kernel_rate`` (elements per second), ``method``, ``iterations`` and, for LMS, the
     median stiffness ratio ``k_ratio_median`` and the share at the upper clamp.
     """
+    from springfem.mechanics.solvers import explicit_static, static
     from springmodel.model import SpringModel
-    from springmodel.solvers import explicit_static, static
 
     scene = ablation_scene(case["scene"], case["divisions"])
     opts = variant_options(scene, case["variant"])

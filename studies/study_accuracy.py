@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from springmodel.scene import Scene, parse_scene
+from springfem.scene import Scene, parse_scene
 
 from . import metrics
 from .compare import (

@@ -28,8 +28,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from springmodel.errors import SolverError
-from springmodel.scene import Material, Scene, parse_scene
+from springfem.errors import SolverError
+from springfem.scene import Material, Scene, parse_scene
+from springmodel.options import SpringOptions
 
 from .cli import SCENES
 from .runner import Figure, StudyContext, StudyOutput, Table
@@ -70,7 +71,7 @@ def applied_stress(scene: Scene) -> float:
 def compliance_voigt(mat: Material) -> np.ndarray:
     """6×6 compliance (Voigt xx, yy, zz, yz, xz, xy; engineering shear) in the material frame
     (axis 0 = fiber), as the FEM reference builds it."""
-    from reference_fem.materials import transverse_compliance
+    from springfem.materials import transverse_compliance
 
     return transverse_compliance(
         mat.E_fiber, mat.E_cross, mat.nu_fiber_cross, mat.nu_cross, mat.G_fiber
@@ -135,7 +136,7 @@ def modulus_case(case: dict[str, Any]) -> dict[str, Any]:
         if case["model"] == "spring":
             from springmodel.model import solve_spring
 
-            opts = replace(scene.spring, calibration=case["calibration"])
+            opts = replace(SpringOptions.of(scene), calibration=case["calibration"])
             u = solve_spring(scene, opts, parallel=False).u
         else:
             import reference_fem

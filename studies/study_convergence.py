@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from springmodel.mesh import box_mesh
-from springmodel.scene import parse_scene
+from springfem.mesh import box_mesh
+from springfem.scene import parse_scene
 
 from . import metrics
 from .compare import bundled_scene_text, solve_model

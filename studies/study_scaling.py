@@ -4,7 +4,7 @@ The benchmark block of :func:`reference_fem.scenes.bench_scene` (2:1:1, clamped 
 end traction, six tets per hexahedron) from about 1e3 to 1e5 tets:
 
 - one explicit step (forces + symplectic-Euler update through
-  :func:`springmodel.solvers.explicit`) of the spring model and of the explicit P1
+  :func:`springfem.mechanics.solvers.explicit`) of the spring model and of the explicit P1
   neo-Hookean FEM, serial kernels (the work per element; the parallel speed-up on this
   machine is what ``springfem bench forces`` measures), median of repeats, both in one case;
 - the set-up of each (spring elements: ray casting and calibration; FEM: shape gradients);
@@ -23,6 +23,8 @@ from dataclasses import replace
 
 import numpy as np
 import pandas as pd
+
+from springmodel.options import SpringOptions
 
 from .metrics import fitted_rate
 from .runner import Figure, StudyContext, StudyOutput, Table
@@ -51,7 +53,7 @@ def _scene(n_tets: int):
     from reference_fem.scenes import bench_scene
 
     scene = bench_scene(n_tets)
-    return replace(scene, spring=replace(scene.spring, torsion=TORSION))
+    return scene.with_options(spring=replace(SpringOptions.of(scene), torsion=TORSION))
 
 
 def _clock():
@@ -107,7 +109,9 @@ def _static_solve(scene, method: str):
     if method == "spring":
         from springmodel.model import solve_spring
 
-        return solve_spring(scene, replace(scene.spring, solver="static", tol=1e-8), parallel=False)
+        return solve_spring(
+            scene, replace(SpringOptions.of(scene), solver="static", tol=1e-8), parallel=False
+        )
     import reference_fem
 
     return reference_fem.solve(scene, order=1, law=method.removeprefix("fem-"))
@@ -151,7 +155,7 @@ def _tet_axis(ax) -> None:
 
 
 def _amg_threshold() -> int:
-    from springmodel.solvers import AMG_THRESHOLD
+    from springfem.mechanics.solvers import AMG_THRESHOLD
 
     return int(AMG_THRESHOLD)
 

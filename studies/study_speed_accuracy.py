@@ -7,8 +7,8 @@ P2 solution on a finer mesh (Timoshenko's beam value is given for context). Meth
 
 - spring model (energy-consistent torsion, volume springs): ``static`` Newton, ``implicit``
   backward-Euler pseudo-time stepping to equilibrium (``dt`` a multiple of the critical
-  step), ``explicit`` dynamic relaxation (:func:`springmodel.solvers.explicit_static`, kinetic
-  damping) at two tolerances and two time-step safety factors;
+  step), ``explicit`` dynamic relaxation (:func:`springfem.mechanics.solvers.explicit_static`,
+  kinetic damping) at two tolerances and two time-step safety factors;
 - FEM P1 and P2, linear and coupled neo-Hookean, static (:func:`reference_fem.solve`);
 - explicit P1 FEM, coupled neo-Hookean (:class:`reference_fem.explicit.ExplicitFem`), to
   equilibrium with the same solver and settings as the spring model.
@@ -29,8 +29,9 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
-from springmodel.errors import SolverError
-from springmodel.scene import Scene, parse_scene
+from springfem.errors import SolverError
+from springfem.scene import Scene, parse_scene
+from springmodel.options import SpringOptions
 
 from .cli import SCENES
 from .metrics import timoshenko_tip_deflection
@@ -99,7 +100,7 @@ def cantilever_text(nx: int, ny: int) -> str:
 
 def _scene(case: dict) -> Scene:
     scene = parse_scene(case["scene_text"])
-    return replace(scene, spring=replace(scene.spring, torsion=TORSION))
+    return scene.with_options(spring=replace(SpringOptions.of(scene), torsion=TORSION))
 
 
 def timoshenko_tip(scene: Scene) -> float:
@@ -122,13 +123,13 @@ def _solve(scene: Scene, method: str, setting: dict) -> tuple[np.ndarray, dict]:
         order, law = FEM_STATIC[method]
         sol = reference_fem.solve(scene, order=order, law=law)
         return sol.u_vertices, {"iterations": sol.result.iterations}
-    from springmodel.solvers import explicit_static, implicit, stable_time_step
+    from springfem.mechanics.solvers import explicit_static, implicit, stable_time_step
 
     if method == "spring-static":
         from springmodel.model import solve_spring
 
         sol = solve_spring(
-            scene, replace(scene.spring, solver="static", tol=STATIC_TOL), parallel=None
+            scene, replace(SpringOptions.of(scene), solver="static", tol=STATIC_TOL), parallel=None
         )
         return sol.u, {"iterations": sol.result.iterations}
     if method == "fem-explicit-p1-neo-hookean":

@@ -18,8 +18,9 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
-from springmodel.errors import SolverError
-from springmodel.scene import Scene, parse_scene
+from springfem.errors import SolverError
+from springfem.scene import Scene, parse_scene
+from springmodel.options import SpringOptions
 
 from .metrics import timoshenko_tip_deflection
 from .runner import Figure, StudyContext, StudyOutput, Table
@@ -74,7 +75,7 @@ def _system(scene: Scene, method: str):
     if method.startswith("spring-"):
         from springmodel.model import SpringModel
 
-        return SpringModel(scene, replace(scene.spring, torsion=method.split("-", 1)[1]))
+        return SpringModel(scene, replace(SpringOptions.of(scene), torsion=method.split("-", 1)[1]))
     from reference_fem.explicit import ExplicitFem
 
     return ExplicitFem(scene, law=method.split("-", 1)[1])
@@ -89,7 +90,7 @@ def _inverted(scene: Scene, u: np.ndarray) -> int:
 
 def critical_step_case(case: dict) -> dict:
     """Predicted and measured critical explicit step of one method on one mesh."""
-    from springmodel.solvers import explicit, stable_time_step
+    from springfem.mechanics.solvers import explicit, stable_time_step
 
     scene = bar_scene(case["nx"], case["ny"], traction=0.0)
     system = _system(scene, case["method"])
@@ -129,7 +130,9 @@ def load_case(case: dict) -> dict:
         if method.startswith("spring-"):
             from springmodel.model import solve_spring
 
-            sol = solve_spring(scene, replace(scene.spring, torsion=method.split("-", 1)[1]))
+            sol = solve_spring(
+                scene, replace(SpringOptions.of(scene), torsion=method.split("-", 1)[1])
+            )
             u = sol.u
         else:
             import reference_fem
@@ -189,7 +192,7 @@ def locking_case(case: dict) -> dict:
 
 def failure_map_case(case: dict) -> dict:
     """Damped explicit dynamics at (load factor, dt factor): ok, blew up or inverted."""
-    from springmodel.solvers import explicit, stable_time_step
+    from springfem.mechanics.solvers import explicit, stable_time_step
 
     scene = bar_scene(case["nx"], case["ny"], traction=-0.1 * case["factor"])
     system = _system(scene, case["method"])

@@ -11,7 +11,7 @@ weight. The spring model runs with
 * ``LMS abs``: + the sign-consistent rule (``k += mu |dV| sum|xi|``),
 * ``volume on (nnls)``: volume springs with the per-element least-squares calibration,
 
-through explicit dynamics (:func:`springmodel.solvers.explicit`, LMS applied by the model's
+through explicit dynamics (:func:`springfem.mechanics.solvers.explicit`, LMS applied by the model's
 ``post_step`` once per step): a suddenly applied load (drift against time) and a slow load
 ramp (drift against load factor). The FEM reference (P1, linear and neo-Hookean, static) and
 the small-strain analytic volume change ``tr eps = (1 - 2 nu) sigma / E`` give what the
@@ -36,9 +36,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from springmodel.errors import SolverError
+from springfem.errors import SolverError
+from springfem.scene import Scene, parse_scene
 from springmodel.options import LMSOptions, SpringOptions
-from springmodel.scene import Scene, parse_scene
 
 from .cli import SCENES
 from .runner import Figure, StudyContext, StudyOutput, Table
@@ -137,7 +137,7 @@ def spring_options(scene: Scene, variant: str) -> SpringOptions:
     rule = changes.pop("lms", None)
     if rule is not None:
         changes["lms"] = LMSOptions(rule=rule, k_min=K_MIN, k_max=K_MAX)
-    return replace(scene.spring, **changes)
+    return replace(SpringOptions.of(scene), **changes)
 
 
 def first_period(scene: Scene) -> float:
@@ -172,8 +172,8 @@ def drift_measures(scene: Scene, x: np.ndarray) -> dict[str, float]:
 
 def common_time_step(scene: Scene) -> float:
     """``0.5 dt_crit / sqrt(k_max)`` of the scene's ``volume on`` model (all variants)."""
+    from springfem.mechanics.solvers import stable_time_step
     from springmodel.model import SpringModel
-    from springmodel.solvers import stable_time_step
 
     model = SpringModel(scene, spring_options(scene, "volume on"), parallel=False)
     dt_crit, _ = stable_time_step(model)
@@ -198,8 +198,8 @@ def dynamic_case(case: dict[str, Any]) -> dict[str, Any]:
     (element drift above :data:`DIVERGED`: the run is stopped there) or ``blew up`` (the
     solver's numerical blow-up test); ``message`` says where and when.
     """
+    from springfem.mechanics.solvers import explicit
     from springmodel.model import SpringModel
-    from springmodel.solvers import explicit
 
     scene = case_scene(case)
     opts = spring_options(scene, case["variant"])
@@ -294,8 +294,8 @@ def static_case(case: dict[str, Any]) -> dict[str, Any]:
     scene = cube_scene(case["n"], case["nu"], case["stress"] * case["load"])
     try:
         if case["model"] == "spring":
+            from springfem.mechanics.solvers import static
             from springmodel.model import SpringModel
-            from springmodel.solvers import static
 
             model = SpringModel(scene, spring_options(scene, case["variant"]), parallel=False)
             x = static(model, tol=1e-9, max_iter=30, fallback=False).x

@@ -1,0 +1,113 @@
+"""``springfem bench`` and the speed studies (speed_accuracy, scaling).
+
+No timing assertions (DESIGN §8): the benchmarks must run and print their rows, the kernels
+they time must agree with their references, and the studies' solves must agree with each
+other where they solve the same problem.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from springfem.scene import parse_scene
+from studies import study_speed_accuracy as sa
+from studies.bench import bench_forces
+from studies.cli import main
+
+
+def test_bench_forces_prints_rows_and_ratios(capsys):
+    assert main(["bench", "forces", "--tets", "200", "--repeats", "1"]) == 0
+    out = capsys.readouterr().out
+    for row in (
+        "spring kernel, parallel",
+        "spring kernel, serial",
+        "spring numpy oracle",
+        "explicit P1 FEM neo-Hookean, parallel",
+        "explicit P1 FEM neo-Hookean, serial",
+        "fused / oracle speed-up",
+        "spring / explicit-FEM cost per force evaluation",
+        "load average",
+    ):
+        assert row in out, row
+
+
+def test_bench_forces_kernels_agree_with_oracle():
+    """The timed fused kernel computes what the numpy oracle computes (round-off)."""
+    res = bench_forces(200, repeats=1)
+    assert res["kernel_vs_oracle_max_rel_diff"] < 1e-10
+    assert {r["name"] for r in res["rows"]} >= {"spring numpy oracle", "spring kernel, serial"}
+    assert all(r["seconds"] > 0 for r in res["rows"])
+
+
+def test_bench_step_and_fem(capfd):
+    assert main(["bench", "step", "--tets", "200", "--repeats", "1"]) == 0
+    out = capfd.readouterr().out
+    assert "spring model, serial" in out and "explicit P1 FEM neo-Hookean, serial" in out
+    assert "cost per step" in out
+    assert main(["bench", "fem", "--tets", "200"]) == 0
+    out = capfd.readouterr().out
+    assert "FEM bench" in out and "Newton iteration" in out
+
+
+def test_bench_rejects_bad_size(capsys):
+    assert main(["bench", "forces", "--tets", "0"]) == 2
+    assert "--tets" in capsys.readouterr().err
+
+
+def test_pareto_front_matches_sweep():
+    """Non-dominated points == a sweep in time order keeping each new best error."""
+    rng = np.random.default_rng(0)
+    t, e = rng.random(60), rng.random(60)
+    order = np.argsort(t)
+    sweep = np.zeros(60, dtype=bool)
+    best = np.inf
+    for i in order:
+        if e[i] < best:
+            sweep[i], best = True, e[i]
+    assert np.array_equal(sa.pareto_front(t, e), sweep)
+
+
+def test_cantilever_variants():
+    scene = parse_scene(sa.cantilever_text(6, 1))
+    assert scene.mesh.n_tets == 6 * 6
+    assert sa.timoshenko_tip(scene) == pytest.approx(4.0306e-4, rel=1e-4)
+
+
+@pytest.mark.parametrize(
+    ("explicit_method", "static_method"),
+    [("fem-explicit-p1-neo-hookean", "fem-p1-neo-hookean"), ("spring-explicit", "spring-static")],
+)
+def test_explicit_points_reach_the_static_answer(explicit_method, static_method):
+    """Dynamic relaxation to 1e-6 relative residual lands on the static solution of the
+    same model: the tips agree to 1e-3 (the residual tolerance times the conditioning of
+    this slender beam)."""
+    case = {"scene_text": sa.cantilever_text(10, 1), "torsion": sa.TORSION}
+    a = sa.point_case(
+        {**case, "method": explicit_method, "setting": {"tol": 1e-6, "dt_safety": 0.5}}
+    )
+    b = sa.point_case({**case, "method": static_method, "setting": {}})
+    assert a["status"] == b["status"] == "ok"
+    ta, tb = np.asarray(a["tip"]), np.asarray(b["tip"])
+    assert np.linalg.norm(ta - tb) < 1e-3 * np.linalg.norm(tb)
+
+
+def test_spring_and_fem_differ_on_the_same_mesh():
+    """The study's spring and P1 points are different models: on 10x1x1 the spring tip is
+    larger than P1's by more than the solver tolerances (DESIGN §4: ~8-25 % softer)."""
+    case = {"scene_text": sa.cantilever_text(10, 1), "torsion": sa.TORSION, "setting": {}}
+    spring = sa.point_case({**case, "method": "spring-static"})
+    p1 = sa.point_case({**case, "method": "fem-p1-linear"})
+    assert abs(spring["tip"][2]) > 1.05 * abs(p1["tip"][2])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["speed_accuracy", "scaling"])
+def test_quick_study_runs(tmp_path, name):
+    from studies.runner import run_study
+
+    res = run_study(name, tmp_path, quick=True, progress=False)
+    assert res.findings and res.figures and res.headline
+    for fig in res.figures:
+        assert fig.path.is_file()
+    assert all(np.isfinite(v) for v in res.headline.values())
