@@ -366,12 +366,60 @@ def load_scene(path: str | os.PathLike) -> Scene:
 
 
 def parse_scene(text: str, path: str | os.PathLike | None = None) -> Scene:
-    """Parse scene TOML ``text``; ``path`` (if any) anchors relative mesh paths."""
+    """Parse scene TOML ``text``; ``path`` (if any) anchors relative mesh paths.
+
+    Parameters
+    ----------
+    text
+        The TOML text.
+    path
+        The file it came from (names it in errors; its folder anchors ``mesh.file``).
+
+    Returns
+    -------
+    Scene
+        :func:`scene_from_dict` of the parsed table.
+    """
     file = str(path) if path is not None else "<scene>"
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{file}: not valid TOML: {exc}") from None
+    return scene_from_dict(data, path=path)
+
+
+def scene_from_dict(data: dict, path: str | os.PathLike | None = None) -> Scene:
+    """Build and validate a scene from a plain mapping: the one way scenes are made.
+
+    The mapping has the layout of a scene file (``name``, ``[mesh]``, ``[material]``,
+    ``[axes]``, ``[[boundary]]``, ``[[load]]``, ``[[probe]]`` and the model sections), so
+    studies and tests build scenes as data and change a value by editing a dict.
+
+    Parameters
+    ----------
+    data
+        The scene table (not modified).
+    path
+        The scene file's path, if any: names it in errors and anchors relative mesh paths
+        (default: the current folder).
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        One line naming the file and the offending key.
+
+    Examples
+    --------
+    >>> box = {"generator": "box", "size": [1, 1, 1], "divisions": [1, 1, 1]}
+    >>> s = scene_from_dict({"mesh": box, "material": {"law": "linear", "E": 1.0, "nu": 0.25}})
+    >>> s.name, s.mesh.n_tets
+    ('scene', 6)
+    """
+    file = str(path) if path is not None else "<scene>"
     base = Path(path).parent if path is not None else Path.cwd()
     top = TableReader(data, "", file)
     name = top.get("name", "str", default=Path(file).stem if path else "scene")

@@ -6,6 +6,8 @@ import meshio
 import numpy as np
 import pytest
 
+import reference_fem  # noqa: F401  (registers the [fem] section, validated on load)
+import springmodel  # noqa: F401  (registers the [spring] section)
 from springfem.errors import SceneError
 from springfem.mesh import box_mesh
 from springfem.scene import load_scene, parse_scene
