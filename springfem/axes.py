@@ -19,6 +19,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .errors import format_ids
+
 #: ``sin`` of the smallest angle accepted between fiber and sheet.
 PARALLEL_TOL = 1e-6
 
@@ -245,6 +247,4 @@ def _where(bad: np.ndarray, limit: int = 8) -> str:
     if bad.ndim == 0:
         return ""
     idx = np.argwhere(bad)
-    ids = [str(int(i[0])) if len(i) == 1 else str(tuple(int(v) for v in i)) for i in idx]
-    more = f" … ({len(ids)} in all)" if len(ids) > limit else ""
-    return " at elements " + ", ".join(ids[:limit]) + more
+    return " at elements " + format_ids(idx if idx.shape[1] > 1 else idx[:, 0], limit)

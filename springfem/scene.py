@@ -37,9 +37,9 @@ from typing import Any, Literal
 import numpy as np
 
 from .errors import InputError, SceneError
+from .files import safe_filename
 from .mesh import Split, TetMesh, box_mesh, read_mesh
 from .regions import Region, locate_points, resolve_region
-from .result import safe_filename
 
 Law = Literal["linear", "transverse-linear", "neo-hookean"]
 LAWS = ("linear", "transverse-linear", "neo-hookean")

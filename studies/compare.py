@@ -30,7 +30,8 @@ import numpy as np
 import pandas as pd
 
 from springfem.errors import InputError, SolverError
-from springfem.result import _jsonable, write_result
+from springfem.files import jsonable as _jsonable
+from springfem.result import write_result
 from springfem.scene import Scene, load_scene
 
 from . import metrics

@@ -17,7 +17,8 @@ from pathlib import Path
 from typing import Any
 
 from springfem.errors import InputError
-from springfem.result import _jsonable, atomic_write_text, remove_stale_temp_files
+from springfem.files import atomic_write_text, remove_stale_temp_files
+from springfem.files import jsonable as _jsonable
 
 from .cache import CaseCache, source_fingerprint
 

@@ -23,8 +23,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import springfem.scene as scene_module
+from springfem.files import safe_filename
 from springfem.mesh import box_mesh
-from springfem.result import safe_filename
 from springfem.scene import BYTES_PER_TET, load_scene, machine_memory, parse_scene
 from studies.cli import main
 
