@@ -120,7 +120,7 @@ def box_mesh(
     vol = tet_volumes(points, tets)
     flip = vol < 0
     tets[flip] = tets[flip][:, [0, 2, 1, 3]]
-    desc = f"box {list(size)} divisions {[nx, ny, nz]} split {split}"
+    desc = f"box {[float(s) for s in size]} divisions {[nx, ny, nz]} split {split}"
     return TetMesh(points=points, tets=tets, source=desc)
 
 

@@ -101,7 +101,10 @@ def test_bundled_scenes_load(path):
             ),
             "selects no nodes",
         ),
-        (lambda t: t.replace("[material]", "[materials]"), "\\[material\\]: missing section"),
+        (
+            lambda t: t.replace("[material]", "[materials]"),
+            "\\[materials\\]: unknown section; did you mean \\[material\\]\\?",
+        ),
         (
             lambda t: t.replace("divisions = [2, 2, 2]", "divisions = [10000, 10000, 10000]"),
             "would need about",
