@@ -32,7 +32,7 @@ from .sections import (
     parse_mesh,
     parse_probe,
 )
-from .types import Scene
+from .types import Material, Scene
 
 MODEL_SECTIONS = ("spring", "fem")
 """Sections that belong to a model: the core stores them, the model parses them."""
@@ -80,16 +80,18 @@ def scene_from_dict(data: dict, path: str | os.PathLike | None = None) -> Scene:
 
     The mapping has the layout of a scene file (``name``, ``[mesh]``, ``[material]``,
     ``[axes]``, ``[[boundary]]``, ``[[load]]``, ``[[probe]]`` and the model sections), so
-    studies and tests build scenes as data and change a value by editing a dict. A mesh
-    built in code (a verification geometry) may stand in for the ``[mesh]`` table: it is
-    used as it is, and ``axes = {"type": "cells"}`` reads its ``fiber`` and ``sheet`` cell
-    data.
+    studies and tests build scenes as data and change a value by editing a dict. Objects
+    built in code may stand in for two tables, and are used as they are: a
+    :class:`~springfem.mesh.TetMesh` (a verification geometry) for ``[mesh]`` (then
+    ``axes = {"type": "cells"}`` reads its ``fiber`` and ``sheet`` cell data), and a
+    :class:`Material` for ``[material]``.
 
     Parameters
     ----------
     data
         The scene table (not modified); ``data["mesh"]`` is a table or a
-        :class:`~springfem.mesh.TetMesh`.
+        :class:`~springfem.mesh.TetMesh`, ``data["material"]`` a table or a
+        :class:`Material`.
     path
         The scene file's path, if any: names it in errors and anchors relative mesh paths
         (default: the current folder).
@@ -128,7 +130,10 @@ def scene_from_dict(data: dict, path: str | os.PathLike | None = None) -> Scene:
     else:
         mesh = parse_mesh(TableReader(data["mesh"], "mesh", file), base)
     top.used.add("mesh")
-    material = parse_material(TableReader(data["material"], "material", file))
+    if isinstance(data["material"], Material):
+        material = data["material"]
+    else:
+        material = parse_material(TableReader(data["material"], "material", file))
     top.used.add("material")
     frames = parse_axes(TableReader(data.get("axes", {}), "axes", file), mesh)
     top.used.add("axes")
