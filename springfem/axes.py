@@ -40,6 +40,11 @@ def rotation_matrix(
         Angle in radians; a scalar gives one ``(3, 3)`` matrix, an array of shape ``s``
         gives ``s + (3, 3)``.
 
+    Returns
+    -------
+    numpy.ndarray
+        ``(3, 3)`` or ``s + (3, 3)`` proper rotations.
+
     Examples
     --------
     >>> (rotation_matrix([0, 0, 1], np.pi / 2) @ [1.0, 0.0, 0.0]).round(12).tolist()
@@ -109,7 +114,20 @@ def orthonormal_frame(
 def uniform_frames(
     n_elements: int, fiber: Sequence[float] | np.ndarray, sheet: Sequence[float] | np.ndarray
 ) -> np.ndarray:
-    """The same frame ``orthonormal_frame(fiber, sheet)`` for all ``n_elements`` tets."""
+    """The same frame ``orthonormal_frame(fiber, sheet)`` for all ``n_elements`` tets.
+
+    Parameters
+    ----------
+    n_elements
+        Number of tets.
+    fiber, sheet
+        One fiber and one sheet direction ``(3,)`` (see :func:`orthonormal_frame`).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n_elements, 3, 3)``; row ``l`` of each frame is axis ``l``.
+    """
     frame = orthonormal_frame(fiber, sheet)
     if frame.shape != (3, 3):
         raise ValueError("uniform frames need one fiber and one sheet vector of 3 components")
@@ -215,6 +233,11 @@ def cell_frames(fiber_vectors: np.ndarray, sheet_vectors: np.ndarray | None = No
         with the fiber (lowest index on ties) made orthogonal to it: deterministic, but the
         choice can jump between neighbouring cells, so use it only with laws that do not
         distinguish sheet from normal (e.g. transversely isotropic).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(m, 3, 3)`` orthonormal frames, rows fiber, sheet, normal.
 
     Raises
     ------

@@ -50,23 +50,52 @@ def format_ids(ids: Iterable | np.ndarray, limit: int = 8) -> str:
 
 
 class SpringFemError(Exception):
-    """Base class of the errors the CLI turns into one clear line."""
+    """Base class of the errors the CLI turns into one clear line.
+
+    Parameters
+    ----------
+    message
+        The line: what is wrong and where (file, key, element ids).
+
+    Attributes
+    ----------
+    exit_code
+        The CLI's exit code for this error (1: internal).
+    """
 
     exit_code = 1
 
 
 class InputError(SpringFemError, ValueError):
-    """Bad input: a scene key, a mesh file, a region or a probe (exit code 2)."""
+    """Bad input: a scene key, a mesh file, a region or a probe (exit code 2).
+
+    Parameters
+    ----------
+    message
+        One line naming what is wrong and where.
+    """
 
     exit_code = 2
 
 
 class SceneError(InputError):
-    """A scene file is malformed: names the file and the key."""
+    """A scene file is malformed: names the file and the key.
+
+    Parameters
+    ----------
+    message
+        ``"<file>: <section>.<key>: <what is wrong>"``.
+    """
 
 
 class MeshError(InputError):
-    """A mesh is unusable: names the file and the element or node ids."""
+    """A mesh is unusable: names the file and the element or node ids.
+
+    Parameters
+    ----------
+    message
+        ``"<file>: <what is wrong> <ids>"`` (ids by :func:`format_ids`).
+    """
 
 
 class SolverError(SpringFemError, RuntimeError):

@@ -62,7 +62,16 @@ def jsonable(obj: Any) -> Any:
 
 
 def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` via a temporary file in the same folder and a rename."""
+    """Write ``text`` to ``path`` via a temporary file in the same folder and a rename.
+
+    Parameters
+    ----------
+    path
+        The target (its folder is created). Readers see the old content or the new, never
+        a part; a failed write leaves the old content.
+    text
+        UTF-8 text.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     # the writer's pid in the name lets remove_stale_temp_files tell a killed writer's
@@ -109,7 +118,17 @@ def remove_stale_temp_files(folder: str | os.PathLike) -> list[Path]:
 
     A writer interrupted by SIGKILL or a power cut can't clean up; its temporary file
     (never the target: targets are replaced by an atomic rename) stays behind. Files whose
-    writer process is still alive are kept. Returns the files removed.
+    writer process is still alive are kept.
+
+    Parameters
+    ----------
+    folder
+        The folder to clear (a missing folder is fine).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files removed.
     """
     removed = []
     try:
@@ -136,6 +155,18 @@ def safe_filename(name: str, limit: int = 80) -> str:
     ``_``, leading dots are dropped (no ``.`` or ``..``, no hidden folders), and the result
     is cut to ``limit`` characters (``scene`` if nothing is left). Scene names pass through
     it when a scene is loaded, so ``out/<name>-<model>`` never leaves ``out``.
+
+    Parameters
+    ----------
+    name
+        Any string.
+    limit
+        Longest result.
+
+    Returns
+    -------
+    str
+        A non-empty, printable name without separators or leading dots.
 
     Examples
     --------

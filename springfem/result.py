@@ -2,6 +2,14 @@
 
 A :class:`Result` is written as ``result.json`` (atomically) next to a VTU file with the
 displacement and per-element data for ParaView.
+
+Examples
+--------
+>>> from springfem.mesh import box_mesh
+>>> m = box_mesh((1.0, 1.0, 1.0), (1, 1, 1))
+>>> u = 0.1 * m.points * [1.0, 0.0, 0.0]  # stretch x by 10 %
+>>> round(volume_summary(m, u)["relative_change"], 12)
+0.1
 """
 
 from __future__ import annotations
@@ -60,14 +68,39 @@ class Result:
     info: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
+        """The fields as plain Python (see :func:`~springfem.files.jsonable`).
+
+        Returns
+        -------
+        dict
+        """
         return jsonable(asdict(self))
 
     def to_json(self) -> str:
+        """The fields as indented JSON with sorted keys (the ``result.json`` text).
+
+        Returns
+        -------
+        str
+        """
         return json.dumps(self.to_dict(), indent=2, sort_keys=True)
 
 
 def volume_summary(mesh: TetMesh, u: np.ndarray) -> dict[str, float]:
-    """Initial and final (deformed) mesh volume and their relative change."""
+    """Initial and final (deformed) mesh volume and their relative change.
+
+    Parameters
+    ----------
+    mesh
+        The mesh at rest.
+    u
+        Nodal displacement, ``(n, 3)`` or flat ``(3 n,)``.
+
+    Returns
+    -------
+    dict
+        ``initial``, ``final`` and ``relative_change`` (``(final - initial) / initial``).
+    """
     v0 = float(mesh.volumes().sum())
     v1 = float(mesh.volumes(mesh.points + np.asarray(u).reshape(-1, 3)).sum())
     return {"initial": v0, "final": v1, "relative_change": (v1 - v0) / v0}
@@ -84,7 +117,25 @@ def write_result(
 ) -> tuple[Path, Path]:
     """Write ``<stem>.json`` and ``<stem>.vtu`` into ``out_dir`` (both atomically).
 
-    ``displacement`` is nodal ``(n, 3)`` on the mesh's vertices.
+    Parameters
+    ----------
+    out_dir
+        Output folder (created; stale temporary files of killed writers are removed).
+    result
+        What goes into the JSON file.
+    mesh
+        The mesh of the VTU file.
+    displacement
+        Nodal ``(n, 3)`` on the mesh's vertices (point data ``displacement``).
+    cell_data, point_data
+        More per-tet and per-node arrays for the VTU file.
+    stem
+        File name without extension.
+
+    Returns
+    -------
+    tuple of pathlib.Path
+        The JSON and the VTU file.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -40,6 +40,19 @@ def element_colouring(tets: np.ndarray, n_points: int) -> np.ndarray:
     The race-free parallel scatter of both fused kernels (spring model and explicit FEM)
     runs the elements of one colour concurrently. Compiled with numba on first use.
 
+    Parameters
+    ----------
+    tets
+        Node indices ``(m, 4)``.
+    n_points
+        Number of nodes.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(m,)`` int64 colours ``0, 1, …``; each element takes the smallest colour not
+        used by an earlier element sharing a node.
+
     Examples
     --------
     >>> element_colouring(np.array([[0, 1, 2, 3], [1, 2, 3, 4], [5, 6, 7, 8]]), 9).tolist()

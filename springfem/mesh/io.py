@@ -33,6 +33,19 @@ def read_mesh(path: str | os.PathLike, scale: float = 1.0) -> TetMesh:
     keep it). Node sets (``point_sets``) and tet cell sets
     become named regions; per-tet cell data (e.g. ``fiber``) is kept.
 
+    Parameters
+    ----------
+    path
+        Any file meshio reads (``.msh``, ``.vtu``, ``.vtk``, ``.mesh``, …).
+    scale
+        Factor on the coordinates (e.g. ``1e-3`` for a file in millimetres).
+
+    Returns
+    -------
+    TetMesh
+        Validated (:func:`~springfem.mesh.validate_mesh`), with what was dropped or
+        repaired in ``notes``.
+
     Raises
     ------
     MeshError
@@ -65,7 +78,21 @@ _VOLUME_TYPES += ("pyramid13", "pyramid14", "wedge18", "hexahedron24", "polyhedr
 
 
 def mesh_from_meshio(m, name: str = "mesh", scale: float = 1.0) -> TetMesh:
-    """Build a validated :class:`TetMesh` from a ``meshio.Mesh`` (see :func:`read_mesh`)."""
+    """Build a validated :class:`TetMesh` from a ``meshio.Mesh`` (see :func:`read_mesh`).
+
+    Parameters
+    ----------
+    m
+        The ``meshio.Mesh``.
+    name
+        What to call it in notes and errors (the file name).
+    scale
+        Factor on the coordinates.
+
+    Returns
+    -------
+    TetMesh
+    """
     try:
         pts = np.asarray(m.points, dtype=np.float64) * scale
     except (TypeError, ValueError) as exc:
@@ -167,7 +194,19 @@ def write_vtu(
     point_data: dict[str, np.ndarray] | None = None,
     cell_data: dict[str, np.ndarray] | None = None,
 ) -> None:
-    """Write the mesh with point and cell data as VTU, atomically (temp file + rename)."""
+    """Write the mesh with point and cell data as VTU, atomically (temp file + rename).
+
+    Parameters
+    ----------
+    path
+        The ``.vtu`` file.
+    mesh
+        The mesh.
+    point_data
+        Name -> per-node array (first axis ``n``).
+    cell_data
+        Name -> per-tet array (first axis ``m``).
+    """
     import meshio
 
     path = os.fspath(path)

@@ -53,43 +53,107 @@ class TetMesh:
 
     @property
     def n_points(self) -> int:
+        """Number of nodes."""
         return int(self.points.shape[0])
 
     @property
     def n_tets(self) -> int:
+        """Number of tets."""
         return int(self.tets.shape[0])
 
     def volumes(self, points: np.ndarray | None = None) -> np.ndarray:
-        """Signed tet volumes at ``points`` (default: the rest configuration)."""
+        """Signed tet volumes at ``points`` (default: the rest configuration).
+
+        Parameters
+        ----------
+        points
+            Node positions ``(n, 3)``, e.g. deformed ones.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(m,)``, positive for positively oriented tets.
+        """
         return tet_volumes(self.points if points is None else points, self.tets)
 
     def quality(self) -> np.ndarray:
-        """Mean-ratio quality per tet, 1 for a regular tet, 0 for a degenerate one."""
+        """Mean-ratio quality per tet, 1 for a regular tet, 0 for a degenerate one.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(m,)`` (see :func:`mean_ratio_quality`).
+        """
         return mean_ratio_quality(self.points, self.tets)
 
     def bounding_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """Smallest and largest node coordinates.
+
+        Returns
+        -------
+        lo, hi : numpy.ndarray
+            ``(3,)`` each.
+        """
         return self.points.min(axis=0), self.points.max(axis=0)
 
     def boundary_facets(self) -> np.ndarray:
-        """Boundary triangles ``(k, 3)``, ordered so their normal points outward."""
+        """Boundary triangles, ordered so their normal points outward (computed once).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(k, 3)`` node indices (see :func:`boundary_facets`).
+        """
         if not hasattr(self, "_boundary"):
             self._boundary = boundary_facets(self.tets)
         return self._boundary
 
     def centers(self) -> np.ndarray:
-        """Tet barycenters ``(m, 3)``."""
+        """Tet barycenters.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(m, 3)``.
+        """
         return self.points[self.tets].mean(axis=1)
 
 
 def tet_volumes(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """Signed volumes ``det[x1-x0, x2-x0, x3-x0] / 6`` of the tets."""
+    """Signed volumes ``det[x1-x0, x2-x0, x3-x0] / 6`` of the tets.
+
+    Parameters
+    ----------
+    points
+        Node positions ``(n, 3)``.
+    tets
+        Node indices ``(m, 4)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(m,)``.
+    """
     x = points[tets]
     d = x[:, 1:] - x[:, :1]
     return np.einsum("ij,ij->i", d[:, 0], np.cross(d[:, 1], d[:, 2])) / 6.0
 
 
 def mean_ratio_quality(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """Mean-ratio quality ``12 (3|V|)^(2/3) / sum of squared edge lengths``, in [0, 1]."""
+    """Mean-ratio quality ``12 (3|V|)^(2/3) / sum of squared edge lengths``, in [0, 1].
+
+    Parameters
+    ----------
+    points
+        Node positions ``(n, 3)``.
+    tets
+        Node indices ``(m, 4)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(m,)``: 1 for a regular tet, 0 for a flat one.
+    """
     x = points[tets]
     edges = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
     l2 = sum(((x[:, a] - x[:, b]) ** 2).sum(axis=1) for a, b in edges)
@@ -103,7 +167,18 @@ _FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])  # outward for p
 
 
 def boundary_facets(tets: np.ndarray) -> np.ndarray:
-    """Triangles that belong to exactly one tet, oriented outward (tets positively oriented)."""
+    """Triangles that belong to exactly one tet, oriented outward (tets positively oriented).
+
+    Parameters
+    ----------
+    tets
+        Node indices ``(m, 4)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(k, 3)`` node indices; the right-hand normal of each points out of its tet.
+    """
     faces = tets[:, _FACES].reshape(-1, 3)
     key = np.sort(faces, axis=1)
     _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)

@@ -37,6 +37,23 @@ def topology_notes(tets: np.ndarray, name: str) -> list[str]:
     * Non-manifold nodes: at a node, the tets around it fall into more than one group
       connected through triangles at that node (parts touching at a node or an edge, a
       "bow tie"). Legal, but such a hinge is rarely meant: a note naming the nodes.
+
+    Parameters
+    ----------
+    tets
+        Node indices ``(m, 4)``, positively oriented.
+    name
+        The mesh's name in messages.
+
+    Returns
+    -------
+    list of str
+        The notes (empty for one connected, manifold body).
+
+    Raises
+    ------
+    MeshError
+        For non-manifold facets and folds (overlapping tets).
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components

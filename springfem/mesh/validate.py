@@ -36,6 +36,25 @@ def validate_mesh(mesh: TetMesh, name: str = "mesh", rel_volume_tol: float = 1e-
     disconnected parts and non-manifold nodes (parts touching only at a node or an edge)
     are noted. Those three are legal meshes both models can solve, but each part needs its
     own boundary conditions, and slivers lower the stable explicit time step.
+
+    Parameters
+    ----------
+    mesh
+        The mesh, changed in place.
+    name
+        Its name in notes and errors (the file name).
+    rel_volume_tol
+        Zero-volume threshold relative to the cube of the longest edge.
+
+    Returns
+    -------
+    TetMesh
+        ``mesh`` itself, repaired, with float64 points and int64 tets.
+
+    Raises
+    ------
+    MeshError
+        Naming the offending nodes or tets.
     """
     pts, tets = mesh.points, mesh.tets
     if pts.ndim != 2 or pts.shape[1] != 3:
