@@ -13,7 +13,7 @@ Examples
 ...     "mesh": {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [1, 1, 1]},
 ...     "material": {"law": "linear", "E": 1.0, "nu": 0.25, "density": 2.0},
 ...     "load": [{"type": "gravity", "value": [0.0, 0.0, -10.0]}]})
->>> external_forces(s).sum(axis=0).tolist()  # the weight, rho V g
+>>> external_forces(s).sum(axis=0).round(12).tolist()  # the weight, rho V g
 [0.0, 0.0, -20.0]
 """
 
