@@ -12,12 +12,20 @@ from __future__ import annotations
 
 import os
 
+#: Largest mesh accepted on any machine.
 MAX_TETS = 20_000_000
-BYTES_PER_TET = 2_000  # spring model + FEM P1 working set, measured order of magnitude
+#: Working set per tet of the spring model plus the P1 FEM (measured order of magnitude).
+BYTES_PER_TET = 2_000
 
 
 def machine_memory() -> int | None:
-    """Physical memory of this machine in bytes, or ``None`` if the OS does not say."""
+    """Physical memory of this machine.
+
+    Returns
+    -------
+    int or None
+        Bytes, or ``None`` if the OS does not say.
+    """
     try:
         return int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES"))
     except (AttributeError, ValueError, OSError):
@@ -30,6 +38,16 @@ def check_mesh_size(n_tets: int) -> str | None:
     The working set of the spring model and the P1 reference is estimated at
     :data:`BYTES_PER_TET` per tet; a mesh is refused when that exceeds the machine's
     physical memory or when it has more than :data:`MAX_TETS` tets.
+
+    Parameters
+    ----------
+    n_tets
+        Number of tets of the mesh.
+
+    Returns
+    -------
+    str or None
+        The reason, with the estimate, or ``None`` when the mesh fits.
     """
     need = n_tets * BYTES_PER_TET
     mem = machine_memory()

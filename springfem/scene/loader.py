@@ -36,6 +36,16 @@ from .types import Scene
 def load_scene(path: str | os.PathLike) -> Scene:
     """Read and validate a scene file.
 
+    Parameters
+    ----------
+    path
+        A TOML scene file; relative mesh paths in it are relative to its folder.
+
+    Returns
+    -------
+    Scene
+        :func:`~springfem.scene.scene_from_dict` of the file's table.
+
     Raises
     ------
     SceneError

@@ -39,6 +39,20 @@ from .types import (
 
 
 def parse_mesh(r: TableReader, base: Path) -> TetMesh:
+    """The ``[mesh]`` section: a mesh file (``file``, ``scale``) or a box generator.
+
+    Parameters
+    ----------
+    r
+        Reader over the ``[mesh]`` table; every error names the file and key.
+    base
+        Folder that relative ``file`` paths are relative to.
+
+    Returns
+    -------
+    TetMesh
+        Validated; refused up front when too large (:func:`check_mesh_size`).
+    """
     if r.has("file") and r.has("generator"):
         raise r.fail("file", "give either file or generator, not both")
     if r.has("file"):
@@ -75,11 +89,31 @@ def parse_mesh(r: TableReader, base: Path) -> TetMesh:
 
 
 def opt_splits() -> tuple[str, ...]:
-    """The mesh splits a box generator accepts."""
+    """The mesh splits a box generator accepts.
+
+    Returns
+    -------
+    tuple of str
+    """
     return get_args(Split)
 
 
 def parse_material(r: TableReader) -> Material:
+    """The ``[material]`` section: law, density and elastic constants.
+
+    ``E`` and ``nu``, or ``mu`` and ``kappa``, for the isotropic laws; the five
+    transversely isotropic constants for ``transverse-linear`` (checked for a positive
+    definite compliance).
+
+    Parameters
+    ----------
+    r
+        Reader over the ``[material]`` table; every error names the file and key.
+
+    Returns
+    -------
+    Material
+    """
     law = r.get("law", "str", choices=LAWS)
     density = r.get("density", "float", default=1000.0, positive=True)
     kw: dict[str, Any] = {"law": law, "density": density}
@@ -120,6 +154,20 @@ def parse_material(r: TableReader) -> Material:
 
 
 def parse_axes(r: TableReader, mesh: TetMesh) -> np.ndarray:
+    """The ``[axes]`` section: ``uniform``, ``helix`` or ``cells`` (mesh cell data) frames.
+
+    Parameters
+    ----------
+    r
+        Reader over the ``[axes]`` table; every error names the file and key.
+    mesh
+        The scene's mesh (regions and probes are resolved on it).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(m, 3, 3)`` frames (rows: fiber, sheet, normal).
+    """
     kind = r.get("type", "str", default="uniform", choices=AXES_TYPES)
     try:
         if kind == "cells":
@@ -165,6 +213,22 @@ def _coordinate(x: Any) -> bool:
 
 
 def parse_region(r: TableReader, mesh: TetMesh, key: str = "region") -> Region:
+    """The region under ``key``: a name, ``{ box = [...] }`` or ``{ point = [...] }``.
+
+    Parameters
+    ----------
+    r
+        Reader over the ``boundary or load`` table; every error names the file and key.
+    mesh
+        The scene's mesh (regions and probes are resolved on it).
+    key
+        The key holding the region.
+
+    Returns
+    -------
+    Region
+        See :func:`~springfem.regions.resolve_region`.
+    """
     if not r.has(key):
         raise r.missing(key)
     r.used.add(key)
@@ -202,6 +266,19 @@ def parse_region(r: TableReader, mesh: TetMesh, key: str = "region") -> Region:
 
 
 def parse_boundary(r: TableReader, mesh: TetMesh) -> Boundary:
+    """One ``[[boundary]]``: a region with ``fix`` components and/or a ``displacement``.
+
+    Parameters
+    ----------
+    r
+        Reader over the ``[[boundary]]`` table; every error names the file and key.
+    mesh
+        The scene's mesh (regions and probes are resolved on it).
+
+    Returns
+    -------
+    Boundary
+    """
     region = parse_region(r, mesh)
     if r.has("fix"):
         fix = r.t["fix"]
@@ -222,6 +299,19 @@ def parse_boundary(r: TableReader, mesh: TetMesh) -> Boundary:
 
 
 def parse_load(r: TableReader, mesh: TetMesh) -> Load:
+    """One ``[[load]]``: a traction, pressure, gravity or force.
+
+    Parameters
+    ----------
+    r
+        Reader over the ``[[load]]`` table; every error names the file and key.
+    mesh
+        The scene's mesh (regions and probes are resolved on it).
+
+    Returns
+    -------
+    Load
+    """
     kind = r.get("type", "str", choices=LOAD_TYPES)
     if kind == "pressure":
         value = np.array([r.get("value", "float")])
@@ -237,6 +327,19 @@ def parse_load(r: TableReader, mesh: TetMesh) -> Load:
 
 
 def parse_probe(r: TableReader, mesh: TetMesh) -> Probe:
+    """One ``[[probe]]``: a named point inside the mesh.
+
+    Parameters
+    ----------
+    r
+        Reader over the ``[[probe]]`` table; every error names the file and key.
+    mesh
+        The scene's mesh (regions and probes are resolved on it).
+
+    Returns
+    -------
+    Probe
+    """
     name = r.get("name", "str")
     point = r.get("point", "vec", length=3)
     r.finish()

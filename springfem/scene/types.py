@@ -40,6 +40,20 @@ class Material:
     For ``transverse-linear`` the fiber is axis 0 of each element's frame; ``E`` and ``nu``
     then hold an isotropic equivalent (``E_cross``, ``nu_cross``) used only for estimates
     such as the stable time step.
+
+    Parameters
+    ----------
+    law
+        One of :data:`LAWS`.
+    E, nu
+        Young's modulus (Pa) and Poisson's ratio.
+    density
+        kg/m³.
+    E_fiber, E_cross, nu_fiber_cross, nu_cross, G_fiber
+        Transversely isotropic constants (``transverse-linear`` only).
+    formulation, volumetric
+        Neo-Hookean energy: ``coupled`` or ``uncoupled`` (isochoric/volumetric split) and
+        the volumetric function ``U(J)`` of the uncoupled form.
     """
 
     law: Law
@@ -72,7 +86,17 @@ class Material:
 
 @dataclass(frozen=True)
 class Boundary:
-    """Prescribed displacement: ``components`` of ``value`` on the region's nodes."""
+    """Prescribed displacement: ``components`` of ``value`` on the region's nodes.
+
+    Parameters
+    ----------
+    region
+        Where.
+    components
+        Constrained components (0, 1, 2 for x, y, z).
+    value
+        ``(3,)`` prescribed displacement (zeros for ``fix``); only ``components`` count.
+    """
 
     region: Region
     components: tuple[int, ...]
@@ -82,7 +106,17 @@ class Boundary:
 @dataclass(frozen=True)
 class Load:
     """An external load: traction (Pa, vector), pressure (Pa, scalar: t = -p n on the
-    deformed surface), gravity (m/s², vector) or force (N, total vector on a region)."""
+    deformed surface), gravity (m/s², vector) or force (N, total vector on a region).
+
+    Parameters
+    ----------
+    type
+        One of :data:`LOAD_TYPES`.
+    value
+        ``(3,)`` vector, or ``(1,)`` for a pressure.
+    region
+        Where (``None`` for gravity).
+    """
 
     type: Literal["traction", "pressure", "gravity", "force"]
     value: np.ndarray
@@ -91,7 +125,19 @@ class Load:
 
 @dataclass(frozen=True)
 class Probe:
-    """A named point where displacements are reported, with its containing tet."""
+    """A named point where displacements are reported, with its containing tet.
+
+    Parameters
+    ----------
+    name
+        Key in the result's ``probes``.
+    point
+        ``(3,)`` position at rest.
+    tet
+        Index of the tet containing it.
+    bary
+        ``(4,)`` barycentric coordinates of the point in that tet.
+    """
 
     name: str
     point: np.ndarray
@@ -101,7 +147,30 @@ class Probe:
 
 @dataclass
 class Scene:
-    """Everything both models need to solve the same problem on the same mesh."""
+    """Everything both models need to solve the same problem on the same mesh.
+
+    Build one with :func:`~springfem.scene.scene_from_dict` (or read a file with
+    :func:`~springfem.scene.load_scene`).
+
+    Parameters
+    ----------
+    name
+        Safe as a file name (:func:`~springfem.files.safe_filename`).
+    mesh
+        The mesh.
+    material
+        The material.
+    frames
+        ``(m, 3, 3)``: ``frames[k, l]`` is axis ``l`` (fiber, sheet, normal) of tet ``k``.
+    boundaries, loads, probes
+        In the order of the scene.
+    options
+        Parsed model sections by name (see :meth:`section`).
+    path
+        The scene file, if any.
+    raw
+        The scene's table as given.
+    """
 
     name: str
     mesh: TetMesh
@@ -137,6 +206,16 @@ class Scene:
     def with_options(self, **sections: Any) -> Scene:
         """A copy of this scene with the given model sections replaced.
 
+        Parameters
+        ----------
+        **sections
+            Section name -> parsed options (e.g. ``spring=SpringOptions(...)``).
+
+        Returns
+        -------
+        Scene
+            A shallow copy (mesh, material and the rest shared); this scene is unchanged.
+
         Examples
         --------
         >>> from springfem.mesh import box_mesh
@@ -151,6 +230,13 @@ class Scene:
         """Constrained DOFs (node * 3 + component) and their prescribed displacements.
 
         Later boundaries override earlier ones on shared DOFs.
+
+        Returns
+        -------
+        dofs : numpy.ndarray
+            Sorted constrained DOF indices.
+        values : numpy.ndarray
+            Prescribed displacement of each.
         """
         values = np.full(3 * self.mesh.n_points, np.nan)
         for b in self.boundaries:
@@ -160,6 +246,17 @@ class Scene:
         return dofs, values[dofs]
 
     def probe_displacements(self, u: np.ndarray) -> dict[str, list[float]]:
-        """Displacement at each probe, interpolated linearly in its tet from nodal ``u``."""
+        """Displacement at each probe, interpolated linearly in its tet from nodal ``u``.
+
+        Parameters
+        ----------
+        u
+            Nodal displacement ``(n, 3)`` or flat ``(3 n,)``.
+
+        Returns
+        -------
+        dict
+            Probe name -> ``[ux, uy, uz]``.
+        """
         u = np.asarray(u).reshape(-1, 3)
         return {p.name: (p.bary @ u[self.mesh.tets[p.tet]]).tolist() for p in self.probes}
