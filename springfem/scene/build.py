@@ -25,6 +25,7 @@ from ..files import safe_filename
 from ..mesh import TetMesh
 from .reader import TableReader, _key_label, _show, suggestion
 from .sections import (
+    SECTION_KEYS,
     parse_axes,
     parse_boundary,
     parse_load,
@@ -128,25 +129,27 @@ def scene_from_dict(data: dict, path: str | os.PathLike | None = None) -> Scene:
     if isinstance(data["mesh"], TetMesh):
         mesh = data["mesh"]
     else:
-        mesh = parse_mesh(TableReader(data["mesh"], "mesh", file), base)
+        mesh = parse_mesh(TableReader(data["mesh"], "mesh", file, SECTION_KEYS["mesh"]), base)
     top.used.add("mesh")
     if isinstance(data["material"], Material):
         material = data["material"]
     else:
-        material = parse_material(TableReader(data["material"], "material", file))
+        material = parse_material(
+            TableReader(data["material"], "material", file, SECTION_KEYS["material"])
+        )
     top.used.add("material")
-    frames = parse_axes(TableReader(data.get("axes", {}), "axes", file), mesh)
+    frames = parse_axes(TableReader(data.get("axes", {}), "axes", file, SECTION_KEYS["axes"]), mesh)
     top.used.add("axes")
     boundaries = [
-        parse_boundary(TableReader(b, f"boundary[{i}]", file), mesh)
+        parse_boundary(TableReader(b, f"boundary[{i}]", file, SECTION_KEYS["boundary"]), mesh)
         for i, b in enumerate(_array_of_tables(data, "boundary", file))
     ]
     loads = [
-        parse_load(TableReader(b, f"load[{i}]", file), mesh)
+        parse_load(TableReader(b, f"load[{i}]", file, SECTION_KEYS["load"]), mesh)
         for i, b in enumerate(_array_of_tables(data, "load", file))
     ]
     probes = [
-        parse_probe(TableReader(b, f"probe[{i}]", file), mesh)
+        parse_probe(TableReader(b, f"probe[{i}]", file, SECTION_KEYS["probe"]), mesh)
         for i, b in enumerate(_array_of_tables(data, "probe", file))
     ]
     names = [p.name for p in probes]

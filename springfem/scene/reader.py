@@ -2,13 +2,13 @@
 
 Examples
 --------
->>> r = TableReader({"E": 1.0e3, "valeu": 2}, "material", "s.toml")
+>>> r = TableReader({"E": 1.0e3, "valeu": 2}, "load[0]", "s.toml", keys=("E", "value"))
 >>> r.get("E", "float", positive=True)
 1000.0
 >>> r.get("value", "float")
 Traceback (most recent call last):
 ...
-springfem.errors.SceneError: s.toml: material.valeu: unknown key; did you mean 'value'?
+springfem.errors.SceneError: s.toml: load[0].valeu: unknown key; did you mean 'value'?
 """
 
 from __future__ import annotations
@@ -76,13 +76,18 @@ class TableReader:
         The table's name in messages (``material``, ``load[0]``; empty for the top level).
     file
         The scene file's name in messages.
+    keys
+        Every key valid in the table, if the parser declares them: then a missing required
+        key is matched against the table's invalid keys only (a valid key asked for later
+        is never taken for a misspelling).
     """
 
-    def __init__(self, table: Any, where: str, file: str):
+    def __init__(self, table: Any, where: str, file: str, keys: Iterable[str] | None = None):
         if not isinstance(table, dict):
             raise SceneError(f"{file}: {where} must be a table")
         self.t, self.where, self.file, self.used = table, where, file, set()
-        self.known: set[str] = set()
+        self.keys = None if keys is None else frozenset(keys)
+        self.known: set[str] = set(self.keys or ())
 
     def _key(self, key: str) -> str:
         key = _key_label(key)
@@ -132,11 +137,14 @@ class TableReader:
         -------
         SceneError
             ``"<key>: missing (required)"``, or ``"<typo>: unknown key; did you mean
-            '<key>'?"`` when a key of the table no parser asked for is close to it.
+            '<key>'?"`` when an invalid key of the table is close to it (only when the
+            valid ``keys`` are declared).
         """
         self.used.add(key)
         self.known.add(key)
-        typo = suggestion(key, set(self.t) - self.known)
+        if self.keys is None:
+            return self.fail(key, "missing (required)")
+        typo = suggestion(key, set(self.t) - self.keys)
         if typo is not None:
             return self.fail(typo, f"unknown key; did you mean {key!r}?")
         return self.fail(key, "missing (required)")

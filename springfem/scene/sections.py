@@ -37,6 +37,19 @@ from .types import (
     Probe,
 )
 
+#: The keys valid in each core section (messages suggest the closest for a misspelt one).
+SECTION_KEYS = {
+    "mesh": ("file", "scale", "generator", "size", "divisions", "split", "origin"),
+    "material": (
+        *("law", "density", "E", "nu", "mu", "kappa", "formulation", "volumetric"),
+        *("E_fiber", "E_cross", "nu_fiber_cross", "nu_cross", "G_fiber"),
+    ),
+    "axes": ("type", "fiber_data", "sheet_data", "fiber", "sheet", "axis", "range", "angles"),
+    "boundary": ("region", "fix", "displacement"),
+    "load": ("type", "value", "region"),
+    "probe": ("name", "point"),
+}
+
 
 def parse_mesh(r: TableReader, base: Path) -> TetMesh:
     """The ``[mesh]`` section: a mesh file (``file``, ``scale``) or a box generator.

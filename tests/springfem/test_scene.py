@@ -248,3 +248,21 @@ def test_the_mesh_description_shows_plain_numbers(capsys, tmp_path):
     out = capsys.readouterr().out
     assert "box [0.1, 0.01, 0.01] divisions [2, 2, 2] split six" in out
     assert "np." not in out
+
+
+def test_a_valid_key_is_never_taken_for_a_misspelling():
+    # nu_cross is close to the missing E_cross (difflib ratio 0.8) but is itself valid
+    data = base()
+    data["material"] = {"law": "transverse-linear", "E_fiber": 3.0, "nu_cross": 0.3}
+    data["material"].update(G_fiber=1.0, nu_fiber_cross=0.2)
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(data, path="bad.toml")
+    assert str(info.value) == "bad.toml: material.E_cross: missing (required)"
+
+
+def test_model_sections_suggest_their_keys():
+    data = base()
+    data["fem"] = {"ordr": 2}
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(data, path="bad.toml")
+    assert str(info.value) == "bad.toml: fem.ordr: unknown key; did you mean 'order'?"
