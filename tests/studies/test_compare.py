@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from springfem.scene import parse_scene
-from studies import compare, plots
+from studies import compare, compare_output, plots
 from studies.cli import main
 from studies.compare import (
     bundled_scene_text,
@@ -149,7 +149,7 @@ def test_cli_compare_json(tmp_path, capsys, monkeypatch):
     def no_render(cmp, path):  # rendering is covered above; keep this test fast
         raise RuntimeError("no OpenGL here")
 
-    monkeypatch.setattr(compare, "render_comparison", no_render)
+    monkeypatch.setattr(compare_output, "render_comparison", no_render)
     scene = tmp_path / "coarse.toml"
     scene.write_text(bundled_scene_text("stretch-fiber", (2, 2, 2)))
     assert main(["compare", str(scene), "--out", str(tmp_path / "o"), "--json"]) == 0
@@ -177,7 +177,7 @@ def test_cli_compare_model_failure_exits_3_and_keeps_table(tmp_path, capsys, mon
         return real(scene, name)
 
     monkeypatch.setattr(compare, "solve_model", failing)
-    monkeypatch.setattr(compare, "render_comparison", lambda cmp, path: path)
+    monkeypatch.setattr(compare_output, "render_comparison", lambda cmp, path: path)
     scene = tmp_path / "coarse.toml"
     scene.write_text(bundled_scene_text("stretch-fiber", (2, 2, 2)))
     out = tmp_path / "o"

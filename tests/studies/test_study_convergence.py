@@ -1,7 +1,7 @@
 """Study ``convergence`` on tiny refinement levels: properties with stated tolerances.
 
-The levels are monkeypatched to k = 1, 2, 3 (60 to 1620 tets) with the P2 reference at
-k = 3, so the whole study (cases, tables, figures) runs in a few seconds.
+The study runs with tiny settings, levels k = 1, 2, 3 (60 to 1620 tets) with the P2
+reference at k = 3, so the whole study (cases, tables, figures) runs in a few seconds.
 """
 
 import doctest
@@ -12,23 +12,16 @@ import pytest
 
 from studies import study_convergence as sc
 from studies.cache import CaseCache
-from studies.runner import StudyContext
+from studies.registry import StudyContext
 
-TINY = {"levels": (1, 2, 3), "p2_levels": (1, 2), "ref": 3}
+TINY = sc.Settings(levels=(1, 2, 3), p2_levels=(1, 2), ref=3, cosine_check_level=2)
 
 
 @pytest.fixture(scope="module")
 def output(tmp_path_factory):
     root = tmp_path_factory.mktemp("conv")
-    mp = pytest.MonkeyPatch()
-    mp.setattr(sc, "QUICK", TINY)
-    mp.setattr(sc, "COSINE_CHECK_LEVEL", 2)
-    try:
-        ctx = StudyContext("convergence", root / "convergence", True, CaseCache(root, "c"), False)
-        out = sc.run(ctx)
-    finally:
-        mp.undo()
-    return out, ctx
+    ctx = StudyContext("convergence", root / "convergence", True, CaseCache(root, "c"), False)
+    return sc.run(ctx, TINY), ctx
 
 
 def _levels(ctx):
