@@ -76,14 +76,13 @@ def test_reference_close_to_timoshenko(output):
     assert abs(out.headline["ref_over_timoshenko"] - 1) < 0.02
 
 
-def test_cosine_and_energy_torsion_agree_in_small_strain(output):
-    """Cosine (spec) and energy torsion differ by 0.03 % in tip deflection at k = 4; both
-    linearise to the same shear stiffness, so require < 1 %."""
-    out, _ = output
-    assert any("cosine torsion changes" in f for f in out.findings)
-    text = next(f for f in out.findings if "cosine torsion changes" in f)
-    pct = float(text.split("by ")[1].split("%")[0])
-    assert abs(pct) < 1.0
+def test_cosine_and_energy_torsion_agree_in_small_strain():
+    """Cosine (spec) and energy torsion linearise to the same shear stiffness (DESIGN §3),
+    so in this small-strain bending their tip deflections differ only by the geometric
+    nonlinearity of the torsion laws (measured 0.03 % at k = 4); require < 1 %."""
+    cosine = sc.work(sc.case("spring", 2, torsion="cosine"))
+    energy = sc.work(sc.case("spring", 2, torsion="energy"))
+    assert cosine["tip"][2] == pytest.approx(energy["tip"][2], rel=0.01)
 
 
 def test_richardson_limit():
