@@ -30,7 +30,18 @@ from .compare import Comparison
 
 
 def summary_lines(cmp: Comparison) -> list[str]:
-    """Error sentences: model error (spring vs same-mesh P1), total and discretisation."""
+    """Error sentences: model error (spring vs same-mesh P1), total and discretisation.
+
+    Parameters
+    ----------
+    cmp
+        A comparison from :func:`studies.compare.compare_scene`.
+
+    Returns
+    -------
+    list of str
+        One sentence per error kind that can be computed.
+    """
     lines = []
     p1 = cmp.same_mesh_p1
     if "spring" in cmp.solutions and p1 is not None:
@@ -56,7 +67,20 @@ def summary_lines(cmp: Comparison) -> list[str]:
 
 def render_comparison(cmp: Comparison, path: str | Path) -> Path:
     """The deformed meshes side by side, coloured by their error against the reference
-    (see :func:`figure_fields` for which solutions are drawn)."""
+    (see :func:`figure_fields` for which solutions are drawn).
+
+    Parameters
+    ----------
+    cmp
+        A comparison.
+    path
+        The PNG to write.
+
+    Returns
+    -------
+    Path
+        The written PNG.
+    """
     names = [n for n in cmp.table["model"] if n in cmp.solutions]
     fields, note = figure_fields({n: cmp.solutions[n].u for n in names}, cmp.reference)
     laws = {n: cmp.solutions[n].result.law for n in fields}
@@ -75,6 +99,18 @@ def figure_fields(
     :data:`MAX_DRAWN_ERROR` × the largest reference displacement are left out (their
     displacements can be many times the body's size and would flatten the shared colour
     scale); the table keeps them.
+
+    Parameters
+    ----------
+    fields
+        Model name -> vertex displacements ``(n, 3)``.
+    reference
+        Name of the reference field.
+
+    Returns
+    -------
+    tuple
+        The fields to draw, and a note naming the omitted ones (``None`` if none).
     """
     if not reference.endswith("-NH"):
         return dict(fields), None
@@ -102,7 +138,26 @@ def error_figure(
     note: str | None = None,
 ) -> Path:
     """Render vertex displacement ``fields`` (name -> ``(n, 3)``) of ``scene`` side by side,
-    coloured by their error magnitude against ``fields[reference]``, one colour scale."""
+    coloured by their error magnitude against ``fields[reference]``, one colour scale.
+
+    Parameters
+    ----------
+    scene
+        The scene (its mesh is drawn).
+    fields
+        Model name -> vertex displacements.
+    reference
+        Name of the reference field.
+    path
+        The PNG to write.
+    laws, note
+        Law per model for the labels; a note for the title.
+
+    Returns
+    -------
+    Path
+        The written PNG.
+    """
     from .plots import Panel, nice_warp_factor, render_error_panels
 
     ref_u = np.asarray(fields[reference]).reshape(-1, 3)
@@ -138,7 +193,20 @@ def _format_cell(v: object) -> str:
 
 def printable(df: pd.DataFrame, width: int = 24) -> str:
     """The table transposed (one column per model) as aligned text; cells longer than
-    ``width`` are replaced by a footnote mark and listed below."""
+    ``width`` are replaced by a footnote mark and listed below.
+
+    Parameters
+    ----------
+    df
+        A comparison table with a ``model`` column.
+    width
+        Longest cell printed in place.
+
+    Returns
+    -------
+    str
+        The aligned text.
+    """
     t = df.set_index("model").T.map(_format_cell)
     notes: list[str] = []
     for col in t.columns:
@@ -151,7 +219,18 @@ def printable(df: pd.DataFrame, width: int = 24) -> str:
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    """``springfem compare [SCENE] [--out DIR] [--json]``."""
+    """``springfem compare [SCENE] [--out DIR] [--json]``.
+
+    Parameters
+    ----------
+    args
+        Parsed arguments: ``scene``, ``out``, ``json``.
+
+    Returns
+    -------
+    int
+        Exit code: 0, or 3 when a model failed.
+    """
     from .cli import scene_path
     from .tables import write_table
 
