@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from springfem.mechanics.solvers import (
+from springfem.mechanics import (
     SolveInfo,
     Trajectory,
     explicit,

@@ -1,12 +1,20 @@
 """The mechanical system the solvers drive, and small helpers on it.
 
-The solvers of :mod:`springfem.mechanics.solvers` never look at springs: they see nodal masses,
+The solvers of :mod:`springfem.mechanics` never look at springs: they see nodal masses,
 constrained DOFs, a force function, optionally an energy and an analytic tangent, and the
 element connectivity (the sparsity pattern of the tangent). Anything with these members is
 a :class:`MechanicalSystem` (structural typing: no base class to inherit).
 
 DOF numbering: node ``i``, component ``c`` is DOF ``3 i + c`` (row-major flattening of an
 ``(n, 3)`` position array).
+
+Examples
+--------
+>>> import numpy as np
+>>> x = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+>>> B = rigid_body_modes(x)
+>>> B.shape, int(np.linalg.matrix_rank(B))
+((12, 6), 6)
 """
 
 from __future__ import annotations

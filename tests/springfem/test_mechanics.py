@@ -18,8 +18,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from springfem.errors import SolverError
-from springfem.mechanics.coloring import ColoredJacobian, distance2_coloring, fd_jacobian
-from springfem.mechanics.solvers import (
+from springfem.mechanics import (
     SolveInfo,
     Trajectory,
     explicit,
@@ -28,6 +27,7 @@ from springfem.mechanics.solvers import (
     stable_time_step,
     static,
 )
+from springfem.mechanics.fd_jacobian import ColoredJacobian, distance2_coloring, fd_jacobian
 from springfem.mechanics.system import MechanicalSystem, node_adjacency
 from springfem.mesh import box_mesh
 from springmodel.options import SpringOptions
