@@ -155,7 +155,7 @@ def _tet_axis(ax) -> None:
 
 
 def _amg_threshold() -> int:
-    from springfem.mechanics import AMG_THRESHOLD
+    from springfem.mechanics import DIRECT_MAX_DOFS as AMG_THRESHOLD
 
     return int(AMG_THRESHOLD)
 

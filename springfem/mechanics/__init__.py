@@ -17,7 +17,7 @@ True
 from .explicit import Integrator, explicit
 from .fd_jacobian import ColoredJacobian, distance2_coloring, fd_jacobian
 from .implicit import implicit
-from .linsolve import AMG_THRESHOLD, LinearSolver, LinearSolverKind, solve_linear
+from .linsolve import DIRECT_MAX_DOFS, LinearSolver, LinearSolverKind, solve_linear
 from .relaxation import explicit_static
 from .results import SolveInfo, Trajectory
 from .static import static
@@ -32,7 +32,7 @@ from .system import (
 from .timestep import stable_time_step
 
 __all__ = [
-    "AMG_THRESHOLD",
+    "DIRECT_MAX_DOFS",
     "ColoredJacobian",
     "Integrator",
     "LinearSolver",

@@ -248,7 +248,7 @@ def _backward_euler_step(
             J = sp.diags(Mf * (1.0 + dt * alpha)) + dt * dt * ctx.ff(K)
             if damped:
                 J = J + dt * ctx.ff(ctx.damping_matrix(x1, s, length / dt))
-            solver = LinearSolver(J, linear_solver, B)
+            solver = LinearSolver(linear_solver, B).factorize(J)
         try:
             dv = solver.solve(-g)
         except SolverError:

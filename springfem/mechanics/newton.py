@@ -80,7 +80,7 @@ def newton(
             return True, x, it - 1, hist, "", K
         K = ctx.stiffness(x, s, jacobian)
         try:
-            solver = LinearSolver(ctx.ff(K), linear_solver, B)
+            solver = LinearSolver(linear_solver, B).factorize(ctx.ff(K))
             dx = solver.solve(R)
         except SolverError as err:
             return False, x, it, hist, f"singular tangent at iteration {it} ({err})", K
