@@ -1,4 +1,15 @@
-"""Newton's method with a backtracking line search at one load factor.
+"""Newton's method with a backtracking line search, and the one rule of adaptive load
+stepping both models use (:class:`LoadStepping`).
+
+Load stepping: the load fraction goes from 0 to 1 in ``load_steps`` nominal increments. A
+step that fails (no convergence, divergence, a failed line search or linear solve, inverted
+elements) is retried with half the increment; after a step that converges in at most
+``easy_iterations`` iterations the increment doubles again, never beyond the nominal one
+(so ``load_steps`` is honoured as the largest increment). The solve gives up after
+``max_cutbacks`` halvings in a row, or when the increment has shrunk below
+``nominal * cut**max_cutbacks`` (creeping towards a limit load). Halving (bisection) keeps
+the largest increment not yet known to fail; the FEM's former ×0.25 threw away more
+progress for no measured gain on the bundled scenes (same answers, same iteration counts).
 
 Examples
 --------
@@ -29,6 +40,7 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -39,6 +51,96 @@ from .linsolve import LinearSolver, LinearSolverKind
 
 #: Backtracking steps (halvings of the Newton step) of the line search.
 MAX_BACKTRACKS = 12
+#: Load fractions within this of 1 count as the full load.
+FULL_LOAD_TOL = 1e-12
+
+
+@dataclass
+class LoadPath:
+    """Outcome of :meth:`LoadStepping.run`.
+
+    Attributes
+    ----------
+    converged
+        The full load was reached.
+    load
+        Last converged load fraction.
+    steps
+        Converged load fractions, in order.
+    cutbacks
+        Failed steps (each halved the increment).
+    reason
+        Why the last failed step failed.
+    failed_at
+        Load fraction of the last failed step (``nan`` when none failed).
+    """
+
+    converged: bool = False
+    load: float = 0.0
+    steps: list[float] = field(default_factory=list)
+    cutbacks: int = 0
+    reason: str = ""
+    failed_at: float = float("nan")
+
+
+@dataclass
+class LoadStepping:
+    """The adaptive load-stepping rule (see the module docstring).
+
+    Parameters
+    ----------
+    load_steps
+        Nominal number of equal increments.
+    max_cutbacks
+        Halvings in a row before giving up.
+    easy_iterations
+        A step converged in at most this many iterations lets the increment grow.
+    cut, grow
+        Factors of the increment after a failed and after an easy step.
+    """
+
+    load_steps: int = 1
+    max_cutbacks: int = 8
+    easy_iterations: int = 4
+    cut: float = 0.5
+    grow: float = 2.0
+
+    def run(self, try_step: Callable[[float, float], tuple[bool, int, str]]) -> LoadPath:
+        """Step the load fraction from 0 to 1.
+
+        Parameters
+        ----------
+        try_step
+            ``try_step(from, to) -> (ok, iterations, reason)``: solve at load fraction ``to``
+            from the state converged at ``from``, keep the new state when ``ok``.
+
+        Returns
+        -------
+        LoadPath
+            Converged fractions, cut-backs, and the reason of the last failure.
+        """
+        path = LoadPath()
+        nominal = 1.0 / max(1, int(self.load_steps))
+        dlam, in_a_row = nominal, 0
+        while path.load < 1.0 - FULL_LOAD_TOL or not path.steps:
+            lam = path.load
+            to = 1.0 if lam + dlam >= 1.0 - FULL_LOAD_TOL else lam + dlam
+            ok, its, reason = try_step(lam, to)
+            if ok:
+                path.load = to
+                path.steps.append(to)
+                in_a_row = 0
+                if its <= self.easy_iterations:
+                    dlam = min(self.grow * dlam, nominal)
+                continue
+            path.cutbacks += 1
+            path.reason, path.failed_at = reason, to
+            in_a_row += 1
+            dlam *= self.cut
+            if in_a_row > self.max_cutbacks or dlam < nominal * self.cut**self.max_cutbacks:
+                break
+        path.converged = bool(path.steps) and path.load >= 1.0 - FULL_LOAD_TOL
+        return path
 
 
 def newton(
@@ -54,8 +156,37 @@ def newton(
     callback: Callable | None,
     it_offset: int,
 ):
-    """Newton iterations at load factor s. Returns ok, x, iterations, history, reason, K.
+    """Newton iterations at load factor ``s`` on a system's free DOFs.
 
+    Parameters
+    ----------
+    ctx
+        The solve context.
+    x
+        Start positions ``(n, 3)`` (fixed DOFs already prescribed).
+    s
+        Load factor.
+    f_ref
+        Reference force norm: the residual is ``|f_free| / f_ref``.
+    tol, max_iter
+        Relative residual tolerance and iterations at most.
+    jacobian, linear_solver
+        Tangent (``auto``, ``analytic``, ``fd``) and linear solver kind.
+    B
+        Rigid-body modes on the free DOFs (near-nullspace of AMG).
+    callback
+        ``callback(iteration, s, x, residual)`` after every iteration, or ``None``.
+    it_offset
+        Added to the iteration number passed to ``callback``.
+
+    Returns
+    -------
+    ok, x, iterations, history, reason, K
+        Whether it converged, the positions, iterations, relative residuals, why it stopped
+        (empty on plain convergence) and the last tangent.
+
+    Notes
+    -----
     Line search (backtracking by halving): with an energy and a descent direction, Armijo
     on the energy; otherwise a step is accepted when the residual norm decreases (Armijo)
     or when Deuflhard's natural monotonicity test holds, ``|K^-1 f(x + a dx)| <=

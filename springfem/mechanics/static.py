@@ -35,7 +35,7 @@ from springfem.errors import SolverError
 
 from .context import JacobianKind, SolveContext, note_solver, reference_norm
 from .linsolve import LinearSolverKind, solve_linear
-from .newton import newton
+from .newton import LoadStepping, newton
 from .relaxation import explicit_static
 from .results import SolveInfo
 from .system import SINGULAR_MESSAGE, MechanicalSystem, check_constrained, rigid_body_modes
@@ -66,7 +66,8 @@ def static(
     :func:`solve_linear` and a backtracking line search: Armijo on the energy when the
     system has one and the step descends it, else on the residual norm. A step that does
     not converge in ``max_iter`` iterations is cut in half and retried (up to
-    ``max_cutbacks`` times in a row); the increment grows back after easy steps. When
+    ``max_cutbacks`` times in a row); the increment grows back after easy steps (the rule
+    of :class:`~springfem.mechanics.newton.LoadStepping`). When
     prescribed displacements change between load steps, a tangent predictor moves the free
     DOFs with them (``K_ff dx_f = -K_fc dx_c``). If Newton gives up and ``fallback`` is on,
     dynamic relaxation (:func:`explicit_static`, kinetic damping) finishes from the last
@@ -122,24 +123,18 @@ def static(
     f_ref = reference_norm(ctx, target)
     B = rigid_body_modes(ctx.x0)[ctx.free]
     x_conv = np.array(ctx.x0 if x_init is None else x_init, dtype=float).reshape(ctx.n, 3)
-    # load fractions lam in [0, 1]; the load factor is lam * target
-    lam_conv = 0.0
-    nominal = 1.0 / max(1, int(load_steps))
-    dlam = nominal
     hist: list[float] = []
-    steps_done: list[float] = []
     total_its = 0
-    cutbacks = 0
-    in_a_row = 0
-    last_reason = ""
-    K_conv: sp.csr_matrix | None = None
+    state = {"x": x_conv, "K": None}  # last converged positions and tangent
     method = "newton"
     notes: list[str] = []
+    first_attempt = [True]
+    path_steps: list[float] = []  # converged load factors
 
-    while lam_conv < 1.0 - 1e-12 or not steps_done:
-        lam_new = min(1.0, lam_conv + dlam)
+    def try_step(lam_conv: float, lam_new: float) -> tuple[bool, int, str]:
+        nonlocal total_its
         s_new = lam_new * target
-        x = x_conv.copy()
+        x = state["x"].copy()
         xf = x.reshape(-1)
         if ctx.fixed.size:
             dp = system.prescribed(s_new) - xf[ctx.fixed]
@@ -148,20 +143,20 @@ def static(
                 # tangent predictor: move the free DOFs with the prescribed ones
                 try:
                     K = sp.csr_matrix(
-                        K_conv
-                        if K_conv is not None
-                        else ctx.stiffness(x_conv, lam_conv * target, jacobian)
+                        state["K"]
+                        if state["K"] is not None
+                        else ctx.stiffness(state["x"], lam_conv * target, jacobian)
                     )
                     rhs = -(K[ctx.free][:, ctx.fixed] @ dp)
                     dxf, name = solve_linear(ctx.ff(K), rhs, linear_solver, B)
                     note_solver(ctx, name)
                     xf[ctx.free] += dxf
                 except SolverError:
-                    if not steps_done:
+                    if not path_steps:
                         raise SolverError(
                             f"{SINGULAR_MESSAGE} or the springs leave a mechanism: the "
                             "tangent stiffness at rest is singular",
-                            state=x_conv,
+                            state=state["x"],
                         ) from None
         ok, x, its, h, reason, K_last = newton(
             ctx, x, s_new, f_ref, tol, max_iter, jacobian, linear_solver, B,
@@ -169,32 +164,24 @@ def static(
         )  # fmt: skip
         total_its += its
         hist.extend(h)
+        first, first_attempt[0] = first_attempt[0], False
         if ok:
             if reason:
                 notes.append(f"load factor {s_new:.4g}: {reason}")
-            x_conv, lam_conv, K_conv = x, lam_new, K_last
-            steps_done.append(s_new)
-            in_a_row = 0
-            if its <= 4:
-                dlam = min(2 * dlam, nominal)  # easy step: grow back
-            continue
-        last_reason = reason
-        if (
-            reason.startswith("singular tangent at iteration 1 ")
-            and not steps_done
-            and (in_a_row == 0)
-        ):
+            state["x"], state["K"] = x, K_last
+            path_steps.append(s_new)
+            return True, its, ""
+        if reason.startswith("singular tangent at iteration 1 ") and first:
             raise SolverError(
-                f"{SINGULAR_MESSAGE} or the springs leave a mechanism: {reason}", state=x_conv
+                f"{SINGULAR_MESSAGE} or the springs leave a mechanism: {reason}",
+                state=state["x"],
             )
-        cutbacks += 1
-        in_a_row += 1
-        dlam *= 0.5
-        # give up after max_cutbacks halvings in a row, or when the increment has shrunk
-        # below nominal / 2^max_cutbacks (creeping towards a limit load)
-        if in_a_row > max_cutbacks or dlam < nominal * 0.5**max_cutbacks:
-            break
-    converged = bool(steps_done) and lam_conv >= 1.0 - 1e-12
+        return False, its, reason
+
+    path = LoadStepping(load_steps, max_cutbacks).run(try_step)
+    x_conv, steps_done, cutbacks = state["x"], path_steps, path.cutbacks
+    lam_conv, last_reason = path.load, path.reason
+    converged = path.converged
     s_conv = lam_conv * target
     x_final = x_conv
     steps = 0
@@ -203,7 +190,7 @@ def static(
     if not converged:
         message = (
             f"{message + '; ' if message else ''}Newton failed at load factor "
-            f"{min(1.0, lam_conv + 2 * dlam) * target:.4g} after {cutbacks} cut-backs "
+            f"{path.failed_at * target:.4g} after {cutbacks} cut-backs "
             f"({last_reason}); last converged load factor {s_conv:.4g}"
         )
         if fallback:
