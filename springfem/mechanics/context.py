@@ -283,6 +283,10 @@ def note_solver(ctx: SolveContext, name: str) -> None:
         The solve context.
     name
         ``direct``, ``cg+amg``, ``gmres+amg`` (``none`` is ignored).
+
+    Returns
+    -------
+    None
     """
     if name != "none" and name not in ctx.solvers_used:
         ctx.solvers_used.append(name)

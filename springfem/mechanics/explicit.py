@@ -282,6 +282,11 @@ def explicit(
         oscillates on the unstable time scale (``omega_eff dt >= 1.5``, see
         ``BlowupMonitor``). Non-finite values are always a blow-up.
 
+    Returns
+    -------
+    Trajectory
+        Recorded energies, final state, steps, ``dt`` and ``dt_crit``.
+
     Raises
     ------
     SolverError

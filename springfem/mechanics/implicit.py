@@ -88,7 +88,20 @@ def implicit(
         If given, stop early when the static residual ``|f_free(x)| / reference_force``
         falls below it (pseudo-time stepping to equilibrium).
 
-    Other parameters are as in :func:`explicit`.
+    Other parameters are as in :func:`~springfem.mechanics.explicit.explicit`
+    (``jacobian`` and ``linear_solver`` as in :func:`~springfem.mechanics.static.static`;
+    ``max_iter`` Newton iterations per step; ``max_substeps`` halvings of a failed step).
+
+    Returns
+    -------
+    Trajectory
+        Energies, final state, total Newton iterations, the final relative Newton residual
+        of every step; ``converged`` false when ``equilibrium_tol`` was not reached.
+
+    Raises
+    ------
+    SolverError
+        When a step fails after ``max_substeps`` halvings (names step, time, node, element).
     """
     t_start = time.perf_counter()
     ctx = SolveContext(system)
