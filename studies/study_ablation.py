@@ -171,7 +171,7 @@ def spring_case(case: dict[str, Any]) -> dict[str, Any]:
     ``kernel_rate`` (elements per second), ``method``, ``iterations`` and, for LMS, the
     median stiffness ratio ``k_ratio_median`` and the share at the upper clamp.
     """
-    from springfem.mechanics.solvers import explicit_static, static
+    from springfem.mechanics import explicit_static, static
     from springmodel.model import SpringModel
 
     scene = ablation_scene(case["scene"], case["divisions"])

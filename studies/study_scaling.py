@@ -169,7 +169,7 @@ def _tet_axis(ax) -> None:
 
 
 def _amg_threshold() -> int:
-    from springfem.mechanics.solvers import AMG_THRESHOLD
+    from springfem.mechanics import DIRECT_MAX_DOFS as AMG_THRESHOLD
 
     return int(AMG_THRESHOLD)
 

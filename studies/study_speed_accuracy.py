@@ -145,7 +145,7 @@ def _solve(scene: Scene, method: str, setting: dict) -> tuple[np.ndarray, dict]:
         order, law = FEM_STATIC[method]
         sol = reference_fem.solve(scene, order=order, law=law)
         return sol.u_vertices, {"iterations": sol.result.iterations}
-    from springfem.mechanics.solvers import explicit_static, implicit, stable_time_step
+    from springfem.mechanics import explicit_static, implicit, stable_time_step
 
     if method == "spring-static":
         from springmodel.model import solve_spring

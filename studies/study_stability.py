@@ -90,7 +90,7 @@ def _inverted(scene: Scene, u: np.ndarray) -> int:
 
 def critical_step_case(case: dict) -> dict:
     """Predicted and measured critical explicit step of one method on one mesh."""
-    from springfem.mechanics.solvers import explicit, stable_time_step
+    from springfem.mechanics import explicit, stable_time_step
 
     scene = bar_scene(case["nx"], case["ny"], traction=0.0)
     system = _system(scene, case["method"])
@@ -192,7 +192,7 @@ def locking_case(case: dict) -> dict:
 
 def failure_map_case(case: dict) -> dict:
     """Damped explicit dynamics at (load factor, dt factor): ok, blew up or inverted."""
-    from springfem.mechanics.solvers import explicit, stable_time_step
+    from springfem.mechanics import explicit, stable_time_step
 
     scene = bar_scene(case["nx"], case["ny"], traction=-0.1 * case["factor"])
     system = _system(scene, case["method"])

@@ -172,7 +172,7 @@ def drift_measures(scene: Scene, x: np.ndarray) -> dict[str, float]:
 
 def common_time_step(scene: Scene) -> float:
     """``0.5 dt_crit / sqrt(k_max)`` of the scene's ``volume on`` model (all variants)."""
-    from springfem.mechanics.solvers import stable_time_step
+    from springfem.mechanics import stable_time_step
     from springmodel.model import SpringModel
 
     model = SpringModel(scene, spring_options(scene, "volume on"), parallel=False)
@@ -198,7 +198,7 @@ def dynamic_case(case: dict[str, Any]) -> dict[str, Any]:
     (element drift above :data:`DIVERGED`: the run is stopped there) or ``blew up`` (the
     solver's numerical blow-up test); ``message`` says where and when.
     """
-    from springfem.mechanics.solvers import explicit
+    from springfem.mechanics import explicit
     from springmodel.model import SpringModel
 
     scene = case_scene(case)
@@ -294,7 +294,7 @@ def static_case(case: dict[str, Any]) -> dict[str, Any]:
     scene = cube_scene(case["n"], case["nu"], case["stress"] * case["load"])
     try:
         if case["model"] == "spring":
-            from springfem.mechanics.solvers import static
+            from springfem.mechanics import static
             from springmodel.model import SpringModel
 
             model = SpringModel(scene, spring_options(scene, case["variant"]), parallel=False)

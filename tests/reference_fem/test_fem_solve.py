@@ -14,11 +14,11 @@ from skfem.helpers import det, grad, identity
 import reference_fem
 from reference_fem import FemSolution, bench, solve
 from reference_fem.constraints import dirichlet
-from reference_fem.linsolve import LinearSolver
 from reference_fem.options import FemOptions
 from reference_fem.scenes import make_scene
 from reference_fem.space import Space
 from springfem.errors import InputError, SolverError
+from springfem.mechanics import LinearSolver
 from springfem.mesh import box_mesh
 from springfem.result import write_result
 from springfem.scene import Material, load_scene
@@ -29,7 +29,6 @@ MODULES = [
     "bench",
     "constraints",
     "hyperelastic",
-    "linsolve",
     "loads",
     "materials",
     "newton",
