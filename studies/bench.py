@@ -384,7 +384,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     else:  # argparse restricts the choices
         raise InputError(f"unknown benchmark {what!r}; valid: forces, fem, step")
     if as_json:
-        from springfem.result import _jsonable
+        from springfem.files import jsonable as _jsonable
 
         print(json.dumps(_jsonable(res), indent=2, sort_keys=True))
     return 0

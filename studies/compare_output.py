@@ -22,7 +22,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from springfem.result import _jsonable, write_result
+from springfem.files import jsonable as _jsonable
+from springfem.result import write_result
 from springfem.scene import Scene, load_scene
 
 from . import compare, metrics

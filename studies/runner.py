@@ -13,7 +13,8 @@ import json
 import time
 from pathlib import Path
 
-from springfem.result import _jsonable, atomic_write_text, remove_stale_temp_files
+from springfem.files import atomic_write_text, remove_stale_temp_files
+from springfem.files import jsonable as _jsonable
 
 from .cache import CaseCache, source_fingerprint
 from .registry import REGISTRY, StudyContext, StudyOutput, get_study
