@@ -208,7 +208,7 @@ def step_time(system, steps: int = STEP_COUNT, repeats: int = 5) -> tuple[float,
     ``post_step``. The time step is tiny (the state barely moves, so no run can blow up);
     the cost of a step does not depend on it. No energies are recorded.
     """
-    from springfem.mechanics.solvers import explicit
+    from springfem.mechanics import explicit
 
     plain = WithoutEnergy(system)
     wall, cpu = timed(lambda: explicit(plain, dt=1e-9, steps=steps, record_every=steps), repeats)

@@ -27,8 +27,8 @@ from reference_fem.hyperelastic import NeoHookean
 from reference_fem.space import Space, p1_gradients
 from springfem.errors import InputError, SolverError
 from springfem.materials import isotropic_matrix
-from springfem.mechanics.coloring import fd_jacobian
-from springfem.mechanics.solvers import explicit, explicit_static, stable_time_step
+from springfem.mechanics import explicit, explicit_static, stable_time_step
+from springfem.mechanics.fd_jacobian import fd_jacobian
 from springfem.mechanics.system import MechanicalSystem
 from springfem.mesh import box_mesh, element_colouring
 from springfem.scene import Material, scene_from_dict

@@ -10,11 +10,11 @@ from skfem.models.elasticity import lame_parameters, linear_elasticity
 
 from reference_fem import FemProblem, element_stiffness_p1, material_matrix
 from reference_fem.assembly import BlockPattern, linear_element_blocks
-from reference_fem.constraints import rigid_body_modes
 from reference_fem.loads import ExternalLoads
 from reference_fem.space import Space
 from springfem.loads import external_forces
 from springfem.materials import isotropic_matrix, voigt_to_tensor
+from springfem.mechanics import rigid_body_modes
 from springfem.mesh import box_mesh
 from springfem.scene import Material, scene_from_dict
 

@@ -14,10 +14,10 @@ from skfem.helpers import det, grad, identity
 import reference_fem
 from reference_fem import FemSolution, bench, solve
 from reference_fem.constraints import dirichlet
-from reference_fem.linsolve import LinearSolver
 from reference_fem.options import FemOptions
 from reference_fem.space import Space
 from springfem.errors import InputError, SolverError
+from springfem.mechanics import LinearSolver
 from springfem.mesh import box_mesh
 from springfem.result import write_result
 from springfem.scene import Material, load_scene, scene_from_dict
@@ -28,7 +28,6 @@ MODULES = [
     "bench",
     "constraints",
     "hyperelastic",
-    "linsolve",
     "loads",
     "materials",
     "newton",
