@@ -10,7 +10,7 @@ import pytest
 
 import springfem
 
-MODULES = sorted(
+MODULES = ["springfem"] + sorted(
     m.name
     for m in pkgutil.walk_packages(springfem.__path__, "springfem.")
     if not m.name.startswith("springfem.mechanics")
