@@ -232,13 +232,17 @@ class Factorization:
         self.name = "none"
         self._lu = None
         self._ml = None
+        self._coarse = "splu"  # pinv's dense SVD is slow with oversubscribed BLAS threads
         if self.kind == "direct":
             with warnings.catch_warnings():
-                warnings.simplefilter("error", spla.MatrixRankWarning)
+                # a rank-deficient factor is judged by the residual of its solutions (a
+                # singular but consistent system, e.g. a mechanism the load does not move,
+                # is solvable)
+                warnings.simplefilter("ignore", spla.MatrixRankWarning)
                 try:
                     # minimum degree on A^T + A: ~4x less fill than COLAMD on these matrices
                     self._lu = spla.splu(self.A.tocsc(), permc_spec="MMD_AT_PLUS_A")
-                except (RuntimeError, spla.MatrixRankWarning):
+                except RuntimeError:
                     self._lu = None  # exactly singular factor: try AMG, which reports it
 
     def solve(self, b: np.ndarray) -> np.ndarray:
@@ -273,7 +277,17 @@ class Factorization:
             x = self._lu.solve(b)
             self.name = "direct"
         if x is None or not self._accepted(A, x, b, bnorm):
-            A, x = self._K, self._krylov(b)
+            A = self._K
+            try:
+                x = self._krylov(b)
+            except RuntimeError:
+                # exactly singular coarsest level (a mechanism): its pseudo-inverse lets CG
+                # solve a singular but consistent system; an inconsistent one is refused
+                self._ml, self._coarse = None, "pinv"
+                try:
+                    x = self._krylov(b)
+                except (RuntimeError, ValueError, np.linalg.LinAlgError):
+                    x = np.full(b.shape, np.nan)
         self.solver.name = self.name
         if self.free is not None:
             x[~self.free] = 0.0
@@ -309,7 +323,7 @@ class Factorization:
                 strength=("symmetric", {"theta": 0.0}),
                 smooth="jacobi",
                 max_coarse=500,
-                coarse_solver="splu",  # pinv's dense SVD is slow with oversubscribed BLAS
+                coarse_solver=self._coarse,
             )
         return self._ml
 
