@@ -23,6 +23,8 @@ from pathlib import Path
 
 from springfem.errors import InputError, SpringFemError
 
+from .overrides import add_set_option  # sweeps
+
 SCENES = Path(__file__).resolve().parent / "scenes"
 DEFAULT_SCENE = SCENES / "cantilever.toml"
 
@@ -101,12 +103,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default=None, help="output folder (default: out/<scene>-<model>)")
     p.add_argument("--json", action="store_true", help="print result.json to stdout")
     p.add_argument("--verbose", "-v", action="store_true", help="print solver progress")
+    add_set_option(p)  # sweeps: --set key=value
     p.set_defaults(func=_subcommand("studies.solve", "cmd_solve"))
 
     p = sub.add_parser("compare", help="spring model vs FEM (P1, P2) on the same scene")
     p.add_argument("scene", nargs="?", default=None, help="scene (default: cantilever)")
     p.add_argument("--out", default=None, help="output folder (default: out/compare-<scene>)")
     p.add_argument("--json", action="store_true", help="print the table as JSON")
+    add_set_option(p)  # sweeps: --set key=value
     p.set_defaults(func=_subcommand("studies.compare", "cmd_compare"))
 
     p = sub.add_parser("study", help="run one study into reports/")

@@ -31,7 +31,7 @@ import pandas as pd
 
 from springfem.errors import InputError, SolverError
 from springfem.result import _jsonable, write_result
-from springfem.scene import Scene, load_scene
+from springfem.scene import Scene
 
 from . import metrics
 from .solve import Solution
@@ -431,9 +431,10 @@ def printable(df: pd.DataFrame, width: int = 24) -> str:
 def cmd_compare(args: argparse.Namespace) -> int:
     """``springfem compare [SCENE] [--out DIR] [--json]``."""
     from .cli import scene_path
+    from .overrides import load_scene_with
     from .tables import write_table
 
-    scene = load_scene(scene_path(args.scene))
+    scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))  # sweeps: --set
     quiet = bool(getattr(args, "json", False))
     out = Path(args.out) if args.out else Path("out") / f"compare-{scene.name}"
 

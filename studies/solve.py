@@ -12,7 +12,7 @@ import numpy as np
 from reference_fem.options import FemOptions
 from springfem.errors import InputError, SolverError
 from springfem.result import Result, safe_filename, volume_summary, write_result
-from springfem.scene import Scene, load_scene
+from springfem.scene import Scene
 
 
 @dataclass
@@ -89,8 +89,9 @@ def write_last_good_state(out: Path, scene: Scene, model: str, exc: SolverError)
 
 def cmd_solve(args: argparse.Namespace) -> int:
     from .cli import _print_json, scene_path
+    from .overrides import load_scene_with
 
-    scene = load_scene(scene_path(args.scene))
+    scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))  # sweeps: --set
     for note in scene.mesh.notes:
         print(f"note: {note}", file=sys.stderr)
     tag = (
