@@ -121,6 +121,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=_subcommand("studies.runner", "cmd_study"))
 
+    p = sub.add_parser("sweep", help="a scene over a grid of values (SWEEP.toml), on Dask")
+    p.add_argument("file", help="sweep TOML file (see studies/sweeps/cantilever.toml)")
+    p.add_argument("--out", default=None, help="output folder (default: out/sweep-<name>)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, nargs="?", const=0, default=None, metavar="N",
+                       help="local Dask cluster of N processes (no N: one per core)")  # fmt: skip
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="join a Dask cluster, e.g. tcp://host:8786")  # fmt: skip
+    add_set_option(p)
+    p.set_defaults(func=_subcommand("studies.sweep", "cmd_sweep"))
+
     p = sub.add_parser("report", help="run all studies and write reports/REPORT.md")
     p.add_argument("--quick", action="store_true", help="coarser meshes, fewer points")
     p.add_argument(
