@@ -33,8 +33,8 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from .files import atomic_write_text, remove_stale_temp_files
 from .mesh import TetMesh, write_vtu
-from .result import atomic_write_text, remove_stale_temp_files
 
 REST_WINDOW = 0.1  # the last 10% of the run decides whether it is at rest
 REST_TOL = 1e-6  # ... kinetic energy below this fraction of the run's largest

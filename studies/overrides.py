@@ -223,6 +223,8 @@ def _names(msg: str, key: str) -> bool:
     parts = key.split(".")
     for n in range(len(parts), 0, -1):
         label = key_label(".".join(parts[:n]))
+        if f" [{label}]:" in msg:  # a section named as such ("[materail]: unknown section")
+            return True
         i = msg.find(f" {label}")
         after = msg[i + 1 + len(label) : i + 2 + len(label)] if i >= 0 else ""
         if after == ":" or (n == len(parts) and after in (".", "[")):

@@ -11,7 +11,8 @@ import numpy as np
 
 from reference_fem.options import FemOptions
 from springfem.errors import InputError, SolverError
-from springfem.result import Result, safe_filename, volume_summary, write_result
+from springfem.files import safe_filename
+from springfem.result import Result, volume_summary, write_result
 from springfem.scene import Scene
 
 
@@ -89,7 +90,7 @@ def write_last_good_state(out: Path, scene: Scene, model: str, exc: SolverError)
 
 def cmd_solve(args: argparse.Namespace) -> int:
     from .cli import _print_json, scene_path
-    from .overrides import load_scene_with
+    from .overrides import load_scene_with  # sweeps: --set
 
     scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))  # sweeps: --set
     for note in scene.mesh.notes:

@@ -33,7 +33,8 @@ from typing import Any
 
 import pandas as pd
 
-from springfem.result import _jsonable, safe_filename
+from springfem.files import jsonable as _jsonable
+from springfem.files import safe_filename
 
 from .cache import CaseCache, case_key, source_fingerprint
 from .executor import run_tasks

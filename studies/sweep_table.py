@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from springfem.result import atomic_write_text, safe_filename
+from springfem.files import atomic_write_text, safe_filename
 
 from .tables import save_figure
 

@@ -5,7 +5,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from springfem.mechanics.solvers import explicit
+from springfem.mechanics import explicit
 from springfem.mesh import box_mesh
 from springfem.scene import scene_from_dict
 from springfem.series import SeriesWriter, pvd_text, reached_rest

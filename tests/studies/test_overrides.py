@@ -89,7 +89,7 @@ def test_scene_with_overrides_is_the_scene_the_file_would_give():
     "sets, needle",
     [
         (["material.nuu=0.4"], "material.nuu: unknown key (from --set material.nuu=0.4)"),
-        (["materail.nu=0.4"], "materail: unknown key (from --set materail.nu=0.4)"),
+        (["materail.nu=0.4"], "[materail]: unknown section"),
         (["material.nu=abc"], "material.nu: must be a number"),
         (["load.0.value=[0, 1]"], "load[0].value"),
         (["spring.torsion=twist"], "spring.torsion"),
