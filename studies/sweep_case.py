@@ -11,7 +11,8 @@ failed), ``probe:<name>:u<x|y|z>`` (probe displacement, m), ``rel_l2`` (relative
 over the mesh vertices against the reference), ``rel_max`` (largest nodal error over the
 largest reference displacement), ``probe_error:<name>`` (relative error of the probe's
 displacement vector), ``volume_change`` (relative), ``iterations``, ``wall_time`` (s, the
-solve alone), ``nodes``, ``tets``.
+solve alone), ``warm`` (false for a model's first solve in its process: that time includes
+numba compilation when the compile cache is cold), ``nodes``, ``tets``.
 
 Examples
 --------
@@ -34,6 +35,7 @@ from .overrides import scene_with_overrides
 from .sweep_file import SWEEP_MODELS
 
 NAN = float("nan")
+_SOLVED_HERE: set[str] = set()  # models already solved in this process (compiled kernels)
 
 
 def run_case(task: dict[str, Any]) -> dict[str, Any]:
@@ -57,15 +59,18 @@ def run_case(task: dict[str, Any]) -> dict[str, Any]:
     models, reference = task["models"], task["reference"]
     order = [reference] + [m for m in models if m != reference]  # a failed reference is known
     solutions, failures = {}, {}
+    warm = {m: m in _SOLVED_HERE for m in order}
     for m in order:
         try:
             solutions[m] = solve_model(scene, SWEEP_MODELS[m])
         except SolverError as exc:
             failures[m] = str(exc)
+        _SOLVED_HERE.add(m)
     ref = solutions.get(reference)
     rows = []
     for m in models:
         row: dict[str, Any] = {"model": m, "nodes": scene.mesh.n_points, "tets": scene.mesh.n_tets}
+        row["warm"] = warm[m]
         sol = solutions.get(m)
         if sol is None:
             row.update(status="failed", message=failures[m])

@@ -235,6 +235,19 @@ def test_local_cluster_survives_a_killed_worker_and_resumes(tmp_path):
     assert len((marker / "calls.log").read_text().splitlines()) == 5
 
 
+def test_joins_an_existing_scheduler(tmp_path):
+    from distributed import LocalCluster
+
+    spec = parse_sweep(tiny(**{"mesh.divisions": [[4, 1, 1], [5, 1, 1]]}))
+    with LocalCluster(n_workers=1, processes=False, protocol="tcp", dashboard_address=None) as c:
+        assert c.scheduler_address.startswith("tcp://")
+        run = run_sweep(spec, tmp_path, scheduler=c.scheduler_address, progress=False,
+                        figures=False)  # fmt: skip
+    assert run.computed == 2 and set(run.table["status"]) == {"ok"}
+    # one worker process: at most each model's first solve there is cold, the later one warm
+    assert (run.table.groupby("model")["warm"].sum() >= 1).all()
+
+
 @pytest.mark.slow
 def test_killed_client_loses_no_finished_case(tmp_path):
     f = tmp_path / "s.toml"
