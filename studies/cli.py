@@ -23,6 +23,8 @@ from pathlib import Path
 
 from springfem.errors import InputError, SpringFemError
 
+from .overrides import add_set_option  # sweeps
+
 SCENES = Path(__file__).resolve().parent / "scenes"
 DEFAULT_SCENE = SCENES / "cantilever.toml"
 
@@ -101,12 +103,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default=None, help="output folder (default: out/<scene>-<model>)")
     p.add_argument("--json", action="store_true", help="print result.json to stdout")
     p.add_argument("--verbose", "-v", action="store_true", help="print solver progress")
+    add_set_option(p)  # sweeps: --set key=value
     p.set_defaults(func=_subcommand("studies.solve", "cmd_solve"))
 
     p = sub.add_parser("compare", help="spring model vs FEM (P1, P2) on the same scene")
     p.add_argument("scene", nargs="?", default=None, help="scene (default: cantilever)")
     p.add_argument("--out", default=None, help="output folder (default: out/compare-<scene>)")
     p.add_argument("--json", action="store_true", help="print the table as JSON")
+    add_set_option(p)  # sweeps: --set key=value
     p.set_defaults(func=_subcommand("studies.compare_output", "cmd_compare"))
 
     p = sub.add_parser("study", help="run one study into reports/")
@@ -116,6 +120,17 @@ def build_parser() -> argparse.ArgumentParser:
         "--out", default=None, help="report folder (default reports/, quick: reports/quick/)"
     )
     p.set_defaults(func=_subcommand("studies.runner", "cmd_study"))
+
+    p = sub.add_parser("sweep", help="a scene over a grid of values (SWEEP.toml), on Dask")
+    p.add_argument("file", help="sweep TOML file (see studies/sweeps/cantilever.toml)")
+    p.add_argument("--out", default=None, help="output folder (default: out/sweep-<name>)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, nargs="?", const=0, default=None, metavar="N",
+                       help="local Dask cluster of N processes (no N: one per core)")  # fmt: skip
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="join a Dask cluster, e.g. tcp://host:8786")  # fmt: skip
+    add_set_option(p)
+    p.set_defaults(func=_subcommand("studies.sweep", "cmd_sweep"))
 
     p = sub.add_parser("report", help="run all studies and write reports/REPORT.md")
     p.add_argument("--quick", action="store_true", help="coarser meshes, fewer points")

@@ -24,7 +24,7 @@ import pandas as pd
 
 from springfem.files import jsonable as _jsonable
 from springfem.result import write_result
-from springfem.scene import Scene, load_scene
+from springfem.scene import Scene
 
 from . import compare, metrics
 from .compare import Comparison
@@ -233,9 +233,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
         Exit code: 0, or 3 when a model failed.
     """
     from .cli import scene_path
+    from .overrides import load_scene_with  # sweeps: --set
     from .tables import write_table
 
-    scene = load_scene(scene_path(args.scene))
+    scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))  # sweeps: --set
     quiet = bool(getattr(args, "json", False))
     out = Path(args.out) if args.out else Path("out") / f"compare-{scene.name}"
 

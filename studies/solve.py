@@ -13,7 +13,7 @@ from reference_fem.options import FemOptions
 from springfem.errors import InputError, SolverError
 from springfem.files import safe_filename
 from springfem.result import Result, volume_summary, write_result
-from springfem.scene import Scene, load_scene
+from springfem.scene import Scene
 
 
 @dataclass
@@ -90,8 +90,9 @@ def write_last_good_state(out: Path, scene: Scene, model: str, exc: SolverError)
 
 def cmd_solve(args: argparse.Namespace) -> int:
     from .cli import _print_json, scene_path
+    from .overrides import load_scene_with  # sweeps: --set
 
-    scene = load_scene(scene_path(args.scene))
+    scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))  # sweeps: --set
     for note in scene.mesh.notes:
         print(f"note: {note}", file=sys.stderr)
     tag = (

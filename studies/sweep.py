@@ -1,0 +1,222 @@
+"""``springfem sweep SWEEP.toml``: a scene over a grid of values, every case × model in a table.
+
+Each finished case is written atomically to ``<out>/cases/<hash>.json`` (the study case
+cache, :class:`studies.cache.CaseCache`) the moment it arrives, in-process or from a Dask
+worker (:mod:`studies.executor`); a rerun computes only cases without a file, and the
+table ``results.parquet``/``results.csv`` and the figures are assembled from the case files.
+The hash covers the case's scene table, models, reference and the code, so editing the
+scene or the models recomputes what changed.
+
+Examples
+--------
+>>> import tempfile
+>>> from studies.sweep_file import parse_sweep
+>>> spec = parse_sweep({"scene": "cantilever", "models": ["fem-p1", "fem-p2"],
+...                     "grid": {"mesh.divisions": [[4, 1, 1], [8, 1, 1]]}})
+>>> out = tempfile.mkdtemp()
+>>> run = run_sweep(spec, out, progress=False, figures=False)
+>>> run.computed, len(run.table), sorted(set(run.table["status"]))
+(2, 4, ['ok'])
+>>> run_sweep(spec, out, progress=False, figures=False).computed  # all cached
+0
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from springfem.files import jsonable as _jsonable
+from springfem.files import safe_filename
+
+from .cache import CaseCache, case_key, source_fingerprint
+from .executor import run_tasks
+from .sweep_case import run_case
+from .sweep_file import SweepSpec, load_sweep
+from .sweep_table import sweep_figures, sweep_table, write_tables
+
+
+@dataclass
+class SweepRun:
+    """What :func:`run_sweep` did.
+
+    Attributes
+    ----------
+    spec
+        The sweep.
+    out
+        Its output folder.
+    table
+        One row per case × model (:func:`studies.sweep_table.sweep_table`).
+    computed, cached
+        Cases computed in this run, and taken from their case files.
+    errors
+        Case index -> message of cases that could not be computed (not cached: a rerun
+        tries them again).
+    files
+        The table and figure files written.
+    seconds
+        Wall time of the run.
+    """
+
+    spec: SweepSpec
+    out: Path
+    table: pd.DataFrame
+    computed: int
+    cached: int
+    errors: dict[int, str] = field(default_factory=dict)
+    files: list[Path] = field(default_factory=list)
+    seconds: float = 0.0
+
+    @property
+    def failed(self) -> pd.DataFrame:
+        """Rows whose status is not ``ok``."""
+        return self.table[self.table["status"] != "ok"]
+
+
+def default_out(spec: SweepSpec) -> Path:
+    """``out/sweep-<name>``."""
+    return Path("out") / f"sweep-{safe_filename(spec.name)}"
+
+
+def code_fingerprint() -> str:
+    """Hash of the sources a case's result depends on (part of every case file's key)."""
+    import reference_fem
+    import springfem
+    import springmodel
+
+    here = Path(__file__).parent
+    return source_fingerprint(
+        *(Path(list(m.__path__)[0]) for m in (springfem, springmodel, reference_fem)),
+        *(here / f for f in ("sweep_case.py", "overrides.py", "compare.py", "metrics.py")),
+    )
+
+
+def run_sweep(
+    spec: SweepSpec,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+    figures: bool = True,
+    work: Callable[[dict[str, Any]], dict[str, Any]] = run_case,
+) -> SweepRun:
+    """Run the missing cases of ``spec``, then write its table and figures.
+
+    Parameters
+    ----------
+    spec
+        The sweep (:func:`studies.sweep_file.load_sweep`).
+    out
+        Output folder (default :func:`default_out`).
+    workers, scheduler
+        In-process (neither), a local cluster of ``workers`` processes (0: one per core)
+        or an existing Dask scheduler (see :mod:`studies.executor`).
+    progress
+        Show a progress bar over the cases.
+    figures
+        Write the default figures.
+    work
+        The case function (:func:`studies.sweep_case.run_case`; tests substitute one).
+
+    Returns
+    -------
+    SweepRun
+    """
+    t0 = time.perf_counter()
+    out = Path(out) if out is not None else default_out(spec)
+    cache = CaseCache(out, "cases", fingerprint=code_fingerprint())
+    tasks = [spec.task(i) for i in range(len(spec.cases))]
+    results: list[dict[str, Any] | None] = [cache.get(t) for t in tasks]
+    todo = [i for i, r in enumerate(results) if r is None]
+    errors: dict[int, str] = {}
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), desc=spec.name, unit="case")
+
+    def finished(j: int, res: dict[str, Any]) -> None:
+        i = todo[j]
+        res = _jsonable(res)
+        cache.put(tasks[i], res)  # atomically, as it arrives
+        results[i] = res
+        if bar is not None:
+            bar.update(1)
+
+    def failed(j: int, exc: BaseException) -> None:
+        errors[todo[j]] = f"{type(exc).__name__}: {exc}"
+        if bar is not None:
+            bar.update(1)
+
+    try:
+        run_tasks(
+            [tasks[i] for i in todo],
+            work,
+            finished,
+            workers=workers,
+            scheduler=scheduler,
+            on_error=failed if workers is not None or scheduler is not None else None,
+            keys=[f"sweep-case-{case_key(tasks[i], cache.fingerprint)}" for i in todo],
+        )
+    finally:
+        if bar is not None:
+            bar.close()
+    for i, msg in errors.items():  # in the table, not in the cache
+        results[i] = {
+            "values": spec.cases[i],
+            "rows": [{"model": m, "status": "failed", "message": msg} for m in spec.models],
+        }
+    table = sweep_table(results, spec.keys)  # type: ignore[arg-type]
+    files = list(write_tables(table, out))
+    if figures:
+        files += sweep_figures(table, spec.keys, spec.reference, out)
+    computed = len(todo) - len(errors)
+    return SweepRun(spec, out, table, computed, len(tasks) - len(todo), errors, files,
+                    time.perf_counter() - t0)  # fmt: skip
+
+
+def summary_lines(run: SweepRun) -> list[str]:
+    """Median error and wall time per model, one line each."""
+    t = run.table[run.table["status"] == "ok"]
+    lines = []
+    for m in run.spec.models:
+        d = t[t["model"] == m]
+        if len(d) == 0:
+            lines.append(f"  {m:<10} no successful case")
+            continue
+        what = (
+            "reference"
+            if m == run.spec.reference
+            else f"median rel. L2 error {d['rel_l2'].median():.3g}"
+        )
+        lines.append(
+            f"  {m:<10} {what}; median solve {d['wall_time'].median():.3g} s ({len(d)} ok)"
+        )
+    return lines
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """``springfem sweep SWEEP.toml [--out DIR] [--workers [N] | --scheduler ADDRESS]``."""
+    spec = load_sweep(args.file, sets=getattr(args, "set", None))
+    run = run_sweep(spec, args.out, workers=args.workers, scheduler=args.scheduler)
+    print(
+        f"sweep {spec.name}: {len(spec.cases)} cases x {len(spec.models)} models "
+        f"({run.computed} computed, {run.cached} cached) in {run.seconds:.1f} s; "
+        f"reference {spec.reference}"
+    )
+    for line in summary_lines(run):
+        print(line)
+    print("wrote " + ", ".join(str(f) for f in run.files) + f" and {run.out / 'cases'}/")
+    bad = run.failed
+    for _, row in bad.iterrows():
+        print(f"springfem: solver failure: case {row['case']} {row['model']}: {row['status']}"
+              f"{': ' + row['message'] if row['message'] else ''}", file=sys.stderr)  # fmt: skip
+    return 3 if len(bad) else 0
