@@ -62,10 +62,12 @@ def run_study(
     spec = get_study(name)
     root = Path(out)
     import reference_fem
+    import springfem
     import springmodel
 
     source = spec.source.parent if spec.source.name == "__init__.py" else spec.source
     code = source_fingerprint(
+        Path(springfem.__file__).parent,  # the core's solvers, meshes and loads shape results
         Path(springmodel.__file__).parent,
         Path(reference_fem.__file__).parent,
         source,
