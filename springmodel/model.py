@@ -107,7 +107,7 @@ class SpringModel:
     def post_step(self, x: np.ndarray, dt: float) -> None:
         """LMS adaptive volume stiffness (eq. 2.81), once per time step."""
         lms = self.options.lms
-        if lms is None or not self.options.volume:
+        if lms is None or not self.options.barycentric_volume:
             return
         V, sum_xi = volume_measures(x, self.elements)
         k = lms_update(

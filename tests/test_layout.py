@@ -63,7 +63,6 @@ OVERSIZE = {
     "springfem/mechanics/solvers.py",
     "springfem/mesh.py",
     "springfem/scene.py",
-    "springmodel/hessian.py",
     "studies/compare.py",
     "studies/study_ablation.py",
     "studies/study_speed_accuracy.py",
