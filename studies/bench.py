@@ -208,7 +208,7 @@ def step_time(system, steps: int = STEP_COUNT, repeats: int = 5) -> tuple[float,
     ``post_step``. The time step is tiny (the state barely moves, so no run can blow up);
     the cost of a step does not depend on it. No energies are recorded.
     """
-    from springfem.mechanics.solvers import explicit
+    from springfem.mechanics import explicit
 
     plain = WithoutEnergy(system)
     wall, cpu = timed(lambda: explicit(plain, dt=1e-9, steps=steps, record_every=steps), repeats)
@@ -384,7 +384,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     else:  # argparse restricts the choices
         raise InputError(f"unknown benchmark {what!r}; valid: forces, fem, step")
     if as_json:
-        from springfem.result import _jsonable
+        from springfem.files import jsonable as _jsonable
 
         print(json.dumps(_jsonable(res), indent=2, sort_keys=True))
     return 0
