@@ -41,10 +41,18 @@ mismatch is reported, not hidden. Negative ``C_ll - b`` is clipped to zero.
 the volume term ``k_s R R`` to ``b V I I``; equal to the above when ``R = rho I`` and about
 half of it on the six-tet split, where it cuts the mismatch from 0.58 to 0.41 (nu = 0.3).
 
-``nnls``: per element, non-negative least squares of ``D_k(k) - C`` in the Frobenius norm
-of the Mandel representation (the rotation-invariant norm of the fourth-order tensor).
+``nnls``: per element, bounded least squares of the tangent against ``C`` with axial and
+torsion constants kept positive, so that every element is positive definite
+(:mod:`springmodel.nnls`). ``exact``: closed-form constants that reproduce the P1 element on
+any tet with the axis-volume spring, energy torsion and (anisotropic) Poisson coupling
+(:mod:`springmodel.exact`).
 
-The mismatch (:func:`calibration_mismatch`) is ``||D_k - C|| / ||C||`` in that same norm.
+The mismatch an element's constants leave (:attr:`Calibrated.mismatch`) is measured on the
+small-strain tangent of the parts that are switched on, including the non-symmetric part of
+the cosine-type torsion laws, as ``||A_k - C|| / ||C||`` in the Frobenius norm of the
+fourth-order tensor (= the Frobenius norm of the Mandel matrices, the "Mandel Frobenius
+norm"; :mod:`springmodel.tangent`). :func:`calibration_mismatch` is the same norm on Voigt
+matrices of the energy forms.
 """
 
 from __future__ import annotations

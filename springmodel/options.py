@@ -91,7 +91,8 @@ class SpringOptions:
         for anisotropic materials, ``coupling = true``; see
         :mod:`springmodel.calibration`).
     k_axial, k_torsion, k_volume
-        Explicit spring constants (N/m, N m, N/m) overriding the calibration.
+        Explicit spring constants (N/m, J, and N/m for the barycentric volume spring or Pa
+        for the axis-volume spring) overriding the calibration.
     solver, integrator, dt, dt_safety, t_end, steps, mass_damping, tol, max_iter
         Solver settings. ``dt = None`` means ``dt_safety * 2 / omega_max``.
         ``mass_damping`` (1/s) is a Rayleigh mass-proportional damping used to bring an
