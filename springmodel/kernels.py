@@ -8,9 +8,10 @@ of ``C^k`` matters (DESIGN §4)::
     G[k, i, l] = C[k, i, 2l] - C[k, i, 2l+1] = grad N_i . zeta_l^0.
 
 Per element it gathers the four vertices, builds the three axis vectors, accumulates the
-axial, damping and torsion forces ``g_l`` of each axis, maps them to the vertices, adds the
-volume spring (gradient or spec form) and its damping, and scatters the four vertex forces.
-It computes exactly what :func:`springmodel.springs.internal_forces` computes.
+axial, coupling, damping, torsion and axis-volume forces ``g_l`` of each axis, maps them to
+the vertices, adds the barycentric volume spring (gradient or spec form) and its damping, and
+scatters the four vertex forces. It computes what :func:`springmodel.springs.internal_forces`
+computes.
 
 Parallel scatter without races (``parallel=True``), two deterministic strategies:
 
@@ -27,11 +28,9 @@ Parallel scatter without races (``parallel=True``), two deterministic strategies
     lot on a busy machine (with OpenMP's default active wait, 10x slower than serial).
 
 Measured once (500k-tet six-split box, 2 cores, ``OMP_WAIT_POLICY=passive``, best of many
-calls on a shared machine), linear axial + cosine torsion + gradient volume springs: serial
-13.3 M tets/s, parallel ``buffer`` 25.7, ``colour`` 22.8, numpy oracle 0.31 (ratio 83x);
-cubic axial + energy torsion: 10.9 / 21.4 / 17.8 / 0.39.
-
-Everything is float64, compiled with ``fastmath=False`` and ``cache=True``.
+calls, shared machine), linear axial + cosine torsion + gradient volume: serial 13.3 M tets/s,
+parallel ``buffer`` 25.7, ``colour`` 22.8, numpy oracle 0.31 (ratio 83x); cubic axial +
+energy torsion: 10.9 / 21.4 / 17.8 / 0.39. All float64, ``fastmath=False``, ``cache=True``.
 """
 
 from __future__ import annotations
@@ -51,13 +50,18 @@ from .options import SpringOptions
 AXIAL_CODES = {"linear": 0, "quadratic": 1, "cubic": 1, "stress-scaled": 2}
 TORSION_CODES = {"off": 0, "angle": 1, "cosine": 2, "cubic": 3, "energy": 4}
 VOLUME_CODES = {"off": 0, "gradient": 1, "spec": 2}
-_A_POLY, _A_STRESS = 1, 2
+#: Axis-volume codes by volumetric energy; coupling adds ``_A_COUPLING`` to the axial code.
+AXIS_VOLUME_CODES = {"quadratic": 3, "log": 4, "simo-taylor": 5}
+_A_POLY, _A_STRESS, _A_COUPLING = 1, 2, 8
 _T_OFF, _T_ANGLE, _T_COSINE, _T_CUBIC, _T_ENERGY = 0, 1, 2, 3, 4
-_V_OFF, _V_GRADIENT = 0, 1
+_V_OFF, _V_GRADIENT, _V_SPEC, _V_AXES_QUAD, _V_AXES_LOG = 0, 1, 2, 3, 4
 
 # Per-element constants, one contiguous row each: P[k, :]
 _KA, _L0, _KT, _T0, _KS, _LSUM, _INV_V0 = 0, 3, 6, 9, 12, 13, 14
 _NP = 16
+# Constants of the axis-volume and coupling springs, a second array Q[k, :] (read only when on)
+_QC, _QKV, _QIDET, _QETA = 0, 3, 4, 5
+_NQ = 6
 
 Scatter = Literal["colour", "buffer"]
 #: Below this many elements ``ForceKernel(parallel=None)`` runs serially.
@@ -95,6 +99,11 @@ def _axpy(s, a, b):
 @njit(cache=True)
 def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@njit(cache=True)
+def _cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
 @njit(cache=True)
@@ -152,6 +161,12 @@ def _torsion(ul, um, Ll, Lm, kt, t0, torsion, bt):
 
 
 @njit(cache=True)
+def _dU(J, volume):
+    """``U'(J) / kappa`` of the log (4) and Simo-Taylor (5) energies."""
+    return math.log(J) / J if volume == _V_AXES_LOG else 0.5 * (J - 1.0 / J)
+
+
+@njit(cache=True)
 def _acc(out, i, f):
     out[i, 0] += f[0]
     out[i, 1] += f[1]
@@ -160,7 +175,7 @@ def _acc(out, i, f):
 
 @njit(cache=True, inline="always")
 def _element(
-    k, x, v, tets, G, P, axial, torsion, volume, damp_ax, damp_vol, b2, b3, bt, cax, cvol, dst
+    k, x, v, tets, G, P, Q, axial, torsion, volume, damp_ax, damp_vol, b2, b3, bt, cax, cvol, dst
 ):
     """Forces of element ``k``, added to the rows ``tets[k]`` of ``dst``."""
     i0, i1, i2, i3 = tets[k, 0], tets[k, 1], tets[k, 2], tets[k, 3]
@@ -185,9 +200,15 @@ def _element(
             + e1[2] * (e2[0] * e3[1] - e2[1] * e3[0])
         )
         vol_ratio = det / 6.0 * P[k, _INV_V0]
-    s0 = _axial(L0, P[k, _L0], P[k, _KA], axial, b2, b3, vol_ratio)
-    s1 = _axial(L1, P[k, _L0 + 1], P[k, _KA + 1], axial, b2, b3, vol_ratio)
-    s2 = _axial(L2, P[k, _L0 + 2], P[k, _KA + 2], axial, b2, b3, vol_ratio)
+    law = axial & 7
+    s0 = _axial(L0, P[k, _L0], P[k, _KA], law, b2, b3, vol_ratio)
+    s1 = _axial(L1, P[k, _L0 + 1], P[k, _KA + 1], law, b2, b3, vol_ratio)
+    s2 = _axial(L2, P[k, _L0 + 2], P[k, _KA + 2], law, b2, b3, vol_ratio)
+    if axial & _A_COUPLING:  # Poisson coupling c_lm s_l s_m, s_l = |zeta_l|/l_l - 1
+        e0, e1, e2 = L0 / P[k, _L0] - 1.0, L1 / P[k, _L0 + 1] - 1.0, L2 / P[k, _L0 + 2] - 1.0
+        s0 -= (Q[k, _QC] * e1 + Q[k, _QC + 1] * e2) / P[k, _L0]
+        s1 -= (Q[k, _QC] * e0 + Q[k, _QC + 2] * e2) / P[k, _L0 + 1]
+        s2 -= (Q[k, _QC + 1] * e0 + Q[k, _QC + 2] * e1) / P[k, _L0 + 2]
     if damp_ax:
         va, vb, vc, vd = _row(v, i0), _row(v, i1), _row(v, i2), _row(v, i3)
         s0 -= cax * _dot(_comb(G, k, 0, va, vb, vc, vd), u0)
@@ -209,13 +230,31 @@ def _element(
         g1 = _add(g1, fl)
         g2 = _add(g2, fm)
 
+    # axis-volume spring V0 U(J), J = det[z0 z1 z2] / det0; damping on dJ/dt
+    if volume >= _V_AXES_QUAD:
+        c12 = _cross(z1, z2)
+        c20 = _cross(z2, z0)
+        c01 = _cross(z0, z1)
+        J = _dot(z0, c12) * Q[k, _QIDET]
+        dU = J - 1.0 if volume == _V_AXES_QUAD else _dU(J, volume)
+        sv = -Q[k, _QKV] * dU * Q[k, _QIDET]  # -V0 U'(J) / det0
+        if damp_vol:
+            va, vb, vc, vd = _row(v, i0), _row(v, i1), _row(v, i2), _row(v, i3)
+            w0, w1 = _comb(G, k, 0, va, vb, vc, vd), _comb(G, k, 1, va, vb, vc, vd)
+            w2 = _comb(G, k, 2, va, vb, vc, vd)
+            Jdot = (_dot(c12, w0) + _dot(c20, w1) + _dot(c01, w2)) * Q[k, _QIDET]
+            sv -= Q[k, _QETA] * Jdot * Q[k, _QIDET]
+        g0 = _axpy(sv, c12, g0)
+        g1 = _axpy(sv, c20, g1)
+        g2 = _axpy(sv, c01, g2)
+
     fa = _spread(G, k, 0, g0, g1, g2)
     fb = _spread(G, k, 1, g0, g1, g2)
     fc = _spread(G, k, 2, g0, g1, g2)
     fd = _spread(G, k, 3, g0, g1, g2)
 
     # barycentric volume springs, xi_j = x_j - x_b (eqs. 2.76–2.77)
-    if volume != _V_OFF:
+    if volume == _V_GRADIENT or volume == _V_SPEC:
         xm = _scale(0.25, _add(_add(xa, xb), _add(xc, xd)))
         ea, eb, ec, ed = _sub(xa, xm), _sub(xb, xm), _sub(xc, xm), _sub(xd, xm)
         ra = math.sqrt(_dot(ea, ea))
@@ -249,22 +288,22 @@ def _element(
 
 
 @njit(cache=True, fastmath=False)
-def _element_range(lo, hi, x, v, tets, G, P, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, dst):
+def _element_range(lo, hi, x, v, tets, G, P, Q, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, dst):
     # _element is inlined here (numba IR), not in the parallel drivers, whose parfor
     # analysis does not accept it; the drivers call this serial loop on their blocks
     for k in range(lo, hi):
-        _element(k, x, v, tets, G, P, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, dst)
+        _element(k, x, v, tets, G, P, Q, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, dst)
 
 
 @njit(cache=True, fastmath=False)
-def _forces_serial(x, v, tets, G, P, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, out):
+def _forces_serial(x, v, tets, G, P, Q, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, out):
     out[:] = 0.0
     m = tets.shape[0]
-    _element_range(0, m, x, v, tets, G, P, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, out)
+    _element_range(0, m, x, v, tets, G, P, Q, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, out)
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _forces_colour(x, v, tets, G, P, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, ptr, out):
+def _forces_colour(x, v, tets, G, P, Q, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, ptr, out):
     n = out.shape[0]
     for i in prange(n):
         out[i, 0] = 0.0
@@ -277,19 +316,21 @@ def _forces_colour(x, v, tets, G, P, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvo
             lo = ptr[c] + b * block
             hi = min(lo + block, ptr[c + 1])
             _element_range(
-                lo, hi, x, v, tets, G, P, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, out
+                lo, hi, x, v, tets, G, P, Q, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, out
             )
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _forces_buffer(x, v, tets, G, P, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, ptr, buf, out):
+def _forces_buffer(
+    x, v, tets, G, P, Q, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, ptr, buf, out
+):
     nchunk = ptr.shape[0] - 1
     n = out.shape[0]
     for t in prange(nchunk):  # one buffer per static chunk: deterministic
         b = buf[t]
         b[:] = 0.0
         _element_range(
-            ptr[t], ptr[t + 1], x, v, tets, G, P, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, b
+            ptr[t], ptr[t + 1], x, v, tets, G, P, Q, ax, to, vo, dax, dvol, b2, b3, bt, cax, cvol, b
         )
     for i in prange(n):
         for d in range(3):
@@ -319,6 +360,16 @@ def pack_constants(elements: SpringElements, options: SpringOptions) -> np.ndarr
     return P
 
 
+def pack_axis_constants(elements: SpringElements, options: SpringOptions) -> np.ndarray:
+    """Constant rows ``(m, 6)`` of the axis-volume and coupling springs (``_QC``.. offsets)."""
+    Q = np.zeros((elements.n_elements, _NQ))
+    Q[:, _QC : _QC + 3] = elements.k_coupling
+    Q[:, _QKV] = elements.k_axis_volume * elements.V0
+    Q[:, _QIDET] = 1.0 / elements.det0
+    Q[:, _QETA] = float(options.volume_damping) * elements.V0
+    return Q
+
+
 class ForceKernel:
     """Fused spring forces of a fixed set of elements and options.
 
@@ -340,8 +391,7 @@ class ForceKernel:
 
     Examples
     --------
-    >>> kernel = ForceKernel(elements, SpringOptions(torsion="energy"))  # doctest: +SKIP
-    >>> f = kernel.forces(x)                                             # doctest: +SKIP
+    >>> f = ForceKernel(elements, SpringOptions(torsion="energy")).forces(x)  # doctest: +SKIP
     """
 
     def __init__(
@@ -376,10 +426,14 @@ class ForceKernel:
             b3 = 0.0
         if options.axial == "linear":
             b2 = 0.0
+        if options.axis_volume:
+            volume_code = AXIS_VOLUME_CODES[options.volumetric]
+        else:
+            volume_code = VOLUME_CODES[form] if options.barycentric_volume else 0
         self._codes = (
-            AXIAL_CODES[options.axial],
+            AXIAL_CODES[options.axial] + (_A_COUPLING if options.coupling else 0),
             TORSION_CODES[options.torsion],
-            VOLUME_CODES[form] if options.volume else 0,
+            volume_code,
         )
         self._scalars = (b2, b3, float(options.torsion_cubic))
         self._cax = float(options.axial_damping)
@@ -401,6 +455,10 @@ class ForceKernel:
         self._tets = np.ascontiguousarray(elements.tets[p], dtype=np.int64)
         self._G = np.ascontiguousarray(elements.G[p], dtype=np.float64)
         self._P = np.ascontiguousarray(pack_constants(elements, options)[p])
+        if options.axis_volume or options.coupling:
+            self._Q = np.ascontiguousarray(pack_axis_constants(elements, options)[p])
+        else:
+            self._Q = np.zeros((1, _NQ))
         self._dummy_v = np.zeros((1, 3))
 
     @property
@@ -424,8 +482,8 @@ class ForceKernel:
         dax = self._cax > 0 and v is not None
         dvol = self._cvol > 0 and v is not None and self._codes[2] != 0
         vv = np.ascontiguousarray(v, dtype=np.float64) if (dax or dvol) else self._dummy_v
-        args = (x, vv, self._tets, self._G, self._P, *self._codes, dax, dvol, *self._scalars)
-        args = (*args, self._cax, self._cvol)
+        tp = (self._tets, self._G, self._P, self._Q)
+        args = (x, vv, *tp, *self._codes, dax, dvol, *self._scalars, self._cax, self._cvol)
         if not self.parallel:
             _forces_serial(*args, out)
         elif self.scatter == "colour":
