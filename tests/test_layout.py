@@ -67,7 +67,6 @@ OVERSIZE = {
     "studies/study_ablation.py",
     "studies/study_speed_accuracy.py",
     "studies/study_stability.py",
-    "studies/study_volume_drift.py",
 }
 
 

@@ -12,11 +12,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from springfem.scene import parse_scene
+from springfem.scene import scene_from_dict
 from studies import compare, compare_output, plots
 from studies.cli import main
 from studies.compare import (
-    bundled_scene_text,
+    bundled_scene,
     compare_scene,
     max_principal_strain,
     model_settings,
@@ -41,7 +41,7 @@ SPRING_P1_L2_TOL = 0.40
 @pytest.fixture(scope="module", params=["stretch-fiber", "stretch-cross"])
 def stretch(request):
     name = request.param
-    scene = parse_scene(bundled_scene_text(name, COARSE))
+    scene = scene_from_dict(bundled_scene(name, COARSE))
     return name, compare_scene(scene)
 
 
@@ -104,7 +104,7 @@ def test_table_columns(stretch):
 
 
 def test_large_strain_detector_analytic():
-    scene = parse_scene(bundled_scene_text("stretch-fiber", (1, 1, 1)))
+    scene = scene_from_dict(bundled_scene("stretch-fiber", (1, 1, 1)))
     x = scene.mesh.points
     eps = 0.1
     u = np.zeros_like(x)
@@ -116,15 +116,15 @@ def test_large_strain_detector_analytic():
 
 
 def test_model_names_are_validated():
-    scene = parse_scene(bundled_scene_text("stretch-fiber", (1, 1, 1)))
+    scene = scene_from_dict(bundled_scene("stretch-fiber", (1, 1, 1)))
     with pytest.raises(ValueError, match="unknown model"):
         model_settings(scene, "P3")
     with pytest.raises(ValueError, match="anisotropic hyperelastic"):
         model_settings(scene, "P2-NH")
 
 
-def test_bundled_scene_text_changes_divisions():
-    scene = parse_scene(bundled_scene_text("cantilever", (10, 1, 1)))
+def test_bundled_scene_changes_divisions():
+    scene = scene_from_dict(bundled_scene("cantilever", (10, 1, 1)))
     assert scene.mesh.n_tets == 60
 
 
@@ -133,9 +133,8 @@ def test_doctests():
         assert doctest.testmod(mod).failed == 0
 
 
-def test_cli_compare_writes_table_and_figure(tmp_path, capsys):
-    scene = tmp_path / "coarse.toml"
-    scene.write_text(bundled_scene_text("stretch-cross", (2, 2, 2)))
+def test_cli_compare_writes_table_and_figure(tmp_path, capsys, scene_file):
+    scene = scene_file(bundled_scene("stretch-cross", (2, 2, 2)))
     out = tmp_path / "cmp"
     assert main(["compare", str(scene), "--out", str(out)]) == 0
     text = capsys.readouterr().out
@@ -147,13 +146,12 @@ def test_cli_compare_writes_table_and_figure(tmp_path, capsys):
     assert res["model"] == "spring"
 
 
-def test_cli_compare_json(tmp_path, capsys, monkeypatch):
+def test_cli_compare_json(tmp_path, capsys, monkeypatch, scene_file):
     def no_render(cmp, path):  # rendering is covered above; keep this test fast
         raise RuntimeError("no OpenGL here")
 
     monkeypatch.setattr(compare_output, "render_comparison", no_render)
-    scene = tmp_path / "coarse.toml"
-    scene.write_text(bundled_scene_text("stretch-fiber", (2, 2, 2)))
+    scene = scene_file(bundled_scene("stretch-fiber", (2, 2, 2)))
     assert main(["compare", str(scene), "--out", str(tmp_path / "o"), "--json"]) == 0
     captured = capsys.readouterr()
     payload = json.loads(captured.out)  # stdout is pure JSON (progress went to stderr)
@@ -168,7 +166,9 @@ def test_cli_compare_bad_scene_exits_2(capsys):
     assert "does not exist" in capsys.readouterr().err
 
 
-def test_cli_compare_model_failure_exits_3_and_keeps_table(tmp_path, capsys, monkeypatch):
+def test_cli_compare_model_failure_exits_3_and_keeps_table(
+    tmp_path, capsys, monkeypatch, scene_file
+):
     """A failed model becomes a row with converged = False, the others are still compared,
     the table is written and the exit code is 3 (DESIGN §6)."""
     real = compare.solve_model
@@ -180,8 +180,7 @@ def test_cli_compare_model_failure_exits_3_and_keeps_table(tmp_path, capsys, mon
 
     monkeypatch.setattr(compare, "solve_model", failing)
     monkeypatch.setattr(compare_output, "render_comparison", lambda cmp, path: path)
-    scene = tmp_path / "coarse.toml"
-    scene.write_text(bundled_scene_text("stretch-fiber", (2, 2, 2)))
+    scene = scene_file(bundled_scene("stretch-fiber", (2, 2, 2)))
     out = tmp_path / "o"
     assert main(["compare", str(scene), "--out", str(out)]) == 3
     assert "spring model blew up at step 7" in capsys.readouterr().err

@@ -11,10 +11,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from springfem.scene import parse_scene
+from springfem.scene import scene_from_dict
 from studies import study_accuracy as sa
 from studies.cache import CaseCache
-from studies.compare import bundled_scene_text
+from studies.compare import bundled_scene
 from studies.metrics import timoshenko_tip_deflection
 from studies.registry import StudyContext
 
@@ -75,7 +75,7 @@ def test_spring_stretch_errors(output):
 
 def test_cantilever_analytic_is_timoshenko(output):
     _, _, probes = output
-    scene = parse_scene(bundled_scene_text("cantilever", TINY["cantilever"]))
+    scene = scene_from_dict(bundled_scene("cantilever", TINY["cantilever"]))
     probe, comp, value, source = sa.analytic_probe("cantilever", scene)
     expected = -timoshenko_tip_deflection(0.1 * 0.01 * 0.01, 0.1, 0.01, 0.01, 1.0e4, 0.3)
     assert (probe, comp, source) == ("tip", 2, "Timoshenko")
