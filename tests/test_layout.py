@@ -64,9 +64,6 @@ OVERSIZE = {
     "springfem/mesh.py",
     "springfem/scene.py",
     "springmodel/hessian.py",
-    "studies/study_ablation.py",
-    "studies/study_speed_accuracy.py",
-    "studies/study_stability.py",
 }
 
 
