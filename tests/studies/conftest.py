@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import tomllib
 
+import numpy as np
 import pytest
 
 
@@ -43,3 +44,57 @@ def scene_file(tmp_path):
         return path
 
     return write
+
+
+# ------------------------------------------------------- the spring model's linear answer
+
+
+def dk_p1_displacement(scene, options=None):
+    """Small-strain displacement ``(n, 3)`` of the spring model, computed independently of
+    its force kernel: P1 FEM assembled with each element's effective spring matrix ``D_k``
+    in place of the material matrix (DESIGN §4: the linearised spring model *is* this FEM).
+
+    Valid for the energy forms (axial, torsion ``energy``, volume ``gradient``). Loads and
+    prescribed displacements are the scene's at load factor 1, taken at the rest state.
+    """
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    from reference_fem import element_stiffness_p1
+    from springmodel.calibration import effective_matrix
+    from springmodel.model import SpringModel
+
+    model = SpringModel(scene, options, parallel=False)
+    el = model.elements
+    D = effective_matrix(el, el.k_axial, el.k_torsion, el.k_volume)
+    points, tets = scene.mesh.points, scene.mesh.tets
+    Ke = element_stiffness_p1(points, tets, D)
+    dofs = (3 * tets[:, :, None] + np.arange(3)).reshape(len(tets), 12)
+    n = 3 * len(points)
+    rows = np.repeat(dofs, 12, axis=1).ravel()
+    cols = np.tile(dofs, (1, 12)).ravel()
+    K = sp.csr_matrix((Ke.ravel(), (rows, cols)), shape=(n, n))
+    f = model.external(model.x0, 1.0).ravel()
+    fixed = np.asarray(model.fixed_dofs, dtype=np.int64)
+    u = np.zeros(n)
+    u[fixed] = model.prescribed(1.0) - model.x0.ravel()[fixed]
+    free = np.setdiff1d(np.arange(n), fixed)
+    rhs = f[free] - K[free][:, fixed] @ u[fixed]
+    u[free] = spla.spsolve(K[free][:, free].tocsc(), rhs)
+    return u.reshape(-1, 3)
+
+
+def scaled_loads(data: dict, factor: float) -> dict:
+    """A copy of a scene table with every load value multiplied by ``factor``."""
+    import copy
+
+    out = copy.deepcopy(data)
+    for load in out.get("load", []):
+        load["value"] = [factor * float(v) for v in load["value"]]
+    return out
+
+
+@pytest.fixture(scope="session")
+def dk_reference():
+    """The helpers :func:`dk_p1_displacement` and :func:`scaled_loads`."""
+    return dk_p1_displacement, scaled_loads
