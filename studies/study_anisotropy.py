@@ -21,7 +21,6 @@ against the rotated compliance.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -29,10 +28,10 @@ import numpy as np
 import pandas as pd
 
 from springfem.errors import SolverError
-from springfem.scene import Material, Scene, parse_scene
+from springfem.scene import Material, Scene, scene_from_dict
 from springmodel.options import SpringOptions
 
-from .cli import SCENES
+from .compare import bundled_scene
 from .registry import Figure, StudyContext, StudyOutput, Table, study
 from .tables import save_figure, write_table
 
@@ -49,15 +48,48 @@ MARKERS = {"spring (analytic cal.)": "o", "spring (nnls cal.)": "s", "FEM P1": "
 # ------------------------------------------------------------------------------ scene
 
 
-def fiber_scene(angle_deg: float, n: int = 6) -> Scene:
-    """``stretch-fiber`` with the fiber at ``angle_deg`` in the x-y plane on an ``n³`` box."""
-    text = (SCENES / "stretch-fiber.toml").read_text()
+def fiber_table(angle_deg: float, n: int = 6) -> dict[str, Any]:
+    """The table of ``stretch-fiber`` with the fiber at ``angle_deg`` in the x-y plane on an
+    ``n³`` box.
+
+    Parameters
+    ----------
+    angle_deg
+        Fiber angle from x, in degrees.
+    n
+        Divisions per side.
+
+    Returns
+    -------
+    dict
+        The table for :func:`springfem.scene.scene_from_dict`.
+
+    Examples
+    --------
+    >>> fiber_table(90.0, 2)["axes"]["sheet"][0]
+    -1.0
+    """
+    data = bundled_scene("stretch-fiber", (n, n, n))
     th = np.radians(angle_deg)
     c, s = float(np.cos(th)), float(np.sin(th))
-    text = re.sub(r"(?m)^fiber = \[.*\]", f"fiber = [{c!r}, {s!r}, 0.0]", text)
-    text = re.sub(r"(?m)^sheet = \[.*\]", f"sheet = [{-s!r}, {c!r}, 0.0]", text)
-    text = re.sub(r"(?m)^divisions = \[.*\]", f"divisions = [{n}, {n}, {n}]", text)
-    return parse_scene(text)
+    data["axes"]["fiber"] = [c, s, 0.0]
+    data["axes"]["sheet"] = [-s, c, 0.0]
+    return data
+
+
+def fiber_scene(angle_deg: float, n: int = 6) -> Scene:
+    """The scene of :func:`fiber_table`.
+
+    Parameters
+    ----------
+    angle_deg, n
+        As for :func:`fiber_table`.
+
+    Returns
+    -------
+    Scene
+    """
+    return scene_from_dict(fiber_table(angle_deg, n))
 
 
 def applied_stress(scene: Scene) -> float:
