@@ -1,6 +1,6 @@
 """Study ``scaling``: cost per explicit step and per static solve against the number of tets.
 
-The benchmark block of :func:`reference_fem.scenes.bench_scene` (2:1:1, clamped at one end,
+The benchmark block of :func:`bench_table` (2:1:1, clamped at one end,
 end traction, six tets per hexahedron) from about 1e3 to 1e5 tets:
 
 - one explicit step (forces + symplectic-Euler update through
@@ -24,6 +24,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
+from springfem.scene import scene_from_dict
 from springmodel.options import SpringOptions
 
 from .metrics import fitted_rate
@@ -63,11 +64,40 @@ class Settings:
         return cls(step=(1_000, 10_000, 100_000), static=(1_000, 3_000, 10_000), neo_max=10_000)
 
 
-def _scene(n_tets: int):
-    from reference_fem.scenes import bench_scene
+def bench_table(n_tets: int = 100_000) -> dict:
+    """The table of the benchmark block: 2:1:1 with about ``n_tets`` tets (six per
+    hexahedron), clamped at ``x_min`` and pulled down at ``x_max``, FEM P1 with AMG.
 
-    scene = bench_scene(n_tets)
-    return scene.with_options(spring=replace(SpringOptions.of(scene), torsion=TORSION))
+    Parameters
+    ----------
+    n_tets
+        Approximate number of tets.
+
+    Returns
+    -------
+    dict
+        The table for :func:`springfem.scene.scene_from_dict`.
+
+    Examples
+    --------
+    >>> bench_table(1_000)["mesh"]["divisions"]
+    [8, 4, 4]
+    """
+    k = max(1, round((n_tets / 12.0) ** (1.0 / 3.0)))
+    return {
+        "name": f"bench-{12 * k**3}",
+        "mesh": {"generator": "box", "size": [2.0, 1.0, 1.0], "divisions": [2 * k, k, k]},
+        "material": {"law": "linear", "E": 1.0e4, "nu": 0.3},
+        "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+        "load": [{"type": "traction", "region": "x_max", "value": [0.0, 0.0, -1.0]}],
+        "probe": [{"name": "tip", "point": [2.0, 0.5, 0.5]}],
+        "fem": {"order": 1, "linear_solver": "amg"},
+        "spring": {"torsion": TORSION},
+    }
+
+
+def _scene(n_tets: int):
+    return scene_from_dict(bench_table(n_tets))
 
 
 def _clock():
