@@ -1,4 +1,4 @@
-"""The runnable examples of every study package and its modules (cases, tables, ...)."""
+"""The runnable examples of the runner, every study package and its modules (cases, ...)."""
 
 import doctest
 import importlib
@@ -11,6 +11,7 @@ from studies.registry import REGISTRY
 
 
 def _modules():
+    yield studies.runner
     for spec in REGISTRY.values():
         pkg = importlib.import_module(spec.run.__module__)
         yield pkg
