@@ -275,7 +275,7 @@ def _parse_law(scene: Scene, law: str) -> int:
 class ExplicitFem:
     """P1 FEM of a scene as a :class:`~springfem.mechanics.system.MechanicalSystem`.
 
-    The solvers of :mod:`springfem.mechanics.solvers` (``explicit``, ``explicit_static``,
+    The solvers of :mod:`springfem.mechanics` (``explicit``, ``explicit_static``,
     ``stable_time_step``, ``static``) drive it as they drive the spring model: lumped masses
     ``rho V / 4``, the scene's Dirichlet conditions and P1 nodal loads
     (:func:`springfem.loads.external_forces`), forces from the fused kernel.

@@ -1,7 +1,7 @@
 """Time series of a dynamic solve: VTU frames in a ParaView collection (PVD) and histories.
 
 A :class:`SeriesWriter` is a solver callback ``writer(step, t, x, v)`` (the signature of
-the ``callback`` of :func:`springfem.mechanics.solvers.explicit` and ``implicit``). It
+the ``callback`` of :func:`springfem.mechanics.explicit` and ``implicit``). It
 writes a frame every ``interval`` seconds of simulated time (``<stem>_00000.vtu`` … with
 point data ``displacement`` and ``velocity``) and rewrites ``<stem>.pvd`` atomically after
 each frame, so a run killed mid-way leaves a valid series of the frames it reached. It

@@ -1,7 +1,7 @@
 """The spring model of a scene: rest data, fused kernel, loads, boundaries, solve.
 
 :class:`SpringModel` is a :class:`~springfem.mechanics.system.MechanicalSystem`: the solvers of
-:mod:`springfem.mechanics.solvers` drive it without knowing about springs. Only the parts the
+:mod:`springfem.mechanics` drive it without knowing about springs. Only the parts the
 scene's ``[spring]`` section switches on are computed.
 
 Examples

@@ -10,7 +10,7 @@
     :func:`reference_fem.bench`: assembly, solve, scikit-fem defaults, one Newton iteration.
 ``step``
     One whole explicit step (forces + symplectic-Euler update, through
-    :func:`springfem.mechanics.solvers.explicit`) of a 100k-tet scene, spring model and
+    :func:`springfem.mechanics.explicit`) of a 100k-tet scene, spring model and
     explicit FEM.
 
 Speeds are compared only as ratios measured in the same run (DESIGN §8); the machine's load
@@ -203,7 +203,7 @@ class WithoutEnergy:
 def step_time(system, steps: int = STEP_COUNT, repeats: int = 5) -> tuple[float, float]:
     """Median wall and CPU seconds per explicit step (symplectic Euler, through the solver).
 
-    A step is what :func:`springfem.mechanics.solvers.explicit` does per step: one force evaluation,
+    A step is what :func:`springfem.mechanics.explicit` does per step: one force evaluation,
     the velocity and position updates, constraints, the kinetic energy and blow-up check and
     ``post_step``. The time step is tiny (the state barely moves, so no run can blow up);
     the cost of a step does not depend on it. No energies are recorded.

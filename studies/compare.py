@@ -17,8 +17,8 @@ neo-Hookean or its strains are large (:data:`LARGE_STRAIN`).
 
 from __future__ import annotations
 
-import re
 import time
+import tomllib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -98,24 +98,42 @@ class Comparison:
 # ------------------------------------------------------------------------------ solving
 
 
-def bundled_scene_text(name: str, divisions: Sequence[int] | None = None) -> str:
-    """The TOML text of a bundled scene, optionally with other box ``divisions``.
+def bundled_scene(name: str, divisions: Sequence[int] | None = None) -> dict:
+    """The table of a bundled scene, optionally with other box ``divisions``.
+
+    Build the scene with :func:`springfem.scene.scene_from_dict`; change a value by
+    editing the returned dict (it is a fresh copy).
+
+    Parameters
+    ----------
+    name
+        A bundled scene (``cantilever``, ``sag``, ...).
+    divisions
+        Box divisions replacing the scene's ``mesh.divisions`` (``None``: keep them).
+
+    Returns
+    -------
+    dict
+        The scene table as read from its TOML file.
+
+    Raises
+    ------
+    InputError
+        If ``divisions`` is given but the scene's mesh is not a generated box.
 
     Examples
     --------
-    >>> "divisions = [20, 2, 2]" in bundled_scene_text("cantilever", [20, 2, 2])
-    True
+    >>> bundled_scene("cantilever", [20, 2, 2])["mesh"]["divisions"]
+    [20, 2, 2]
     """
     from .cli import scene_path
 
-    text = scene_path(name).read_text(encoding="utf-8")
-    if divisions is None:
-        return text
-    new = "divisions = [" + ", ".join(str(int(d)) for d in divisions) + "]"
-    text, n = re.subn(r"(?m)^divisions\s*=\s*\[[^\]]*\]", new, text)
-    if n != 1:
-        raise InputError(f"scene {name}: no single 'divisions = [...]' line to replace")
-    return text
+    data = tomllib.loads(scene_path(name).read_text(encoding="utf-8"))
+    if divisions is not None:
+        if "divisions" not in data.get("mesh", {}):
+            raise InputError(f"scene {name}: its mesh has no 'divisions' to replace")
+        data["mesh"]["divisions"] = [int(d) for d in divisions]
+    return data
 
 
 def linear_law(scene: Scene) -> str:

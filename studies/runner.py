@@ -87,11 +87,42 @@ def run_study(
 
 
 def default_out(out: str | None, quick: bool) -> Path:
-    """``reports/`` for the full report, ``reports/quick/`` for ``--quick``."""
+    """The report folder: ``out`` if given, else ``reports/`` (``reports/quick/`` for quick).
+
+    Parameters
+    ----------
+    out
+        The ``--out`` option (``None``: the default folder).
+    quick
+        The ``--quick`` flag.
+
+    Returns
+    -------
+    Path
+
+    Examples
+    --------
+    >>> default_out(None, quick=True).as_posix()
+    'reports/quick'
+    >>> default_out("elsewhere", quick=True).as_posix()
+    'elsewhere'
+    """
     return Path(out) if out else Path("reports") / ("quick" if quick else "")
 
 
 def cmd_study(args: argparse.Namespace) -> int:
+    """``springfem study NAME [--quick] [--out DIR]``: run one study, print what it found.
+
+    Parameters
+    ----------
+    args
+        Parsed options ``name``, ``quick``, ``out``.
+
+    Returns
+    -------
+    int
+        The exit code (0).
+    """
     res = run_study(args.name, default_out(args.out, args.quick), args.quick)
     print(f"{res.title} ({res.seconds:.1f} s)")
     for line in res.findings:
@@ -111,7 +142,22 @@ def _rel(path: Path, root: Path) -> str:
 
 
 def write_report(outputs: list[StudyOutput], root: Path, quick: bool) -> Path:
-    """Assemble ``REPORT.md`` from the studies' outputs."""
+    """Assemble ``REPORT.md`` and the headline JSON from the studies' outputs.
+
+    Parameters
+    ----------
+    outputs
+        The studies' outputs, in report order.
+    root
+        The report folder (tables and figures are linked relative to it).
+    quick
+        The quick preset (names the regenerating command and ``headline-quick.json``).
+
+    Returns
+    -------
+    Path
+        The path of ``REPORT.md``.
+    """
     flag = " --quick" if quick else ""
     lines = [
         "# springfem report: the spring model against FEM on the same meshes",
@@ -179,6 +225,18 @@ def run_report(
 
 
 def cmd_report(args: argparse.Namespace) -> int:
+    """``springfem report [--quick] [--out DIR]``: run every study and write the report.
+
+    Parameters
+    ----------
+    args
+        Parsed options ``quick``, ``out``.
+
+    Returns
+    -------
+    int
+        The exit code (0).
+    """
     out = default_out(args.out, args.quick)
     outputs = run_report(out, args.quick)
     total = sum(o.seconds for o in outputs)

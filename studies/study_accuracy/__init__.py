@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from springfem.scene import parse_scene
+from springfem.scene import scene_from_dict
 
 from ..compare import (
     MODELS,
@@ -60,7 +60,7 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
     """
     cases = [scene_case(n, settings) for n in SCENES]
     results = ctx.cache.run(cases, work, progress=ctx.progress, desc="accuracy")
-    scenes = {c["scene"]: parse_scene(c["text"]) for c in cases}
+    scenes = {c["scene"]: scene_from_dict(c["table"]) for c in cases}
     res = dict(zip(SCENES, results, strict=True))
 
     errors = error_table(res)

@@ -7,12 +7,12 @@ from typing import Any
 
 import numpy as np
 
-from springfem.scene import Scene, parse_scene
+from springfem.scene import Scene, scene_from_dict
 
 from .. import metrics
 from ..compare import (
     Comparison,
-    bundled_scene_text,
+    bundled_scene,
     compare_scene,
     max_principal_strain,
 )
@@ -79,12 +79,12 @@ def scene_case(name: str, settings: Settings) -> dict[str, Any]:
     dict
         The JSON-able case.
     """
-    text = bundled_scene_text(name, settings.divisions[name])
+    data = bundled_scene(name, settings.divisions[name])
     return {
         "study": "accuracy",
         "version": VERSION,
         "scene": name,
-        "text": text,
+        "table": data,
         "fields": name in settings.figure_scenes,
     }
 
@@ -121,7 +121,7 @@ def summarize(cmp: Comparison, fields: bool = False) -> dict[str, Any]:
 
 def work(case: dict[str, Any]) -> dict[str, Any]:
     """Run the comparison of one scene case."""
-    scene = parse_scene(case["text"])
+    scene = scene_from_dict(case["table"])
     return summarize(compare_scene(scene), fields=case["fields"])
 
 

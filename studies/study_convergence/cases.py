@@ -8,9 +8,9 @@ from typing import Any
 import numpy as np
 
 from springfem.mesh import box_mesh
-from springfem.scene import parse_scene
+from springfem.scene import scene_from_dict
 
-from ..compare import bundled_scene_text, solve_model
+from ..compare import bundled_scene, solve_model
 
 BASE = (10, 1, 1)
 
@@ -72,21 +72,21 @@ def coarse_vertices() -> np.ndarray:
 
 
 def case(model: str, k: int, torsion: str | None = None) -> dict[str, Any]:
-    """The cache case of one model at level ``k`` (the scene text decides everything).
+    """The cache case of one model at level ``k`` (the scene table decides everything).
 
     ``torsion`` overrides the spring model's torsion law (default :data:`SPRING_TORSION`).
     """
-    text = bundled_scene_text("cantilever", divisions(k))
+    data = bundled_scene("cantilever", divisions(k))
     if model == "spring":
-        text += f'\n[spring]\ntorsion = "{torsion or SPRING_TORSION}"\n'
-    return {"study": "convergence", "version": VERSION, "model": model, "k": k, "text": text}
+        data.setdefault("spring", {})["torsion"] = torsion or SPRING_TORSION
+    return {"study": "convergence", "version": VERSION, "model": model, "k": k, "table": data}
 
 
 def work(c: dict[str, Any]) -> dict[str, Any]:
     """Solve one level with one model: tip displacement and the coarse-vertex field."""
     from scipy.spatial import cKDTree
 
-    scene = parse_scene(c["text"])
+    scene = scene_from_dict(c["table"])
     sol = solve_model(scene, c["model"])
     dist, idx = cKDTree(scene.mesh.points).query(coarse_vertices())
     if dist.max() > 1e-9 * max(SIZE):

@@ -8,7 +8,7 @@
 - net force and moment zero, rigid motions give no force, objectivity f(Qx) = Q f(x);
 - the parallel colour-ordered kernel equals the serial one;
 - inverted elements are reported by id and step;
-- dynamic relaxation (springfem.mechanics.solvers.explicit_static) reaches reference_fem's Newton
+- dynamic relaxation (springfem.mechanics.explicit_static) reaches reference_fem's Newton
   solution of a neo-Hookean stretch.
 """
 

@@ -38,18 +38,30 @@ def test_full_model_beats_axial_only_in_stretch():
     assert r["axial+energy+volume"]["kernel_rate"] > 0
 
 
-def test_axial_only_fails_honestly_in_bending():
+def test_axial_only_fails_honestly_in_bending(dk_reference):
     # Cantilever (20×2×2×6 tets): axial springs alone leave zero-energy modes, so the
-    # static solve must report a failure (not a wrong answer); the full model solves with
-    # a model error against P1 below 25 % (measured 0.17, analytic calibration) and nnls
-    # calibration below 5 % (measured 0.013).
-    _, r = _run("cantilever", ("axial", "axial+energy+volume", "+volume (nnls cal.)"))
+    # static solve must report a failure (not a wrong answer). The model errors of the
+    # full model (analytic and nnls calibration) against P1 are those of the spring model's
+    # linearisation, the D_k FEM (conftest.py), independent of the force kernel: the
+    # nonlinear kinematics add O(tip deflection / L) (Timoshenko: 4e-3), the tolerance.
+    from studies.metrics import timoshenko_tip_deflection
+    from studies.study_ablation import ablation_scene, variant_options
+
+    fem, r = _run("cantilever", ("axial", "axial+energy+volume", "+volume (nnls cal.)"))
     assert r["axial"]["status"] == "fails"
     assert "singular" in r["axial"]["message"]
     assert np.isnan(r["axial"]["error"])
-    assert r["axial+energy+volume"]["status"] == "ok"
-    assert r["axial+energy+volume"]["error"] < 0.25
-    assert r["+volume (nnls cal.)"]["error"] < 0.05
+    dk_p1_displacement, _ = dk_reference
+    scene = ablation_scene("cantilever", Settings.quick().divisions["cantilever"])
+    u_p1 = np.asarray(fem["u"])
+    rotation = timoshenko_tip_deflection(0.1 * 1e-4, 0.1, 0.01, 0.01, 1.0e4, 0.3) / 0.1
+    for v in ("axial+energy+volume", "+volume (nnls cal.)"):
+        assert r[v]["status"] == "ok"
+        u_dk = dk_p1_displacement(scene, variant_options(scene, v))
+        expected = np.linalg.norm(u_dk - u_p1) / np.linalg.norm(u_p1)
+        assert r[v]["error"] == pytest.approx(expected, abs=rotation), v
+    # and the nnls calibration is the better one in bending (0.013 against 0.17)
+    assert r["+volume (nnls cal.)"]["error"] < r["axial+energy+volume"]["error"]
 
 
 def test_cheapest_adequate_rule():

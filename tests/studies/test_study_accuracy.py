@@ -11,10 +11,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from springfem.scene import parse_scene
+from springfem.scene import scene_from_dict
 from studies import study_accuracy as sa
 from studies.cache import CaseCache
-from studies.compare import bundled_scene_text
+from studies.compare import bundled_scene
 from studies.metrics import timoshenko_tip_deflection
 from studies.registry import StudyContext
 
@@ -57,25 +57,41 @@ def test_p1_is_exact_for_uniaxial_stretch(output):
         assert probes.at[name, "analytic (m)"] == pytest.approx(1e-4, rel=1e-12)
 
 
-def test_spring_stretch_errors(output):
-    """Spring model on the 2x2x2 cubes. Measured: axial end displacement +1.5 % (fiber),
-    +5.1 % (cross) from sigma L / E; L2 model error 0.25 / 0.34, lateral contraction
-    +75 % / +44 % (the calibration mismatch of DESIGN §4). Tolerances ~1.5-2x measured."""
+#: Strain of the stretch scenes (sigma / E = 1 %). The study solves the spring model with
+#: its nonlinear kinematics at this strain; its linearisation (the D_k FEM, equal to it to
+#: 1e-6 at small load: test_compare.py) differs by O(strain) (measured 1.0 % over the field):
+#: numbers of the linear D_k FEM hold for the study's to 2 x strain.
+STRAIN = 0.01
+
+
+@pytest.mark.parametrize("name", ["stretch-fiber", "stretch-cross"])
+def test_spring_stretch_errors(output, dk_reference, name):
+    """The study's spring numbers on the 2x2x2 cubes against the D_k FEM (the spring
+    model's own small-strain answer) and P1 on the same mesh: probe error from sigma L / E
+    and L2 model error, to 2 x strain."""
+    import reference_fem
+
     _, errors, probes = output
-    assert abs(probes.at["stretch-fiber", "spring / analytic − 1"]) < 0.03
-    assert abs(probes.at["stretch-cross", "spring / analytic − 1"]) < 0.08
-    for name in ("stretch-fiber", "stretch-cross"):
-        assert 0.0 < errors.at[name, "model err L2"] < 0.40
-        # with P1 exact, model error and total error coincide
-        assert errors.at[name, "model err L2"] == pytest.approx(
-            errors.at[name, "total err L2"], rel=1e-8
-        )
-        assert probes.at[name, "lateral spring / ref − 1"] > 0.2  # too much contraction
+    dk_p1_displacement, _ = dk_reference
+    scene = scene_from_dict(bundled_scene(name, TINY[name]))
+    u_dk = dk_p1_displacement(scene)
+    u_p1 = reference_fem.solve(scene, order=1).u_vertices
+    analytic = probes.at[name, "analytic (m)"]
+    probe_dk = scene.probe_displacements(u_dk)["corner"][0] / analytic - 1
+    err_dk = np.linalg.norm(u_dk - u_p1) / np.linalg.norm(u_p1)
+    assert probes.at[name, "spring / analytic − 1"] == pytest.approx(probe_dk, abs=2 * STRAIN)
+    assert errors.at[name, "model err L2"] == pytest.approx(err_dk, abs=2 * STRAIN)
+    # with P1 exact, model error and total error coincide
+    assert errors.at[name, "model err L2"] == pytest.approx(
+        errors.at[name, "total err L2"], rel=1e-8
+    )
+    # the calibration contracts too much laterally (DESIGN §4): the sign, not a size
+    assert probes.at[name, "lateral spring / ref − 1"] > 0
 
 
 def test_cantilever_analytic_is_timoshenko(output):
     _, _, probes = output
-    scene = parse_scene(bundled_scene_text("cantilever", TINY["cantilever"]))
+    scene = scene_from_dict(bundled_scene("cantilever", TINY["cantilever"]))
     probe, comp, value, source = sa.analytic_probe("cantilever", scene)
     expected = -timoshenko_tip_deflection(0.1 * 0.01 * 0.01, 0.1, 0.01, 0.01, 1.0e4, 0.3)
     assert (probe, comp, source) == ("tip", 2, "Timoshenko")

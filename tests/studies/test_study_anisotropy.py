@@ -6,6 +6,7 @@ import pytest
 
 from studies.study_anisotropy import (
     affine_fit,
+    applied_stress,
     fiber_scene,
     modulus_case,
     off_axis_modulus,
@@ -64,19 +65,30 @@ def test_boundary_conditions_leave_the_off_axis_shear_free(material):
     assert r["gamma_xy"] / r["eps_xx"] == pytest.approx(2 * eps[0, 1] / eps[0, 0], rel=1e-6)
 
 
-def test_spring_anisotropy_ratio_near_analytic(material):
-    # Measured: E(0)/E(90) = 3.047 on 2³ and 3³ meshes against E_f/E_c = 3 (+1.6 %, the
-    # calibration mismatch of the six-tet split); tolerance 5 %. Along the fibers the
-    # axial springs alone carry the load: E(0) within 1 % of E_f.
-    e0, e90 = _case(0.0, "spring"), _case(90.0, "spring")
-    ratio = e0["E_eff"] / e90["E_eff"]
-    assert ratio == pytest.approx(material.E_fiber / material.E_cross, rel=0.05)
-    assert e0["E_eff"] == pytest.approx(material.E_fiber, rel=0.01)
+def _dk_modulus(angle: float, dk_reference) -> tuple[float, float]:
+    """``E_eff`` of the spring model's linearisation (the D_k FEM of conftest.py), measured
+    as the study measures it, and the strain ``sigma / E_eff`` it implies."""
+    dk_p1_displacement, _ = dk_reference
+    scene = fiber_scene(angle, N)
+    u = dk_p1_displacement(scene)
+    pts = scene.mesh.points
+    face = np.isclose(pts[:, 0], pts[:, 0].max())
+    E = applied_stress(scene) / (u[face, 0].mean() / (pts[:, 0].max() - pts[:, 0].min()))
+    return E, applied_stress(scene) / E
 
 
-def test_spring_off_axis_modulus_within_stated_error(material):
-    # Measured -4.8 % at 45° on this mesh (-5.1 % on 4³); the study reports it. Bound 8 %,
-    # and the spring model must be softer off-axis than along the fibers (monotone trend).
-    r = _case(45.0, "spring")
-    assert r["E_eff"] == pytest.approx(off_axis_modulus(material, 45.0), rel=0.08)
-    assert r["E_eff"] < _case(0.0, "spring")["E_eff"]
+@pytest.mark.parametrize("angle", [0.0, 45.0, 90.0])
+def test_spring_modulus_is_its_dk_linearisation(angle, dk_reference):
+    # The spring model's effective modulus at each fiber angle equals its small-strain
+    # answer, the D_k FEM (independent of the force kernel), up to its nonlinear
+    # kinematics at the scene's strain: O(strain), tolerance rel = strain (1-3 %;
+    # measured 0.14 %, 0.45 %, 1.0 %).
+    E_dk, strain = _dk_modulus(angle, dk_reference)
+    assert _case(angle, "spring")["E_eff"] == pytest.approx(E_dk, rel=strain)
+
+
+def test_spring_anisotropy_trend():
+    # Monotone trend: the spring model is softer off-axis than along the fibers, and softer
+    # still across them (E_f / E_c = 3).
+    e0, e45, e90 = (_case(a, "spring")["E_eff"] for a in (0.0, 45.0, 90.0))
+    assert e0 > e45 > e90

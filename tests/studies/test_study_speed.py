@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from springfem.scene import parse_scene
+from springfem.scene import scene_from_dict
 from studies import study_speed_accuracy as sa
 from studies.bench import bench_forces
 from studies.cli import main
@@ -69,7 +69,7 @@ def test_pareto_front_matches_sweep():
 
 
 def test_cantilever_variants():
-    scene = parse_scene(sa.cantilever_text(6, 1))
+    scene = scene_from_dict(sa.cantilever_table(6, 1))
     assert scene.mesh.n_tets == 6 * 6
     assert sa.timoshenko_tip(scene) == pytest.approx(4.0306e-4, rel=1e-4)
 
@@ -82,7 +82,7 @@ def test_explicit_points_reach_the_static_answer(explicit_method, static_method)
     """Dynamic relaxation to 1e-6 relative residual lands on the static solution of the
     same model: the tips agree to 1e-3 (the residual tolerance times the conditioning of
     this slender beam)."""
-    case = {"scene_text": sa.cantilever_text(10, 1), "torsion": sa.TORSION}
+    case = {"scene": sa.cantilever_table(10, 1), "torsion": sa.TORSION}
     a = sa.point_case(
         {**case, "method": explicit_method, "setting": {"tol": 1e-6, "dt_safety": 0.5}}
     )
@@ -95,7 +95,7 @@ def test_explicit_points_reach_the_static_answer(explicit_method, static_method)
 def test_spring_and_fem_differ_on_the_same_mesh():
     """The study's spring and P1 points are different models: on 10x1x1 the spring tip is
     larger than P1's by more than the solver tolerances (DESIGN §4: ~8-25 % softer)."""
-    case = {"scene_text": sa.cantilever_text(10, 1), "torsion": sa.TORSION, "setting": {}}
+    case = {"scene": sa.cantilever_table(10, 1), "torsion": sa.TORSION, "setting": {}}
     spring = sa.point_case({**case, "method": "spring-static"})
     p1 = sa.point_case({**case, "method": "fem-p1-linear"})
     assert abs(spring["tip"][2]) > 1.05 * abs(p1["tip"][2])

@@ -1,0 +1,127 @@
+"""Study ``ablation``: "model no more than a scene needs".
+
+For every bundled scene (coarse meshes in the quick settings) the spring model is solved with its
+parts switched on one by one:
+
+============================  ===========================================================
+``axial``                     axial springs only (torsion off, volume off)
+``axial+volume``              + barycentric volume springs, no torsion (enough for a stretch
+                              along the axes?)
+``axial+cosine``              + torsion springs, the spec's cosine law (2.44–2.45)
+``axial+energy``              + torsion springs, the energy-consistent law
+``axial+cosine+volume``       + barycentric volume springs
+``axial+energy+volume``       + barycentric volume springs
+``+LMS (abs)``                axial+energy+volume with sign-consistent LMS; LMS acts once
+                              per time step, so this variant needs a dynamic solver:
+                              dynamic relaxation (kinetic damping) from rest
+``+volume (nnls cal.)``       axial+energy+volume with the per-element least-squares
+                              calibration instead of the analytic one
+============================  ===========================================================
+
+Model error is the relative L2 error of the vertex displacements against FEM P1 (the scene's
+law) on the same mesh; total error (against a converged solution) is the convergence
+study's business. Cost is the wall time of the static solve (Newton with the analytic
+Hessian for the gradient variants, a coloured finite-difference Jacobian for cosine torsion;
+median of 3 when a solve takes under half a second) and the throughput of the serial force
+kernel (elements per second). A variant that the solver cannot bring to equilibrium (a
+singular tangent: the axial-only network has zero-energy modes; or no convergence) is
+recorded as ``fails`` with the solver's message.
+
+The cheapest adequate model of a scene is the variant with the smallest static solve time
+among those whose model error is within :data:`TOLERANCE` (relative) of the best spring
+variant's error.
+
+The study is split into :mod:`.cases` (variants, settings, one solve), :mod:`.tables`
+(every variant, winners), :mod:`.figures` and :mod:`.findings`.
+
+Examples
+--------
+>>> list(VARIANTS)[:2]
+['axial', 'axial+volume']
+"""
+
+from __future__ import annotations
+
+import pandas as pd
+
+from ..registry import StudyContext, StudyOutput, study
+from .cases import (
+    DR_TOL,
+    MAX_ERROR,
+    SCENE_NAMES,
+    TIME_TIE,
+    TOLERANCE,
+    VARIANTS,
+    Settings,
+    ablation_scene,
+    fem_case,
+    model_error,
+    spring_case,
+    variant_options,
+)
+from .figures import error_cost_figure
+from .findings import report_findings
+from .tables import ablation_table, cheapest_adequate, result_rows, winners_frame, winners_table
+
+__all__ = [
+    "DR_TOL",
+    "MAX_ERROR",
+    "SCENE_NAMES",
+    "TIME_TIE",
+    "TOLERANCE",
+    "VARIANTS",
+    "Settings",
+    "ablation_scene",
+    "cheapest_adequate",
+    "fem_case",
+    "model_error",
+    "run",
+    "spring_case",
+    "variant_options",
+]
+
+
+@study("ablation", Settings)
+def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
+    """Run the ablation study (see the module docstring).
+
+    Parameters
+    ----------
+    ctx
+        Output folder, cache and preset.
+    settings
+        Meshes and step budget.
+
+    Returns
+    -------
+    StudyOutput
+        Findings, the ablation and winners tables, the error-vs-cost figure, headline.
+    """
+    rows, fem_times, notes = [], {}, []
+    for name in SCENE_NAMES:
+        d = settings.divisions[name]
+        div = list(d) if d is not None else None
+        fem = ctx.cache.run(
+            [{"scene": name, "divisions": div, "model": "fem-p1"}], fem_case, ctx.progress, name
+        )[0]
+        if fem["status"] != "ok":
+            notes.append(f"{name}: the FEM P1 reference fails ({fem['message']}).")
+            continue
+        fem_times[name] = fem["time"]
+        cases = [
+            {"scene": name, "divisions": div, "variant": v, "dr_steps": settings.dr_steps}
+            for v in VARIANTS
+        ]
+        res = ctx.cache.run(cases, spring_case, ctx.progress, name)
+        rows += result_rows(name, cases, res, fem["u"])
+    df = pd.DataFrame(rows)
+    winners, headline = winners_frame(df)
+    findings, counts = report_findings(df, winners, fem_times, settings.dr_steps, notes)
+    return StudyOutput(
+        name=ctx.name,
+        title="Ablation: model no more than a scene needs",
+        findings=findings,
+        tables=[ablation_table(ctx, df, fem_times), winners_table(ctx, winners)],
+        figures=[error_cost_figure(ctx, df, winners, fem_times)],
+        headline={**headline, **counts},
+    )

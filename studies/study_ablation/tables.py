@@ -1,0 +1,178 @@
+"""Tables of the ablation study: every (scene, variant) and the winners per scene."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..registry import StudyContext, Table
+from ..tables import write_table
+from .cases import MAX_ERROR, TIME_TIE, TOLERANCE, VARIANTS, model_error
+
+
+def cheapest_adequate(
+    df: pd.DataFrame, tolerance: float = TOLERANCE, max_error: float | None = None
+) -> pd.Series | None:
+    """The cheapest adequate variant among the ``ok`` rows of one scene.
+
+    Adequate: model error at most ``(1 + tolerance)`` times the smallest error (or, with
+    ``max_error``, at most ``max_error``). Cheapest: the smallest ``solve_time``; times
+    within :data:`TIME_TIE` of it count as a tie, broken by the order of :data:`VARIANTS`
+    (fewer parts first), so timer noise does not pick the winner. ``None`` if no row
+    qualifies.
+    """
+    ok = df[(df.status == "ok") & np.isfinite(df.error)]
+    if ok.empty:
+        return None
+    limit = (1.0 + tolerance) * ok.error.min() if max_error is None else max_error
+    adequate = ok[ok.error <= limit]
+    if adequate.empty:
+        return None
+    tied = adequate[adequate.solve_time <= (1.0 + TIME_TIE) * adequate.solve_time.min()]
+    order = {v: i for i, v in enumerate(VARIANTS)}
+    return tied.loc[tied.variant.map(order).sort_values().index[0]]
+
+
+def result_rows(name: str, cases: list[dict], results: list[dict], u_ref: Any) -> list[dict]:
+    """One row per variant of one scene: status, model error, cost, solver facts.
+
+    Parameters
+    ----------
+    name
+        The scene.
+    cases, results
+        Its spring cases and their results (:func:`~.cases.spring_case`).
+    u_ref
+        The FEM P1 vertex displacements.
+
+    Returns
+    -------
+    list of dict
+    """
+    rows = []
+    for c, r in zip(cases, results):
+        err, perr = model_error(c, r, u_ref)
+        rows.append(
+            {
+                "scene": name,
+                "tets": r.get("tets"),
+                "variant": c["variant"],
+                "status": r["status"],
+                "error": err,
+                "probe_error": perr,
+                "solve_time": r.get("solve_time", np.nan),
+                "kernel_Mtets/s": r.get("kernel_rate", np.nan) / 1e6,
+                "method": r.get("method", ""),
+                "iterations": r.get("iterations", np.nan),
+                "message": r.get("message", ""),
+                "k_ratio_median": r.get("k_ratio_median", np.nan),
+            }
+        )
+    return rows
+
+
+def ablation_table(ctx: StudyContext, df: pd.DataFrame, fem_times: dict[str, float]) -> Table:
+    """Write the table of every (scene, variant) with the FEM P1 time for scale.
+
+    Parameters
+    ----------
+    ctx
+        Where to write.
+    df
+        The rows of :func:`result_rows`.
+    fem_times
+        Scene -> FEM P1 solve time.
+
+    Returns
+    -------
+    Table
+    """
+    table = df.drop(columns=["k_ratio_median"]).copy()
+    table["fem_p1_time"] = table.scene.map(fem_times)
+    return Table(
+        write_table(table, ctx.path("ablation")),
+        "Spring-model parts switched on one by one, per scene: status, model error "
+        "(relative L2 of vertex displacements against FEM P1 on the same mesh), largest "
+        "probe error, static solve wall time (s; the LMS variant: dynamic relaxation), "
+        "serial force-kernel throughput (M elements/s), solver method and iterations, and "
+        "the FEM P1 solve time for scale.",
+    )
+
+
+def winners_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, float]]:
+    """Per scene: the best variant, the cheapest adequate ones, the failures.
+
+    Parameters
+    ----------
+    df
+        The rows of :func:`result_rows`.
+
+    Returns
+    -------
+    winners : DataFrame
+    headline : dict
+        Best and full-model (``axial+energy+volume``) errors per scene.
+    """
+    headline: dict[str, float] = {}
+    wrows = []
+    ladder = [v for v in VARIANTS if "nnls" not in v]  # the parts of the spec, analytic cal.
+    for name, g in df.groupby("scene", sort=False):
+        best = g[g.status == "ok"].sort_values("error")
+        win = cheapest_adequate(g)
+        if win is None:
+            wrows.append({"scene": name, "cheapest adequate": "none (all fail)"})
+            continue
+        win_ladder = cheapest_adequate(g[g.variant.isin(ladder)])
+        win_abs = cheapest_adequate(g, max_error=MAX_ERROR)
+        wrows.append(
+            {
+                "scene": name,
+                "best variant": best.variant.iloc[0],
+                "best error": best.error.iloc[0],
+                "cheapest adequate": win.variant,
+                "its error": win.error,
+                "its solve time": win.solve_time,
+                "cheapest adequate (analytic cal.)": (
+                    win_ladder.variant if win_ladder is not None else "none"
+                ),
+                "its error (analytic cal.)": (
+                    win_ladder.error if win_ladder is not None else np.nan
+                ),
+                f"cheapest with error <= {MAX_ERROR:g}": (
+                    win_abs.variant if win_abs is not None else "none"
+                ),
+                "fails": ", ".join(g[g.status != "ok"].variant) or "none",
+            }
+        )
+        headline[f"best_error_{name}"] = round(float(best.error.iloc[0]), 4)
+        full = g[g.variant == "axial+energy+volume"]
+        if len(full) and full.status.iloc[0] == "ok":
+            headline[f"full_error_{name}"] = round(float(full.error.iloc[0]), 4)
+    winners = pd.DataFrame(wrows)
+    return winners, headline
+
+
+def winners_table(ctx: StudyContext, winners: pd.DataFrame) -> Table:
+    """Write the winners table.
+
+    Parameters
+    ----------
+    ctx
+        Where to write.
+    winners
+        :func:`winners_frame`.
+
+    Returns
+    -------
+    Table
+    """
+    return Table(
+        write_table(winners, ctx.path("winners")),
+        f"Per scene: the most accurate spring variant; the cheapest variant (smallest "
+        f"static solve time, ties within {TIME_TIE:.0%} broken towards fewer parts) whose "
+        f"model error is within {TOLERANCE:.0%} of the best, over all variants and over "
+        f"the analytic-calibration ladder of the spec's parts only; the cheapest with a "
+        f"model error of at most {MAX_ERROR:.0%}; and the variants that fail.",
+    )

@@ -1,0 +1,208 @@
+"""Cases of the scaling study: the benchmark block, one explicit-step and one static case."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from springfem.scene import scene_from_dict
+from springmodel.options import SpringOptions
+
+TORSION = "energy"
+REPEATS = 5
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Target tet counts of the explicit-step and static-solve series.
+
+    Parameters
+    ----------
+    step
+        Tet counts of the explicit-step series.
+    static
+        Tet counts of the static-solve series.
+    neo_max
+        Largest tet count of the neo-Hookean Newton solve.
+    """
+
+    step: tuple[int, ...] = (1_000, 3_000, 10_000, 30_000, 100_000, 200_000)
+    static: tuple[int, ...] = (1_000, 3_000, 10_000, 30_000, 100_000)
+    neo_max: int = 30_000  # the neo-Hookean Newton solve at 1e5 tets alone costs ~20 s
+
+    @classmethod
+    def full(cls) -> Settings:
+        """Up to 200,000 tets."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> Settings:
+        """Up to 100,000 tets (explicit) and 10,000 (static)."""
+        return cls(step=(1_000, 10_000, 100_000), static=(1_000, 3_000, 10_000), neo_max=10_000)
+
+
+def bench_table(n_tets: int = 100_000) -> dict:
+    """The table of the benchmark block: 2:1:1 with about ``n_tets`` tets (six per
+    hexahedron), clamped at ``x_min`` and pulled down at ``x_max``, FEM P1 with AMG.
+
+    Parameters
+    ----------
+    n_tets
+        Approximate number of tets.
+
+    Returns
+    -------
+    dict
+        The table for :func:`springfem.scene.scene_from_dict`.
+
+    Examples
+    --------
+    >>> bench_table(1_000)["mesh"]["divisions"]
+    [8, 4, 4]
+    """
+    k = max(1, round((n_tets / 12.0) ** (1.0 / 3.0)))
+    return {
+        "name": f"bench-{12 * k**3}",
+        "mesh": {"generator": "box", "size": [2.0, 1.0, 1.0], "divisions": [2 * k, k, k]},
+        "material": {"law": "linear", "E": 1.0e4, "nu": 0.3},
+        "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+        "load": [{"type": "traction", "region": "x_max", "value": [0.0, 0.0, -1.0]}],
+        "probe": [{"name": "tip", "point": [2.0, 0.5, 0.5]}],
+        "fem": {"order": 1, "linear_solver": "amg"},
+        "spring": {"torsion": TORSION},
+    }
+
+
+def _scene(n_tets: int):
+    return scene_from_dict(bench_table(n_tets))
+
+
+def _clock():
+    return time.perf_counter(), time.process_time()
+
+
+def _since(t):
+    return time.perf_counter() - t[0], time.process_time() - t[1]
+
+
+def step_case(case: dict) -> dict:
+    """Set-up and per-step cost of the spring model and the explicit P1 FEM (serial)."""
+    from reference_fem.explicit import ExplicitFem
+    from springmodel.model import SpringModel
+
+    from ..bench import step_time
+
+    scene = _scene(case["n_tets"])
+    t = _clock()
+    spring = SpringModel(scene, parallel=False)
+    spring_setup = _since(t)
+    t = _clock()
+    fem = ExplicitFem(scene, parallel=False)
+    fem_setup = _since(t)
+    steps = int(np.clip(2_000_000 // scene.mesh.n_tets, 5, 200))
+    systems = {"spring": spring, "fem": fem}
+    for s in systems.values():
+        step_time(s, 2, 1)  # warm-up
+    wall = {k: [] for k in systems}
+    cpu = {k: [] for k in systems}
+    for _ in range(case["repeats"]):
+        for name, s in systems.items():
+            w, c = step_time(s, steps, 1)
+            wall[name].append(w)
+            cpu[name].append(c)
+    out = {
+        "tets": scene.mesh.n_tets,
+        "nodes": scene.mesh.n_points,
+        "steps": steps,
+        "spring_setup_wall": spring_setup[0],
+        "spring_setup_cpu": spring_setup[1],
+        "fem_setup_wall": fem_setup[0],
+        "fem_setup_cpu": fem_setup[1],
+    }
+    for name in systems:
+        out[f"{name}_step_wall"] = float(np.median(wall[name]))
+        out[f"{name}_step_cpu"] = float(np.median(cpu[name]))
+    out["ratio_cpu"] = float(np.median(np.array(cpu["spring"]) / np.array(cpu["fem"])))
+    return out
+
+
+def _static_solve(scene, method: str):
+    if method == "spring":
+        from springmodel.model import solve_spring
+
+        return solve_spring(
+            scene, replace(SpringOptions.of(scene), solver="static", tol=1e-8), parallel=False
+        )
+    import reference_fem
+
+    return reference_fem.solve(scene, order=1, law=method.removeprefix("fem-"))
+
+
+_WARM: set[str] = set()
+
+
+def static_case(case: dict) -> dict:
+    """One static solve (from the scene, set-up included) by one method."""
+    method = case["method"]
+    if method not in _WARM:  # imports and compilation are not part of the cost
+        _static_solve(_scene(100), method)
+        _WARM.add(method)
+    scene = _scene(case["n_tets"])
+    t = _clock()
+    sol = _static_solve(scene, method)
+    wall, cpu = _since(t)
+    if method == "spring":
+        linear_solver = getattr(sol.info, "linear_solver", "")
+    else:
+        linear_solver = str(sol.result.info.get("linear_solver", ""))
+    return {
+        "tets": scene.mesh.n_tets,
+        "wall": wall,
+        "cpu": cpu,
+        "dofs": 3 * scene.mesh.n_points,
+        "iterations": sol.result.iterations,
+        "tip": sol.result.probes["tip"],
+        "linear_solver": linear_solver,
+    }
+
+
+STATIC_METHODS = {
+    "spring": "spring model, static Newton",
+    "fem-linear": "FEM P1 linear, static",
+    "fem-neo-hookean/coupled": "FEM P1 neo-Hookean, Newton",
+}
+
+
+def grids(p: Settings) -> tuple[list[dict], list[dict]]:
+    """The explicit-step and static-solve cases.
+
+    Parameters
+    ----------
+    p
+        The study's settings.
+
+    Returns
+    -------
+    step_cases, static_cases : list of dict
+        Cases for :func:`step_case` and :func:`static_case` (no neo-Hookean FEM above
+        ``p.neo_max`` tets).
+    """
+    step_cases = [
+        {
+            "kind": "step",
+            "n_tets": n,
+            "repeats": REPEATS,
+            "torsion": TORSION,
+            "scene": "bench_scene",
+        }
+        for n in p.step
+    ]
+    static_cases = [
+        {"kind": "static", "n_tets": n, "method": m, "torsion": TORSION, "scene": "bench_scene"}
+        for n in p.static
+        for m in STATIC_METHODS
+        if not (m.startswith("fem-neo") and n > p.neo_max)
+    ]
+    return step_cases, static_cases

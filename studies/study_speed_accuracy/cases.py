@@ -1,0 +1,283 @@
+"""Cases of the speed-accuracy study: settings, the cantilever scenes, one timed solve."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from springfem.errors import SolverError
+from springfem.scene import Scene, scene_from_dict
+from springmodel.options import SpringOptions
+
+from ..compare import bundled_scene
+from ..metrics import timoshenko_tip_deflection
+
+#: The spring model's torsion law here: the energy-consistent one (conservative, so static
+#: Newton has an analytic Hessian and explicit dynamics conserve energy).
+TORSION = "energy"
+#: Static / implicit tolerances (relative residual).
+STATIC_TOL = 1e-8
+IMPLICIT_TOL = 1e-6
+STEP_REPEATS = 7
+STEP_COUNT = 20
+
+FEM_STATIC = {
+    "fem-p1-linear": (1, "linear"),
+    "fem-p1-neo-hookean": (1, "neo-hookean/coupled"),
+    "fem-p2-linear": (2, "linear"),
+    "fem-p2-neo-hookean": (2, "neo-hookean/coupled"),
+}
+LABELS = {
+    "spring-static": "spring, static Newton",
+    "spring-implicit": "spring, implicit to rest",
+    "spring-explicit": "spring, explicit to rest",
+    "fem-explicit-p1-neo-hookean": "explicit P1 FEM (neo-Hookean), to rest",
+    "fem-p1-linear": "FEM P1 linear, static",
+    "fem-p1-neo-hookean": "FEM P1 neo-Hookean, static",
+    "fem-p2-linear": "FEM P2 linear, static",
+    "fem-p2-neo-hookean": "FEM P2 neo-Hookean, static",
+}
+STYLE = {  # marker, colour
+    "spring-static": ("o", "tab:red"),
+    "spring-implicit": ("o", "tab:orange"),
+    "spring-explicit": ("o", "tab:pink"),
+    "fem-explicit-p1-neo-hookean": ("^", "tab:purple"),
+    "fem-p1-linear": ("s", "tab:blue"),
+    "fem-p1-neo-hookean": ("s", "tab:cyan"),
+    "fem-p2-linear": ("D", "tab:green"),
+    "fem-p2-neo-hookean": ("D", "tab:olive"),
+}
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Meshes and solver settings of the speed-accuracy study.
+
+    Parameters
+    ----------
+    meshes
+        ``(nx, ny)`` cantilever meshes (``nx × ny × ny`` hexahedra) of the points.
+    reference
+        ``(nx, ny)`` of the fine P2 reference.
+    explicit
+        ``(tol, dt_safety)`` settings of the explicit runs.
+    implicit
+        Time-step factor of the implicit runs -> largest ``(nx, ny)`` it runs on.
+    """
+
+    meshes: tuple[tuple[int, int], ...] = ((10, 1), (20, 2), (40, 4))
+    reference: tuple[int, int] = (60, 6)
+    explicit: tuple[tuple[float, float], ...] = ((1e-3, 0.3), (1e-6, 0.3), (1e-6, 0.5))
+    implicit: dict[float, tuple[int, int]] = field(
+        default_factory=lambda: {100.0: (20, 2), 1e4: (40, 4)}
+    )
+
+    @classmethod
+    def full(cls) -> Settings:
+        """Three meshes up to 40 × 4 × 4, reference 60 × 6 × 6."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> Settings:
+        """Two meshes, reference 40 × 4 × 4."""
+        return cls(
+            meshes=((10, 1), (20, 2)),
+            reference=(40, 4),
+            explicit=((1e-6, 0.5),),
+            implicit={100.0: (10, 1), 1e4: (20, 2)},  # dt factor -> largest mesh
+        )
+
+
+def cantilever_table(nx: int, ny: int) -> dict:
+    """The bundled cantilever scene's table with ``nx x ny x ny`` hexahedra.
+
+    Parameters
+    ----------
+    nx, ny
+        Hexahedra along the beam and across it.
+
+    Returns
+    -------
+    dict
+        The table for :func:`springfem.scene.scene_from_dict`.
+
+    Examples
+    --------
+    >>> cantilever_table(6, 1)["mesh"]["divisions"]
+    [6, 1, 1]
+    """
+    return bundled_scene("cantilever", (nx, ny, ny))
+
+
+def _scene(case: dict) -> Scene:
+    scene = scene_from_dict(case["scene"])
+    return scene.with_options(spring=replace(SpringOptions.of(scene), torsion=TORSION))
+
+
+def timoshenko_tip(scene: Scene) -> float:
+    """Timoshenko tip deflection (m, positive down) of the cantilever scene."""
+    lo, hi = scene.mesh.bounding_box()
+    L, b, h = (hi - lo).tolist()
+    traction = scene.loads[0].value
+    force = float(-traction[2]) * b * h
+    return timoshenko_tip_deflection(force, L, b, h, scene.material.E, scene.material.nu)
+
+
+def _solve(scene: Scene, method: str, setting: dict) -> tuple[np.ndarray, dict]:
+    """Run one method on a scene: vertex displacement and solver facts."""
+    if method in FEM_STATIC:
+        import reference_fem
+
+        order, law = FEM_STATIC[method]
+        sol = reference_fem.solve(scene, order=order, law=law)
+        return sol.u_vertices, {"iterations": sol.result.iterations}
+    from springfem.mechanics import explicit_static, implicit, stable_time_step
+
+    if method == "spring-static":
+        from springmodel.model import solve_spring
+
+        sol = solve_spring(
+            scene, replace(SpringOptions.of(scene), solver="static", tol=STATIC_TOL), parallel=None
+        )
+        return sol.u, {"iterations": sol.result.iterations}
+    if method == "fem-explicit-p1-neo-hookean":
+        from reference_fem.explicit import ExplicitFem
+
+        system = ExplicitFem(scene, law="neo-hookean")
+    else:
+        from springmodel.model import SpringModel
+
+        system = SpringModel(scene, parallel=None)
+    if method == "spring-implicit":
+        dt = setting["dt_factor"] * stable_time_step(system)[0]
+        traj = implicit(system, dt=dt, steps=5000, equilibrium_tol=IMPLICIT_TOL)
+        if not traj.converged:
+            raise SolverError(traj.message, state=traj.x - system.x0)
+        return traj.x - system.x0, {"steps": traj.steps, "iterations": traj.iterations}
+    info = explicit_static(
+        system, tol=setting["tol"], dt_safety=setting["dt_safety"], max_steps=400_000
+    )
+    return info.x - system.x0, {"steps": info.steps, "dt": info.dt}
+
+
+_WARM: set[str] = set()
+
+
+def _warm_up(method: str, setting: dict) -> None:
+    """Run a method once on a tiny mesh so compilation and imports are not timed."""
+    if method in _WARM:
+        return
+    tiny = {"scene": cantilever_table(4, 1)}
+    loose = dict(setting, tol=1e-2) if "tol" in setting else setting
+    try:
+        _solve(_scene(tiny), method, loose)
+    except SolverError:
+        pass
+    _WARM.add(method)
+
+
+def point_case(case: dict) -> dict:
+    """One (method, mesh, setting) point: wall time from the scene to the answer, tip."""
+    scene = _scene(case)
+    _warm_up(case["method"], case["setting"])
+    t0, c0 = time.perf_counter(), time.process_time()
+    try:
+        u, facts = _solve(scene, case["method"], case["setting"])
+    except SolverError as exc:
+        msg = str(exc)
+        status = "blew up" if "blew up" in msg or "inverted" in msg else "failed"
+        return {
+            "status": status,
+            "seconds": time.perf_counter() - t0,
+            "cpu_seconds": time.process_time() - c0,
+            "message": msg[:240],
+        }
+    return {
+        "status": "ok",
+        "seconds": time.perf_counter() - t0,
+        "cpu_seconds": time.process_time() - c0,
+        "tip": scene.probe_displacements(u)["tip"],
+        "tets": scene.mesh.n_tets,
+        **facts,
+    }
+
+
+def reference_case(case: dict) -> dict:
+    """The reference tip displacement: P2 linear on the finest mesh."""
+    import reference_fem
+
+    scene = _scene(case)
+    sol = reference_fem.solve(scene, order=2, law="linear")
+    return {
+        "tip": sol.result.probes["tip"],
+        "tets": scene.mesh.n_tets,
+        "timoshenko": timoshenko_tip(scene),
+    }
+
+
+def step_count(n_tets: int) -> int:
+    """Explicit steps per timed repeat: about 0.2 M element evaluations (>~10 ms)."""
+    return int(np.clip(200_000 // max(n_tets, 1), STEP_COUNT, 500))
+
+
+def step_cost_case(case: dict) -> dict:
+    """Cost of one explicit step, spring model and explicit P1 FEM, measured alternately."""
+    from reference_fem.explicit import ExplicitFem
+    from springmodel.model import SpringModel
+
+    from ..bench import step_time
+
+    scene = _scene(case)
+    systems = {"spring": SpringModel(scene, parallel=None), "fem": ExplicitFem(scene)}
+    wall = {k: [] for k in systems}
+    cpu = {k: [] for k in systems}
+    for system in systems.values():  # warm-up
+        step_time(system, 2, 1)
+    for _ in range(case["repeats"]):
+        for name, system in systems.items():
+            w, c = step_time(system, case["steps"], 1)
+            wall[name].append(w)
+            cpu[name].append(c)
+    out = {"tets": scene.mesh.n_tets}
+    for name in systems:
+        out[f"{name}_wall"] = float(np.median(wall[name]))
+        out[f"{name}_cpu"] = float(np.median(cpu[name]))
+    out["ratio_wall"] = float(np.median(np.array(wall["spring"]) / np.array(wall["fem"])))
+    out["ratio_cpu"] = float(np.median(np.array(cpu["spring"]) / np.array(cpu["fem"])))
+    out["parallel"] = {
+        k: bool(
+            getattr(s, "parallel", False) or getattr(getattr(s, "kernel", None), "parallel", False)
+        )
+        for k, s in systems.items()
+    }
+    return out
+
+
+def cases_for(p: Settings) -> list[dict]:
+    """All (method, mesh, setting) points of a plan."""
+    out = []
+    for nx, ny in p.meshes:
+        base = {
+            "kind": "point",
+            "mesh": [nx, ny],
+            "scene": cantilever_table(nx, ny),
+            "torsion": TORSION,
+        }
+        for method in FEM_STATIC:
+            out.append({**base, "method": method, "setting": {}})
+        out.append({**base, "method": "spring-static", "setting": {"tol": STATIC_TOL}})
+        for factor, (mx, _) in p.implicit.items():
+            if nx <= mx:
+                out.append(
+                    {
+                        **base,
+                        "method": "spring-implicit",
+                        "setting": {"dt_factor": factor, "tol": IMPLICIT_TOL},
+                    }
+                )
+        for tol, safety in p.explicit:
+            for method in ("spring-explicit", "fem-explicit-p1-neo-hookean"):
+                out.append({**base, "method": method, "setting": {"tol": tol, "dt_safety": safety}})
+    return out

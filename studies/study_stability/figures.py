@@ -1,0 +1,105 @@
+"""Figures of the stability study: locking against ν, and the failure map."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from ..registry import Figure, StudyContext
+from ..tables import save_figure
+from .cases import MAP_METHODS, Settings
+
+
+def locking_figure(ctx: StudyContext, dk: pd.DataFrame, q: Settings) -> Figure:
+    """Tip deflection over Timoshenko and volume change against Poisson's ratio.
+
+    Parameters
+    ----------
+    ctx
+        Where to write.
+    dk
+        The locking frame.
+    q
+        The study's settings.
+
+    Returns
+    -------
+    Figure
+    """
+    import matplotlib.pyplot as plt
+
+    nus = list(q.nus)
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    for m, g in dk.groupby("method"):
+        ax[0].plot(g["nu"], g["tip_ratio"], "o-", label=m)
+        ax[1].semilogy(g["nu"], np.abs(g["volume_change"]) + 1e-16, "o-", label=m)
+    ax[0].axhline(1.0, color="k", lw=0.8, ls="--", label="Timoshenko")
+    ax[0].set_xlabel("Poisson's ratio ν")
+    ax[0].set_ylabel("tip deflection / Timoshenko")
+    ax[0].set_title("bending vs ν (P1 locks as ν → 0.5)")
+    ax[1].set_xlabel("Poisson's ratio ν")
+    ax[1].set_ylabel("|ΔV| / V0")
+    ax[1].set_title("volume change vs ν")
+    for a in ax:
+        a.grid(alpha=0.3)
+        a.legend()
+    hi = dk[dk.nu == max(nus)].set_index("method")["tip_ratio"]
+    lo = dk[dk.nu == min(nus)].set_index("method")["tip_ratio"]
+    return Figure(
+        save_figure(fig, ctx.path("locking.png")),
+        f"Tip deflection over Timoshenko against ν: from ν = {min(nus)} to "
+        f"{max(nus)}, P1 goes {lo['fem-p1']:.2f} → {hi['fem-p1']:.2f}, "
+        f"P2 {lo['fem-p2']:.2f} → {hi['fem-p2']:.2f}, spring "
+        f"{lo['spring']:.2f} → {hi['spring']:.2f}.",
+    )
+
+
+def failure_map_figure(ctx: StudyContext, dm: pd.DataFrame, q: Settings) -> Figure:
+    """The failure map per method: ok, inverted or blew up on the load × dt grid.
+
+    Parameters
+    ----------
+    ctx
+        Where to write.
+    dm
+        The failure-map frame.
+    q
+        The study's settings.
+
+    Returns
+    -------
+    Figure
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+
+    lf, df_ = list(q.map_loads), list(q.map_dt_factors)
+    mmethods = list(MAP_METHODS)
+    codes = {"ok": 0, "inverted": 1, "blew up": 2}
+    fig, axes = plt.subplots(1, len(mmethods), figsize=(4.2 * len(mmethods), 3.8), sharey=True)
+    cmap = ListedColormap(["#4caf50", "#ff9800", "#d32f2f"])
+    for a, m in zip(axes, mmethods):
+        g = dm[dm.method == m]
+        grid = np.array(
+            [
+                [codes[g[(g.load_factor == f) & (g.dt_factor == d)].status.iloc[0]] for d in df_]
+                for f in lf
+            ]
+        )
+        a.imshow(grid, cmap=cmap, vmin=0, vmax=2, origin="lower", aspect="auto")
+        a.set_xticks(range(len(df_)), [f"{d:g}" for d in df_])
+        a.set_yticks(range(len(lf)), [f"{f:g}" for f in lf])
+        a.set_xlabel("dt / dt_crit (predicted)")
+        a.set_title(m)
+        for i in range(len(lf)):
+            for j in range(len(df_)):
+                a.text(j, i, list(codes)[grid[i, j]], ha="center", va="center", fontsize=7)
+    axes[0].set_ylabel("load factor")
+    ok_share = dm.groupby("method")["status"].apply(lambda s: float((s == "ok").mean()))
+    return Figure(
+        save_figure(fig, ctx.path("failure_map.png")),
+        "Failure map (green ok, orange inverted elements, red blew up) of "
+        "explicit damped runs; share of the grid that runs ok: "
+        + ", ".join(f"{m} {v:.0%}" for m, v in ok_share.items())
+        + ".",
+    )
