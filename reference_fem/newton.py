@@ -1,5 +1,6 @@
-"""The FEM's Newton iteration (displacement form, prescribed values reached by the
-update) under the shared load-stepping rule :class:`springfem.mechanics.newton.LoadStepping`.
+"""The FEM's adapter to the one Newton (:func:`springfem.mechanics.newton.newton`):
+:class:`FemStep` (displacement form, the prescribed values reached by the update), a secant
+predictor, and the shared load-stepping rule :class:`springfem.mechanics.newton.LoadStepping`.
 
 The load factor ``lambda`` scales every load and every prescribed displacement. A load step
 that fails (too many iterations, a growing or non-finite residual, an inverted element, a
@@ -8,6 +9,16 @@ up, the solve stops with :class:`~springfem.errors.SolverError` carrying the las
 displacement.
 
 Convergence: ``|R_free| <= tol * max(|f_int|, |f_ext|)`` with the prescribed values reached.
+
+Examples
+--------
+Inverted elements reject a state: a trial is backtracked, a start fails the load step.
+
+>>> import numpy as np
+>>> from springfem.mechanics.newton import RejectedState
+>>> err = InvertedElements(np.array([3, 7]), "(first at x = [0.1, 0.0, 0.0])")
+>>> isinstance(err, RejectedState), str(err)
+(True, '2 inverted element(s) (J <= 0): [3, 7] (first at x = [0.1, 0.0, 0.0])')
 """
 
 from __future__ import annotations
@@ -38,6 +49,15 @@ class InvertedElements(RejectedState):
 
 
 class NonlinearProblem(Protocol):
+    """What the FEM's Newton needs of a discrete problem (a ``FemProblem``).
+
+    Attributes
+    ----------
+    n_dofs, free, fixed_dofs, fixed_values
+        DOF count, boolean mask of the free DOFs, the prescribed DOFs and their values at
+        load factor 1.
+    """
+
     n_dofs: int
     free: np.ndarray
     fixed_dofs: np.ndarray
@@ -84,7 +104,19 @@ class NewtonOptions:
 
 @dataclass
 class NewtonReport:
-    """Outcome: total iterations and, per accepted step, its load factor and residuals."""
+    """Outcome of :func:`solve_nonlinear`.
+
+    Attributes
+    ----------
+    converged
+        The full load was reached.
+    iterations
+        Newton iterations of the accepted steps.
+    steps
+        Per accepted step: ``load``, ``iterations`` and relative ``residuals``.
+    cutbacks
+        Failed steps (each halved the increment).
+    """
 
     converged: bool = False
     iterations: int = 0
@@ -116,10 +148,12 @@ class FemStep:
         self.free_ids = np.flatnonzero(problem.free)
 
     def residual(self, u: np.ndarray) -> tuple[np.ndarray, float]:
+        """Residual ``R`` (energy-gradient sign) and its relative norm."""
         R, ref = self.problem.residual(u, self.scale)
         return R, float(np.linalg.norm(R[self.problem.free]) / max(ref, 1e-300))
 
     def correction(self, u: np.ndarray, R: np.ndarray):
+        """Newton correction ``d = -K^-1 R`` and the re-solve with the same tangent."""
         p = self.problem
         _, K, symmetric, _ = p.residual_tangent(u, self.scale)
         du = np.zeros_like(u)
@@ -129,18 +163,22 @@ class FemStep:
         return du, lambda rhs: -p.solve_linear(K, rhs, symmetric, "")
 
     def trial(self, u: np.ndarray, alpha: float, du: np.ndarray) -> np.ndarray:
+        """The state ``+ alpha d``."""
         t = u + alpha * du
         if alpha == 1.0:
             t[self.problem.fixed_dofs] = self.target
         return t
 
     def energy(self, u: np.ndarray) -> float | None:
+        """Potential energy at the load factor, or ``None``."""
         return self.problem.energy(u, self.scale)
 
     def constrained(self, u: np.ndarray) -> bool:
+        """Whether the prescribed values are reached."""
         return bool(np.abs(u[self.problem.fixed_dofs] - self.target).max(initial=0.0) == 0.0)
 
     def locate(self, R: np.ndarray) -> str:
+        """Where the largest (or first non-finite) free residual is, for messages."""
         Rf = R[self.free_ids]
         bad = np.flatnonzero(~np.isfinite(Rf))
         if bad.size:

@@ -1,4 +1,4 @@
-"""Static equilibrium of a :class:`~springfem.mechanics.system.MechanicalSystem`: Newton
+"""Static equilibrium of a :class:`~springfem.mechanics.system.MechanicalSystem`: the one Newton
 with line search and adaptive load stepping, a tangent predictor for moving prescribed
 displacements, and dynamic relaxation as the fallback.
 
@@ -75,10 +75,12 @@ class SpringStep:
         self.K = None
 
     def residual(self, x: np.ndarray) -> tuple[np.ndarray, float]:
+        """Residual ``R`` (energy-gradient sign) and its relative norm."""
         R = -self.ctx.free_force(x, self.s)
         return R, float(np.linalg.norm(R)) / self.f_ref
 
     def correction(self, x: np.ndarray, R: np.ndarray):
+        """Newton correction ``d = -K^-1 R`` and the re-solve with the same tangent."""
         self.K = self.ctx.stiffness(x, self.s, self.jacobian)
         solver = LinearSolver(self.linear_solver, self.B).factorize(self.ctx.ff(self.K))
         d = solver.solve(-R)
@@ -86,17 +88,21 @@ class SpringStep:
         return d, lambda b: -solver.solve(b)
 
     def trial(self, x: np.ndarray, alpha: float, d: np.ndarray) -> np.ndarray:
+        """The state ``+ alpha d``."""
         x_try = x.copy()
         x_try.reshape(-1)[self.ctx.free] += alpha * d
         return x_try
 
     def energy(self, x: np.ndarray) -> float | None:
+        """Potential energy at the load factor, or ``None``."""
         return self.ctx.system.energy(x, self.s)
 
     def constrained(self, x: np.ndarray) -> bool:
+        """Whether the prescribed values are reached."""
         return True  # the fixed DOFs are prescribed before Newton starts
 
     def locate(self, R: np.ndarray) -> str:
+        """Where the largest (or first non-finite) free residual is, for messages."""
         return ""
 
     def monitor(self, callback: Callable | None, offset: int):
