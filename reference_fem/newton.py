@@ -1,5 +1,6 @@
-"""The FEM's Newton iteration (displacement form, prescribed values reached by the
-update) under the shared load-stepping rule :class:`springfem.mechanics.newton.LoadStepping`.
+"""The FEM's adapter to the one Newton (:func:`springfem.mechanics.newton.newton`):
+:class:`FemStep` (displacement form, the prescribed values reached by the update), a secant
+predictor, and the shared load-stepping rule :class:`springfem.mechanics.newton.LoadStepping`.
 
 The load factor ``lambda`` scales every load and every prescribed displacement. A load step
 that fails (too many iterations, a growing or non-finite residual, an inverted element, a
@@ -8,6 +9,16 @@ up, the solve stops with :class:`~springfem.errors.SolverError` carrying the las
 displacement.
 
 Convergence: ``|R_free| <= tol * max(|f_int|, |f_ext|)`` with the prescribed values reached.
+
+Examples
+--------
+Inverted elements reject a state: a trial is backtracked, a start fails the load step.
+
+>>> import numpy as np
+>>> from springfem.mechanics.newton import RejectedState
+>>> err = InvertedElements(np.array([3, 7]), "(first at x = [0.1, 0.0, 0.0])")
+>>> isinstance(err, RejectedState), str(err)
+(True, '2 inverted element(s) (J <= 0): [3, 7] (first at x = [0.1, 0.0, 0.0])')
 """
 
 from __future__ import annotations
@@ -19,10 +30,16 @@ from typing import Protocol
 import numpy as np
 
 from springfem.errors import SolverError
-from springfem.mechanics.newton import LoadStepping
+from springfem.mechanics.newton import (
+    LoadStepping,
+    NewtonOutcome,
+    NewtonSettings,
+    RejectedState,
+    newton,
+)
 
 
-class InvertedElements(Exception):
+class InvertedElements(RejectedState):
     """Raised by a problem's residual when elements have ``J <= 0``."""
 
     def __init__(self, elements: np.ndarray, where: str = ""):
@@ -32,6 +49,15 @@ class InvertedElements(Exception):
 
 
 class NonlinearProblem(Protocol):
+    """What the FEM's Newton needs of a discrete problem (a ``FemProblem``).
+
+    Attributes
+    ----------
+    n_dofs, free, fixed_dofs, fixed_values
+        DOF count, boolean mask of the free DOFs, the prescribed DOFs and their values at
+        load factor 1.
+    """
+
     n_dofs: int
     free: np.ndarray
     fixed_dofs: np.ndarray
@@ -78,7 +104,19 @@ class NewtonOptions:
 
 @dataclass
 class NewtonReport:
-    """Outcome: total iterations and, per accepted step, its load factor and residuals."""
+    """Outcome of :func:`solve_nonlinear`.
+
+    Attributes
+    ----------
+    converged
+        The full load was reached.
+    iterations
+        Newton iterations of the accepted steps.
+    steps
+        Per accepted step: ``load``, ``iterations`` and relative ``residuals``.
+    cutbacks
+        Failed steps (each halved the increment).
+    """
 
     converged: bool = False
     iterations: int = 0
@@ -86,92 +124,102 @@ class NewtonReport:
     cutbacks: int = 0
 
 
-class _StepFailed(Exception):
-    pass
-
-
 def _log(opts: NewtonOptions, msg: str) -> None:
     if opts.verbose:
         print(msg, file=sys.stderr, flush=True)
 
 
+class FemStep:
+    """One load step of a :class:`NonlinearProblem` as a
+    :class:`~springfem.mechanics.newton.NewtonProblem` (displacement form: the state is the
+    full DOF vector, the prescribed values are reached by the first full update).
+
+    Parameters
+    ----------
+    problem
+        The discrete problem.
+    scale
+        Load factor ``lambda`` (of the loads and the prescribed values).
+    """
+
+    def __init__(self, problem: NonlinearProblem, scale: float):
+        self.problem, self.scale = problem, scale
+        self.target = scale * problem.fixed_values
+        self.free_ids = np.flatnonzero(problem.free)
+
+    def residual(self, u: np.ndarray) -> tuple[np.ndarray, float]:
+        """Residual ``R`` (energy-gradient sign) and its relative norm."""
+        R, ref = self.problem.residual(u, self.scale)
+        return R, float(np.linalg.norm(R[self.problem.free]) / max(ref, 1e-300))
+
+    def correction(self, u: np.ndarray, R: np.ndarray):
+        """Newton correction ``d = -K^-1 R`` and the re-solve with the same tangent."""
+        p = self.problem
+        _, K, symmetric, _ = p.residual_tangent(u, self.scale)
+        du = np.zeros_like(u)
+        du[p.fixed_dofs] = self.target - u[p.fixed_dofs]
+        b = -R - (K @ du if not self.constrained(u) else 0.0)
+        du += p.solve_linear(K, b, symmetric, "")
+        return du, lambda rhs: -p.solve_linear(K, rhs, symmetric, "")
+
+    def trial(self, u: np.ndarray, alpha: float, du: np.ndarray) -> np.ndarray:
+        """The state ``+ alpha d``."""
+        t = u + alpha * du
+        if alpha == 1.0:
+            t[self.problem.fixed_dofs] = self.target
+        return t
+
+    def energy(self, u: np.ndarray) -> float | None:
+        """Potential energy at the load factor, or ``None``."""
+        return self.problem.energy(u, self.scale)
+
+    def constrained(self, u: np.ndarray) -> bool:
+        """Whether the prescribed values are reached."""
+        return bool(np.abs(u[self.problem.fixed_dofs] - self.target).max(initial=0.0) == 0.0)
+
+    def locate(self, R: np.ndarray) -> str:
+        """Where the largest (or first non-finite) free residual is, for messages."""
+        Rf = R[self.free_ids]
+        bad = np.flatnonzero(~np.isfinite(Rf))
+        if bad.size:
+            return f" at FE node {int(self.free_ids[bad[0]]) // 3}"
+        if not Rf.size:
+            return ""
+        worst = int(self.free_ids[np.argmax(np.abs(Rf))])
+        return f"; largest residual at FE node {worst // 3}, component {'xyz'[worst % 3]}"
+
+
 def newton_step(
     problem: NonlinearProblem, u: np.ndarray, scale: float, opts: NewtonOptions, label: str
-) -> tuple[np.ndarray, list[float], int]:
-    """Iterate to equilibrium at load factor ``scale`` starting from ``u``.
+) -> NewtonOutcome:
+    """Iterate to equilibrium at load factor ``scale`` from ``u`` with the one Newton.
 
-    Returns the solution, the relative residual history and the iteration count; raises
-    ``_StepFailed`` with a reason.
+    Parameters
+    ----------
+    problem
+        The discrete problem.
+    u
+        Start DOF vector.
+    scale
+        Load factor.
+    opts
+        Settings.
+    label
+        Prefix of the progress lines.
+
+    Returns
+    -------
+    NewtonOutcome
+        See :func:`springfem.mechanics.newton.newton`.
     """
-    free = problem.free
-    target = scale * problem.fixed_values
-    history: list[float] = []
-    u = u.copy()
-    r0 = None
-    for it in range(opts.max_iter + 1):
-        try:
-            R, K, symmetric, ref = problem.residual_tangent(u, scale)
-        except InvertedElements as exc:
-            raise _StepFailed(str(exc)) from None
-        res = np.linalg.norm(R[free])
-        rel = res / max(ref, 1e-300)
-        history.append(float(rel))
-        gap = np.abs(u[problem.fixed_dofs] - target).max(initial=0.0)
-        _log(opts, f"  {label} iteration {it:2d}  |R|/|f| = {rel:.3e}")
-        if not np.isfinite(rel):
-            bad = np.flatnonzero(~np.isfinite(R[free]))
-            where = f" at FE node {int(free[bad[0]]) // 3}" if bad.size else ""
-            raise _StepFailed(f"non-finite residual{where}")
-        if rel <= opts.tol and gap == 0.0:
-            return u, history, it
-        if it == opts.max_iter:
-            worst = int(free[np.argmax(np.abs(R[free]))])
-            raise _StepFailed(
-                f"no convergence in {opts.max_iter} iterations (|R|/|f| = {rel:.2e}; largest "
-                f"residual at FE node {worst // 3}, component {'xyz'[worst % 3]})"
-            )
-        if r0 is None:
-            # divergence is judged against the first residual with the prescribed values
-            # reached: before that (a prescribed displacement from rest) it can be 0
-            r0 = rel if gap == 0.0 else None
-        elif rel > 1e6 * max(r0, opts.tol):
-            raise _StepFailed(f"residual grew to {rel:.2e}")
-        du = np.zeros_like(u)
-        du[problem.fixed_dofs] = target - u[problem.fixed_dofs]
-        b = -R - (K @ du if gap > 0 else 0.0)
-        try:
-            du += problem.solve_linear(K, b, symmetric, f"{label} iteration {it}: ")
-        except SolverError as exc:
-            raise _StepFailed(str(exc)) from None
-        # Backtracking line search: accept a step that decreases the potential energy
-        # (Armijo, when the loads have one) or the residual norm; full steps while the
-        # prescribed values move.
-        slope = float(R @ du)
-        e0 = problem.energy(u, scale) if gap == 0 and slope < 0 else None
-        alpha = 1.0
-        for _ in range(opts.max_backtracks):
-            trial = u + alpha * du
-            if alpha == 1.0:
-                trial[problem.fixed_dofs] = target
-            try:
-                Rt, ref_t = problem.residual(trial, scale)
-                rel_t = np.linalg.norm(Rt[free]) / max(ref_t, 1e-300)
-            except InvertedElements:
-                rel_t = np.inf
-            if np.isfinite(rel_t):
-                if gap > 0 or rel_t <= (1 - 1e-4 * alpha) * rel:
-                    break
-                if e0 is not None and problem.energy(trial, scale) <= e0 + 1e-4 * alpha * slope:
-                    break
-            alpha *= 0.5
-        else:
-            if rel <= 1e3 * opts.tol and gap == 0.0:
-                return u, history, it  # at the round-off floor
-            raise _StepFailed(f"line search failed at |R|/|f| = {rel:.2e}")
-        if alpha < 1.0:
+
+    def monitor(it: int, state: np.ndarray, rel: float, alpha: float) -> None:
+        if 0 < alpha < 1.0:
             _log(opts, f"  {label} line search alpha = {alpha:g}")
-        u = trial
-    raise AssertionError("unreachable")
+        _log(opts, f"  {label} iteration {it:2d}  |R|/|f| = {rel:.3e}")
+
+    settings = NewtonSettings(opts.tol, opts.max_iter, opts.max_backtracks)
+    return newton(FemStep(problem, scale), u.copy(), settings, monitor)
 
 
 def _predict(
@@ -227,11 +275,11 @@ def solve_nonlinear(
     def try_step(lam: float, target: float) -> tuple[bool, int, str]:
         label = f"step {len(report.steps) + 1} (load {target:.4g})"
         start = _predict(problem, state["u"], lam, target, state["prev"])
-        try:
-            u_new, hist, its = newton_step(problem, start, target, opts, label)
-        except _StepFailed as exc:
-            _log(opts, f"  {label} failed: {exc}; load increment cut")
-            return False, 0, str(exc)
+        out = newton_step(problem, start, target, opts, label)
+        if not out.converged:
+            _log(opts, f"  {label} failed: {out.reason}; load increment cut")
+            return False, 0, out.reason
+        u_new, hist, its = out.state, out.history, out.iterations
         report.iterations += its
         report.steps.append({"load": target, "iterations": its, "residuals": hist})
         _log(opts, f"step {len(report.steps)}: load {target:.4g} converged in {its} iterations")

@@ -1,5 +1,14 @@
-"""Newton's method with a backtracking line search, and the one rule of adaptive load
-stepping both models use (:class:`LoadStepping`).
+"""ONE Newton iteration with a backtracking line search (:func:`newton`), run by both models
+through a small problem protocol (:class:`NewtonProblem`), and the one rule of adaptive
+load stepping (:class:`LoadStepping`).
+
+Newton: the problem gives the residual ``R`` (the gradient of the energy when there is
+one) with its relative norm, the Newton correction ``d = -K^-1 R`` with a way to re-solve
+with the same tangent, the trial state ``state + alpha d``, the energy (or ``None``), and
+whether the prescribed values are reached. A state the problem cannot accept (inverted
+elements) is signalled by raising :class:`RejectedState` from ``residual``: a rejected
+trial is backtracked, a rejected start fails the step. The spring model's adapter is in
+:mod:`.static`, the FEM's in ``reference_fem.newton``.
 
 Load stepping: the load fraction goes from 0 to 1 in ``load_steps`` nominal increments. A
 step that fails (no convergence, divergence, a failed line search or linear solve, inverted
@@ -13,46 +22,272 @@ progress for no measured gain on the bundled scenes (same answers, same iteratio
 
 Examples
 --------
+A scalar problem ``E(u) = u^4/4 - u`` (root ``u = 1``), its state a 1-vector:
 
->>> import numpy as np, scipy.sparse as sp
->>> class Oscillator:  # one tet, only node 3 moves (along x): mass 1, spring 4, load 1
-...     x0 = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
-...     masses = np.ones(4)
-...     fixed_dofs = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 11])
-...     def prescribed(self, s): return self.x0.reshape(-1)[self.fixed_dofs]
-...     def forces(self, x, v, s=1.0):
-...         f = np.zeros((4, 3)); f[3, 0] = -4.0 * x[3, 0] + s; return f
-...     def energy(self, x, s=1.0): return 2.0 * x[3, 0] ** 2 - s * x[3, 0]
-...     def stiffness(self, x, s=1.0):
-...         return sp.csr_matrix(([4.0], ([9], [9])), shape=(12, 12))
-...     def element_nodes(self): return np.array([[0, 1, 2, 3]])
-...     def post_step(self, x, dt): pass
->>> from springfem.mechanics.context import SolveContext
->>> from springfem.mechanics.system import rigid_body_modes
->>> ctx = SolveContext(Oscillator())
->>> ok, x, its, hist, reason, K = newton(
-...     ctx, ctx.x0.copy(), 1.0, 1.0, 1e-12, 10, "auto", "auto",
-...     rigid_body_modes(ctx.x0)[ctx.free], None, 0)
->>> ok, its, round(float(x[3, 0]), 12)
-(True, 1, 0.25)
+>>> import numpy as np
+>>> class Quartic:
+...     def residual(self, u): R = u**3 - 1.0; return R, float(abs(R[0]))
+...     def correction(self, u, R):
+...         resolve = lambda b: -b / (3.0 * u**2)
+...         return resolve(R), resolve
+...     def trial(self, u, alpha, d): return u + alpha * d
+...     def energy(self, u): return float(u[0] ** 4 / 4 - u[0])
+...     def constrained(self, u): return True
+...     def locate(self, R): return ""
+>>> out = newton(Quartic(), np.array([2.0]), NewtonSettings(tol=1e-14, max_iter=20))
+>>> out.converged, out.iterations, round(float(out.state[0]), 14)
+(True, 6, 1.0)
+>>> all(b <= a * a for a, b in zip(out.history[2:], out.history[3:]))  # quadratic
+True
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any, Protocol
 
 import numpy as np
 
 from springfem.errors import SolverError
 
-from .context import JacobianKind, SolveContext, note_solver
-from .linsolve import LinearSolver, LinearSolverKind
-
-#: Backtracking steps (halvings of the Newton step) of the line search.
-MAX_BACKTRACKS = 12
 #: Load fractions within this of 1 count as the full load.
 FULL_LOAD_TOL = 1e-12
+#: Armijo constant: a step of length ``alpha`` must realise this fraction of the decrease
+#: the linearisation predicts (of the energy, or of the residual norm).
+ARMIJO = 1e-4
+#: Energy changes below this times ``|E| + |slope|`` are roundoff: the residual decides.
+ENERGY_ROUNDOFF = 1e-12
+#: A residual within this factor of the tolerance is at the roundoff floor: a failed line
+#: search or a stalled residual there counts as converged (with a note).
+ROUNDOFF_FLOOR = 1e3
+#: A residual above this times ``max(first residual, tol)`` is divergence.
+DIVERGENCE = 1e8
+#: Stagnation: after this many iterations, a residual and a correction both above
+#: ``STAGNATION_RATIO`` times their values this many iterations ago fail the step.
+STAGNATION_WINDOW = 8
+#: See :data:`STAGNATION_WINDOW`.
+STAGNATION_RATIO = 0.9
+#: A residual above this fraction of the previous one at the roundoff floor has stalled.
+STALL_RATIO = 0.5
+
+
+class RejectedState(Exception):
+    """Raised by :meth:`NewtonProblem.residual` for a state the problem cannot accept
+    (e.g. inverted elements); the message says why."""
+
+
+class NewtonProblem(Protocol):
+    """What :func:`newton` needs of a problem. ``state`` is whatever the problem iterates on."""
+
+    def residual(self, state: Any) -> tuple[np.ndarray, float]:
+        """Residual ``R`` (energy-gradient sign) and its relative norm; may raise
+        :class:`RejectedState`."""
+        ...
+
+    def correction(
+        self, state: Any, R: np.ndarray
+    ) -> tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]:
+        """Newton correction ``d`` at ``state`` (reaching the prescribed values) and
+        ``resolve(R') = -K^-1 R'`` with the same tangent; may raise :class:`SolverError`."""
+        ...
+
+    def trial(self, state: Any, alpha: float, d: np.ndarray) -> Any:
+        """The state ``state + alpha d``."""
+        ...
+
+    def energy(self, state: Any) -> float | None:
+        """Potential energy, or ``None`` when the forces have none."""
+        ...
+
+    def constrained(self, state: Any) -> bool:
+        """Whether the prescribed values are reached."""
+        ...
+
+    def locate(self, R: np.ndarray) -> str:
+        """Where the largest (or first non-finite) residual is, for messages (or ``""``)."""
+        ...
+
+
+@dataclass
+class NewtonSettings:
+    """Settings of :func:`newton`.
+
+    Parameters
+    ----------
+    tol
+        Relative residual tolerance.
+    max_iter
+        Newton iterations (linear solves) at most.
+    max_backtracks
+        Halvings of the step length in the line search.
+    """
+
+    tol: float = 1e-8
+    max_iter: int = 200
+    max_backtracks: int = 12
+
+
+@dataclass
+class NewtonOutcome:
+    """Result of :func:`newton`.
+
+    Attributes
+    ----------
+    converged
+        The residual reached the tolerance (or its roundoff floor, see ``reason``).
+    state
+        The last accepted state.
+    iterations
+        Newton iterations done.
+    history
+        Relative residuals of the accepted states, the start first.
+    reason
+        Why it stopped: empty on plain convergence, a note at the roundoff floor, the
+        failure otherwise.
+    """
+
+    converged: bool
+    state: Any
+    iterations: int
+    history: list[float]
+    reason: str = ""
+
+
+def newton(
+    problem: NewtonProblem,
+    state: Any,
+    settings: NewtonSettings,
+    monitor: Callable[[int, Any, float, float], None] | None = None,
+) -> NewtonOutcome:
+    """Newton iterations with a backtracking line search from ``state``.
+
+    Parameters
+    ----------
+    problem
+        The :class:`NewtonProblem`.
+    state
+        Start state.
+    settings
+        Tolerance, iterations and backtracks.
+    monitor
+        ``monitor(iteration, state, residual, alpha)`` at the start (iteration 0, alpha 0)
+        and after every accepted step, or ``None``.
+
+    Returns
+    -------
+    NewtonOutcome
+        Convergence, last state, iterations, residual history and reason.
+
+    Notes
+    -----
+    Line search (backtracking by halving from ``alpha = 1``): a trial whose residual is
+    not finite or that the problem rejects is halved. While the prescribed values are not
+    yet reached, any other trial is accepted. Otherwise a step is accepted when any of
+    these holds: the residual norm decreases (Armijo); with an energy and a descent
+    direction, the energy decreases (Armijo; when it is flat to roundoff, the residual
+    decreases at all); Deuflhard's natural monotonicity test,
+    ``|K^-1 R(x + a d)| <= (1 - a/2) |d|`` (the simplified Newton correction, one more
+    solve with the same tangent). Requiring the energy alone cut back the full step of
+    the P2 neo-Hookean cantilever, whose residual falls while the energy test fails; the
+    monotonicity test is affine invariant: on slender structures the residual norm of a
+    good Newton step often grows (large axial forces from small rotations) while the
+    correction shrinks.
+    """
+    tol, max_iter = settings.tol, settings.max_iter
+    try:
+        R, r = problem.residual(state)
+    except RejectedState as exc:
+        return NewtonOutcome(False, state, 0, [], str(exc))
+    hist = [r]
+    corrections: list[float] = []
+    met = problem.constrained(state)
+    r0 = r if met else None
+    if monitor is not None:
+        monitor(0, state, r, 0.0)
+
+    def done(ok: bool, its: int, reason: str = "") -> NewtonOutcome:
+        return NewtonOutcome(ok, state, its, hist, reason)
+
+    for it in range(1, max_iter + 1):
+        if not np.isfinite(r):
+            return done(False, it - 1, f"non-finite residual{problem.locate(R)}")
+        if r <= tol and met:
+            return done(True, it - 1)
+        try:
+            d, resolve = problem.correction(state, R)
+        except SolverError as err:
+            return done(False, it, f"singular tangent at iteration {it} ({err})")
+        except RejectedState as exc:
+            return done(False, it - 1, str(exc))
+        d_norm = float(np.linalg.norm(d))
+        corrections.append(d_norm)
+        slope = float(R @ d)  # dE/dalpha at alpha = 0 (R = grad E)
+        e0 = problem.energy(state) if met and slope < 0 else None
+        alpha, accepted = 1.0, False
+        for _ in range(settings.max_backtracks):
+            trial = problem.trial(state, alpha, d)
+            try:
+                R_try, r_try = problem.residual(trial)
+            except RejectedState:
+                r_try = np.inf
+            if np.isfinite(r_try):
+                accepted = _acceptable(
+                    problem, trial, alpha, met, e0, slope, r, r_try, R_try, resolve, d_norm
+                )
+            if accepted:
+                break
+            alpha *= 0.5
+        if not accepted:
+            if met and r <= ROUNDOFF_FLOOR * tol:
+                return done(True, it, f"residual stagnated at roundoff level {r:.3g}")
+            return done(False, it, f"line search failed at iteration {it} (residual {r:.3g})")
+        r_old, met_old = r, met
+        state, R, r = trial, R_try, r_try
+        met = problem.constrained(state)
+        hist.append(r)
+        if monitor is not None:
+            monitor(it, state, r, alpha)
+        if met:
+            stalled = met_old and r > STALL_RATIO * r_old and r_old <= ROUNDOFF_FLOOR * tol
+            if tol < r and stalled:
+                return done(True, it, f"residual stagnated at roundoff level {r:.3g}")
+            if r0 is None:
+                r0 = r
+            elif r > DIVERGENCE * max(r0, tol):
+                return done(False, it, f"diverging (residual {r:.3g})")
+        w = STAGNATION_WINDOW
+        if (
+            it >= w
+            and r > STAGNATION_RATIO * hist[-w]
+            and d_norm > STAGNATION_RATIO * corrections[-w]
+        ):
+            return done(False, it, f"stagnating at residual {r:.3g}")
+    if np.isfinite(r) and r <= tol and met:
+        return done(True, max_iter)
+    where = problem.locate(R)
+    return done(
+        False, max_iter, f"no convergence in {max_iter} iterations (residual {r:.3g}{where})"
+    )
+
+
+def _acceptable(problem, trial, alpha, met, e0, slope, r, r_try, R_try, resolve, d_norm) -> bool:
+    """The line-search test of :func:`newton` for a finite trial (see its Notes)."""
+    if not met:
+        return True  # the prescribed values are being reached: take the step
+    if r_try <= (1.0 - ARMIJO * alpha) * r:
+        return True
+    if e0 is not None:
+        de = problem.energy(trial) - e0
+        if de <= ARMIJO * alpha * slope:
+            return True
+        if abs(de) <= ENERGY_ROUNDOFF * (abs(e0) + abs(slope)) and r_try < r:
+            return True  # energy flat to roundoff and the residual decreases
+    try:
+        bar = float(np.linalg.norm(resolve(R_try)))
+    except SolverError:
+        return False
+    return bar <= (1.0 - 0.5 * alpha) * d_norm  # natural monotonicity
 
 
 @dataclass
@@ -141,128 +376,3 @@ class LoadStepping:
                 break
         path.converged = bool(path.steps) and path.load >= 1.0 - FULL_LOAD_TOL
         return path
-
-
-def newton(
-    ctx: SolveContext,
-    x: np.ndarray,
-    s: float,
-    f_ref: float,
-    tol: float,
-    max_iter: int,
-    jacobian: JacobianKind,
-    linear_solver: LinearSolverKind,
-    B: np.ndarray,
-    callback: Callable | None,
-    it_offset: int,
-):
-    """Newton iterations at load factor ``s`` on a system's free DOFs.
-
-    Parameters
-    ----------
-    ctx
-        The solve context.
-    x
-        Start positions ``(n, 3)`` (fixed DOFs already prescribed).
-    s
-        Load factor.
-    f_ref
-        Reference force norm: the residual is ``|f_free| / f_ref``.
-    tol, max_iter
-        Relative residual tolerance and iterations at most.
-    jacobian, linear_solver
-        Tangent (``auto``, ``analytic``, ``fd``) and linear solver kind.
-    B
-        Rigid-body modes on the free DOFs (near-nullspace of AMG).
-    callback
-        ``callback(iteration, s, x, residual)`` after every iteration, or ``None``.
-    it_offset
-        Added to the iteration number passed to ``callback``.
-
-    Returns
-    -------
-    ok, x, iterations, history, reason, K
-        Whether it converged, the positions, iterations, relative residuals, why it stopped
-        (empty on plain convergence) and the last tangent.
-
-    Notes
-    -----
-    Line search (backtracking by halving): with an energy and a descent direction, Armijo
-    on the energy; otherwise a step is accepted when the residual norm decreases (Armijo)
-    or when Deuflhard's natural monotonicity test holds, ``|K^-1 f(x + a dx)| <=
-    (1 - a/2) |dx|`` (the simplified Newton correction, one more solve with the same
-    factorisation). The latter is affine invariant: on slender structures the residual
-    norm of a good Newton step often grows (large axial forces from small rotations)
-    while the correction shrinks.
-    """
-    system = ctx.system
-    free = ctx.free
-    xf = x.reshape(-1)
-    R = ctx.free_force(x, s)
-    r = float(np.linalg.norm(R)) / f_ref
-    hist = [r]
-    corrections: list[float] = []
-    r0 = r
-    K = None
-    for it in range(1, max_iter + 1):
-        if not np.isfinite(r):
-            return False, x, it - 1, hist, "non-finite residual", K
-        if r <= tol:
-            return True, x, it - 1, hist, "", K
-        K = ctx.stiffness(x, s, jacobian)
-        try:
-            solver = LinearSolver(linear_solver, B).factorize(ctx.ff(K))
-            dx = solver.solve(R)
-        except SolverError as err:
-            return False, x, it, hist, f"singular tangent at iteration {it} ({err})", K
-        note_solver(ctx, solver.name)
-        dx_norm = float(np.linalg.norm(dx))
-        corrections.append(dx_norm)
-        e0 = system.energy(x, s)
-        slope = float(R @ dx)  # -dPi/dalpha at alpha = 0 (f = -grad Pi)
-        use_energy = e0 is not None and slope > 0
-        alpha = 1.0
-        accepted = False
-        for _ in range(MAX_BACKTRACKS):
-            x_try = x.copy()
-            x_try.reshape(-1)[free] = xf[free] + alpha * dx
-            R_try = ctx.free_force(x_try, s)
-            r_try = float(np.linalg.norm(R_try)) / f_ref
-            if np.isfinite(r_try):
-                if use_energy:
-                    e_try = system.energy(x_try, s)
-                    de = e_try - e0
-                    if de <= -1e-4 * alpha * slope:
-                        accepted = True
-                    elif abs(de) <= 1e-12 * (abs(e0) + abs(slope)) and r_try < r:
-                        accepted = True  # energy flat to roundoff: the residual decides
-                elif r_try <= (1.0 - 1e-4 * alpha) * r:
-                    accepted = True
-                else:
-                    try:
-                        bar = float(np.linalg.norm(solver.solve(R_try)))
-                    except SolverError:
-                        bar = np.inf
-                    accepted = bar <= (1.0 - 0.5 * alpha) * dx_norm  # natural monotonicity
-            if accepted:
-                break
-            alpha *= 0.5
-        if not accepted:
-            if r <= 1e3 * tol:
-                return True, x, it, hist, f"residual stagnated at roundoff level {r:.3g}", K
-            return False, x, it, hist, f"line search failed at iteration {it} (residual {r:.3g})", K
-        r_old = r
-        x, xf, R, r = x_try, x_try.reshape(-1), R_try, r_try
-        hist.append(r)
-        if callback is not None:
-            callback(it_offset + it, s, x, r)
-        if r > tol and r > 0.5 * r_old and r_old <= 1e3 * tol:
-            return True, x, it, hist, f"residual stagnated at roundoff level {r:.3g}", K
-        if r > 1e8 * max(r0, tol):
-            return False, x, it, hist, f"diverging (residual {r:.3g})", K
-        if it >= 8 and r > 0.9 * hist[-8] and dx_norm > 0.9 * corrections[-8]:
-            return False, x, it, hist, f"stagnating at residual {r:.3g}", K
-    if np.isfinite(r) and r <= tol:
-        return True, x, max_iter, hist, "", K
-    reason = f"no convergence in {max_iter} iterations (residual {r:.3g})"
-    return False, x, max_iter, hist, reason, K

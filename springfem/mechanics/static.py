@@ -1,4 +1,4 @@
-"""Static equilibrium of a :class:`~springfem.mechanics.system.MechanicalSystem`: Newton
+"""Static equilibrium of a :class:`~springfem.mechanics.system.MechanicalSystem`: the one Newton
 with line search and adaptive load stepping, a tangent predictor for moving prescribed
 displacements, and dynamic relaxation as the fallback.
 
@@ -34,14 +34,87 @@ import scipy.sparse as sp
 from springfem.errors import SolverError
 
 from .context import JacobianKind, SolveContext, note_solver, reference_norm
-from .linsolve import LinearSolverKind, solve_linear
-from .newton import LoadStepping, newton
+from .linsolve import LinearSolver, LinearSolverKind, solve_linear
+from .newton import LoadStepping, NewtonSettings, newton
 from .relaxation import explicit_static
 from .results import SolveInfo
 from .system import SINGULAR_MESSAGE, MechanicalSystem, check_constrained, rigid_body_modes
 
 #: Explicit steps the dynamic-relaxation fallback may take after Newton gives up.
 FALLBACK_MAX_STEPS = 200_000
+
+
+class SpringStep:
+    """One load step of a system as a :class:`~springfem.mechanics.newton.NewtonProblem`.
+
+    The state is the positions ``(n, 3)`` with the fixed DOFs prescribed; the residual is
+    ``-f_free`` (the energy gradient), relative to ``f_ref``.
+
+    Parameters
+    ----------
+    ctx
+        The solve context.
+    s
+        Load factor.
+    f_ref
+        Reference force norm.
+    jacobian, linear_solver
+        Tangent and linear solver kind.
+    B
+        Rigid-body modes on the free DOFs (near-nullspace of AMG).
+
+    Attributes
+    ----------
+    K
+        The last tangent (``None`` before the first correction).
+    """
+
+    def __init__(self, ctx: SolveContext, s, f_ref, jacobian, linear_solver, B):
+        self.ctx, self.s, self.f_ref = ctx, s, f_ref
+        self.jacobian, self.linear_solver, self.B = jacobian, linear_solver, B
+        self.K = None
+
+    def residual(self, x: np.ndarray) -> tuple[np.ndarray, float]:
+        """Residual ``R`` (energy-gradient sign) and its relative norm."""
+        R = -self.ctx.free_force(x, self.s)
+        return R, float(np.linalg.norm(R)) / self.f_ref
+
+    def correction(self, x: np.ndarray, R: np.ndarray):
+        """Newton correction ``d = -K^-1 R`` and the re-solve with the same tangent."""
+        self.K = self.ctx.stiffness(x, self.s, self.jacobian)
+        solver = LinearSolver(self.linear_solver, self.B).factorize(self.ctx.ff(self.K))
+        d = solver.solve(-R)
+        note_solver(self.ctx, solver.name)
+        return d, lambda b: -solver.solve(b)
+
+    def trial(self, x: np.ndarray, alpha: float, d: np.ndarray) -> np.ndarray:
+        """The state ``+ alpha d``."""
+        x_try = x.copy()
+        x_try.reshape(-1)[self.ctx.free] += alpha * d
+        return x_try
+
+    def energy(self, x: np.ndarray) -> float | None:
+        """Potential energy at the load factor, or ``None``."""
+        return self.ctx.system.energy(x, self.s)
+
+    def constrained(self, x: np.ndarray) -> bool:
+        """Whether the prescribed values are reached."""
+        return True  # the fixed DOFs are prescribed before Newton starts
+
+    def locate(self, R: np.ndarray) -> str:
+        """Where the largest (or first non-finite) free residual is, for messages."""
+        return ""
+
+    def monitor(self, callback: Callable | None, offset: int):
+        """The :func:`newton` monitor calling ``callback(iteration, s, x, residual)``."""
+        if callback is None:
+            return None
+
+        def call(it: int, x: np.ndarray, r: float, alpha: float) -> None:
+            if it > 0:
+                callback(offset + it, self.s, x, r)
+
+        return call
 
 
 def static(
@@ -130,6 +203,7 @@ def static(
     notes: list[str] = []
     first_attempt = [True]
     path_steps: list[float] = []  # converged load factors
+    settings = NewtonSettings(tol=tol, max_iter=max_iter)
 
     def try_step(lam_conv: float, lam_new: float) -> tuple[bool, int, str]:
         nonlocal total_its
@@ -158,10 +232,16 @@ def static(
                             "tangent stiffness at rest is singular",
                             state=state["x"],
                         ) from None
-        ok, x, its, h, reason, K_last = newton(
-            ctx, x, s_new, f_ref, tol, max_iter, jacobian, linear_solver, B,
-            callback, total_its,
-        )  # fmt: skip
+        step = SpringStep(ctx, s_new, f_ref, jacobian, linear_solver, B)
+        out = newton(step, x, settings, step.monitor(callback, total_its))
+        ok, x, its, h, reason, K_last = (
+            out.converged,
+            out.state,
+            out.iterations,
+            out.history,
+            out.reason,
+            step.K,
+        )
         total_its += its
         hist.extend(h)
         first, first_attempt[0] = first_attempt[0], False

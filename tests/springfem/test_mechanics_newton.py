@@ -1,6 +1,7 @@
-"""Newton with line search and the shared load-stepping rule: quadratic convergence on a
-neo-Hookean FEM problem (agreeing with the FEM reference's own Newton), a cut-back on a
-failed step, and the rule itself (halve, grow back to the nominal increment, give up)."""
+"""The one Newton with line search and the shared load-stepping rule: quadratic convergence
+on a neo-Hookean FEM problem (agreeing with the FEM reference), for both models on a bent
+cantilever, backtracking of rejected states, FEM residual locations, a cut-back on a failed
+step, and the rule itself (halve, grow back to the nominal increment, give up)."""
 
 from __future__ import annotations
 
@@ -9,8 +10,9 @@ import pytest
 
 from reference_fem import solve
 from reference_fem.explicit import ExplicitFem
+from reference_fem.newton import FemStep
 from springfem.mechanics import static
-from springfem.mechanics.newton import LoadStepping
+from springfem.mechanics.newton import LoadStepping, NewtonSettings, RejectedState, newton
 from springfem.scene import parse_scene
 
 #: A clamped-slide cube stretched ~25 % by a traction: clearly nonlinear, 2x2x2 boxes.
@@ -103,3 +105,103 @@ def test_load_stepping_honours_nominal_steps_and_gives_up():
     assert not failed.converged and failed.steps == [] and failed.reason == "no"
     # halvings in a row: 1, 1/2, 1/4, 1/8 tried; the fourth cut exceeds max_cutbacks
     assert failed.cutbacks == 4 and failed.failed_at == pytest.approx(1 / 8)
+
+
+#: A cantilever bent by a tip shear to ~25 % of its length (clearly nonlinear): the spring
+#: model (energy-consistent torsion, analytic Hessian) and the P1 neo-Hookean FEM.
+BEND = {
+    "name": "bend",
+    "mesh": {"generator": "box", "size": [0.1, 0.02, 0.02], "divisions": [6, 2, 2]},
+    "material": {"law": "neo-hookean", "E": 1.0e4, "nu": 0.3},
+    "axes": {"fiber": [1.0, 0.0, 0.0], "sheet": [0.0, 1.0, 0.0]},
+    "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+    "load": [{"type": "traction", "region": "x_max", "value": [0.0, 0.0, -60.0]}],
+    "spring": {"torsion": "energy", "tol": 1e-12},
+    "fem": {"tol": 1e-12},
+}
+
+
+def assert_quadratic(history: list[float]) -> None:
+    """``r_k+1 <= 100 r_k^2`` on the pairs with ``r_k < 0.05`` (the quadratic phase) and
+    ``r_k+1`` above roundoff (1e-12 relative), at least one of them with ``r_k <= 1e-3``: a
+    linear rate rho there gives ``r_k+1 / r_k^2 = rho / r_k >= 1000 rho``, so any rate above
+    0.1 fails (Newton's constant in these relative units is O(1) to O(10) here)."""
+    pairs = [(a, b) for a, b in zip(history, history[1:], strict=False) if a < 0.05 and b > 1e-12]
+    assert len(pairs) >= 2 and min(a for a, _ in pairs) <= 1e-3, history
+    assert all(b <= 100.0 * a * a for a, b in pairs), history
+
+
+def test_one_newton_converges_quadratically_for_both_models():
+    """Both models run :func:`springfem.mechanics.newton.newton` (the spring static solve
+    and the FEM's load steps): quadratic on a bending problem, one load step each."""
+    from springfem.scene import scene_from_dict
+    from springmodel.model import solve_spring
+
+    scene = scene_from_dict(BEND)
+    spring = solve_spring(scene, parallel=False)
+    assert spring.result.converged and spring.info.load_steps == [1.0]
+    assert np.abs(spring.u).max() > 0.02
+    assert_quadratic(spring.info.residual_history)
+    fem = solve(scene, order=1)
+    steps = fem.result.info["newton"]
+    assert len(steps) == 1 and np.abs(fem.u_vertices).max() > 0.02
+    assert_quadratic(steps[0]["residuals"])
+
+
+class Quartic:
+    """``E(u) = u^4/4 - u`` (root ``u = 1``); states with ``|u| > 10`` are rejected."""
+
+    def residual(self, u):
+        if abs(u[0]) > 10.0:
+            raise RejectedState(f"|u| = {abs(u[0]):.3g} > 10")
+        R = u**3 - 1.0
+        return R, float(abs(R[0]))
+
+    def correction(self, u, R):
+        def resolve(b):
+            return -b / (3.0 * u**2)
+
+        return resolve(R), resolve
+
+    def trial(self, u, alpha, d):
+        return u + alpha * d
+
+    def energy(self, u):
+        return float(u[0] ** 4 / 4 - u[0])
+
+    def constrained(self, u):
+        return True
+
+    def locate(self, R):
+        return ""
+
+
+def test_rejected_trials_are_backtracked_and_a_rejected_start_fails():
+    """From u = 0.1 the full Newton step lands at u ~ 33 (rejected): the line search halves
+    it until accepted and Newton still reaches the root; a rejected start fails the step
+    with the problem's reason."""
+    alphas = []
+    out = newton(
+        Quartic(), np.array([0.1]), NewtonSettings(tol=1e-14, max_iter=50),
+        lambda it, u, r, alpha: alphas.append(alpha),
+    )  # fmt: skip
+    assert out.converged and out.state[0] == pytest.approx(1.0, abs=1e-13)
+    assert alphas[1] <= 0.25  # 0.1 + alpha * 33.3 <= 10 needs alpha <= 0.3
+    failed = newton(Quartic(), np.array([20.0]), NewtonSettings())
+    assert not failed.converged and failed.reason == "|u| = 20 > 10"
+
+
+def test_fem_step_locates_the_largest_free_residual():
+    """The failure message names the FE node and component of the largest free residual
+    (DOF ``3 node + component``), or the first non-finite one."""
+
+    class Stub:
+        free = np.array([False, True, True, True, False, True, True, True, True])
+        fixed_dofs = np.array([0, 4])
+        fixed_values = np.zeros(2)
+
+    step = FemStep(Stub(), 1.0)
+    R = np.array([9.0, 0.1, 0.2, 0.3, 9.0, -5.0, 0.1, 0.0, 0.4])  # fixed DOFs ignored
+    assert step.locate(R) == "; largest residual at FE node 1, component z"
+    R[7] = np.nan
+    assert step.locate(R) == " at FE node 2"
