@@ -75,6 +75,28 @@ def _subcommand(module: str, func: str) -> Callable[[argparse.Namespace], int]:
     return run
 
 
+def _positive_float(text: str) -> float:
+    """An argparse type: a positive number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    """An argparse type: a positive integer."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with usage errors as one line (exit 2), like every other bad input."""
 
@@ -102,7 +124,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--law", default=None, help="FEM material law override")
     p.add_argument("--out", default=None, help="output folder (default: out/<scene>-<model>)")
     p.add_argument("--json", action="store_true", help="print result.json to stdout")
-    p.add_argument("--verbose", "-v", action="store_true", help="print solver progress")
+    p.add_argument("--verbose", "-v", action="store_true",
+                   help="print solver progress (Newton and relaxation residuals)")  # fmt: skip
+    p.add_argument("--max-time", type=_positive_float, default=None, metavar="SECONDS",
+                   help="stop the solve after this wall time (exit 3)")  # fmt: skip
+    p.add_argument("--max-steps", type=_positive_int, default=None, metavar="N",
+                   help="stop a time-stepping solve after N steps (exit 3)")  # fmt: skip
     add_set_option(p)  # sweeps: --set key=value
     p.set_defaults(func=_subcommand("studies.solve", "cmd_solve"))
 
