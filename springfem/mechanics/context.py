@@ -74,8 +74,9 @@ _LIMITS: dict[str, float | None] = {"max_time": None, "max_steps": None}
 def solve_limits(max_time: float | None = None, max_steps: int | None = None) -> Iterator[None]:
     """Cap every solve started inside the block: wall time and time steps.
 
-    A :class:`SolveContext` created inside takes a deadline ``max_time`` seconds from its
-    creation; every force evaluation past it (or past ``max_steps`` time steps of an
+    A :class:`SolveContext` created inside takes a deadline ``max_time`` seconds after its
+    first force evaluation (which includes the one-time compilation of the force kernels,
+    seconds on a busy machine); every force evaluation past it (or past ``max_steps`` time steps of an
     explicit, relaxation or implicit loop) raises :class:`SolveStopped`. One check in the
     force evaluation every solver goes through caps all solver loops alike.
 
@@ -156,7 +157,11 @@ class SolveContext:
         """
         self.n_evals += 1
         f = np.asarray(self.system.forces(x, v, s), dtype=float).reshape(self.n, 3)
-        if self.deadline is not None or self.max_steps is not None:
+        if self.n_evals == 1 and self.max_time is not None:
+            # the clock starts after the first evaluation, which compiles the kernels once
+            self.start = time.monotonic()
+            self.deadline = self.start + float(self.max_time)
+        elif self.deadline is not None or self.max_steps is not None:
             self.check_limits(x, f)
         return f
 
@@ -175,7 +180,8 @@ class SolveContext:
             return
         r = float(np.linalg.norm(f.reshape(-1)[self.free]))
         res = f"relative residual {r / self.f_ref:.3g}" if self.f_ref else f"residual {r:.3g} N"
-        what = f"{self.step} steps" if self.step else f"{self.n_evals} force evaluations"
+        # the loops set ``step`` before evaluating its forces: ``step - 1`` are complete
+        what = f"{self.step - 1} steps" if self.step else f"{self.n_evals} force evaluations"
         cap = (
             f"the --max-time cap of {self.max_time:g} s"
             if late
