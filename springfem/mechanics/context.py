@@ -77,8 +77,8 @@ def solve_limits(max_time: float | None = None, max_steps: int | None = None) ->
     A :class:`SolveContext` created inside takes a deadline ``max_time`` seconds after its
     first force evaluation (which includes the one-time compilation of the force kernels,
     seconds on a busy machine); every force evaluation past it (or past ``max_steps`` time
-    steps of an explicit, relaxation or implicit loop) raises :class:`SolveStopped`. One check in the
-    force evaluation every solver goes through caps all solver loops alike.
+    steps of an explicit, relaxation or implicit loop) raises :class:`SolveStopped`. One
+    check in the force evaluation every solver goes through caps all solver loops alike.
 
     Parameters
     ----------

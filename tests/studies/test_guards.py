@@ -126,9 +126,7 @@ def fake_models(monkeypatch):
 def _neo_scene():
     from studies.overrides import load_scene_with
 
-    return load_scene_with(
-        "studies/scenes/sag.toml", ["mesh.divisions=[2, 1, 1]"]
-    )
+    return load_scene_with("studies/scenes/sag.toml", ["mesh.divisions=[2, 1, 1]"])
 
 
 def test_compare_never_ranks_against_a_small_strain_reference(fake_models):
