@@ -104,6 +104,33 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"springfem: error: {message} (see {self.prog} --help)\n")
 
 
+class _StudyParser(_Parser):
+    """The ``study`` subcommand's parser: its help lists the registered studies.
+
+    The list is read from :data:`studies.registry.REGISTRY` only when the help is shown
+    (importing every study module would slow down every other command's start-up).
+    """
+
+    def format_help(self) -> str:
+        import inspect
+
+        from .runner import REGISTRY
+
+        names = "\n".join(
+            f"  {name.replace('_', '-'):<16}{_first_line(inspect.getmodule(spec.run).__doc__)}"
+            for name, spec in REGISTRY.items()
+        )
+        return super().format_help() + f"\nstudies:\n{names}\n"
+
+
+def _first_line(doc: str | None) -> str:
+    """The first line of a docstring (empty for none)."""
+    import re
+
+    line = (doc or "").strip().splitlines()[0] if (doc or "").strip() else ""
+    return re.sub(r"^Study ``[^`]*``:\s*", "", line)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="springfem",
@@ -141,7 +168,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_subcommand("studies.compare_output", "cmd_compare"))
 
     p = sub.add_parser("study", help="run one study into reports/")
-    p.add_argument("name", help="study name")
+    p.__class__ = _StudyParser  # lists the studies in its --help
+    p.add_argument("name", help="study name (listed below)")
     p.add_argument("--quick", action="store_true", help="coarser meshes, fewer points")
     p.add_argument(
         "--out", default=None, help="report folder (default reports/, quick: reports/quick/)"
