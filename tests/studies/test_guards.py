@@ -148,3 +148,30 @@ def test_compare_falls_back_to_p1_nh_and_says_so(fake_models):
     assert cmp.reference == "P1-NH"
     assert any("P2-NH FAILED" in n and "P1-NH" in n for n in cmp.notes)
     assert cmp.table.set_index("model").loc["spring", "rel L2 err"] == pytest.approx(0.1)
+
+
+def test_study_help_lists_the_registered_studies(capsys):
+    from studies.runner import REGISTRY
+
+    with pytest.raises(SystemExit) as exc:
+        main(["study", "--help"])
+    assert exc.value.code == 0
+    text = capsys.readouterr().out
+    listed = text.split("studies:", 1)[1]
+    assert REGISTRY and all(f"  {n.replace('_', '-')} " in listed for n in REGISTRY)
+
+
+def test_p2_result_says_it_is_reduced_to_vertices(tmp_path, capsys):
+    argv = ["solve", "cantilever", "--model", "fem", "--order", "2", "--out", str(tmp_path),
+            "--set", "mesh.divisions=[4, 1, 1]"]  # fmt: skip
+    assert main(argv) == 0
+    assert "reduced to the mesh vertices" in capsys.readouterr().out
+    res = json.loads((tmp_path / "result.json").read_text())
+    assert "vertex_output" in res["info"]
+
+
+def test_verbose_shows_the_fem_newton_residuals(tmp_path, capsys):
+    argv = ["solve", "sag", "--model", "fem", "-v", "--out", str(tmp_path),
+            "--set", "mesh.divisions=[4, 2, 1]"]  # fmt: skip
+    assert main(argv) == 0
+    assert "|R|/|f|" in capsys.readouterr().err
