@@ -192,7 +192,8 @@ def write_last_good_state(
     try:
         write_result(out, res, scene.mesh, u, stem="last_good_state")
     except OSError as err:
-        return f"the last state could not be written to {out}: {err.strerror or err}"
+        what = "last state" if stopped else "last good state"
+        return f"the {what} could not be written to {out}: {err.strerror or err}"
     if stopped:
         return f"last state written to {out}"
     what = "initial state (failed before the first step)" if initial else "last good state"
@@ -226,7 +227,8 @@ def cmd_solve(args: argparse.Namespace) -> int:
             sol = solve_scene(scene, args.model, args.order, args.law, args.verbose, out / "series")
     except (SolverError, SolveStopped) as exc:
         written = write_last_good_state(out, scene, args.model, exc)
-        raise type(exc)(f"{exc}; {written}", state=exc.state) from None
+        text = f"{exc}; {written}" if isinstance(exc, SolveStopped) else f"{exc} ({written})"
+        raise type(exc)(text, state=exc.state) from None
     for line in guards.solution_warnings(scene, sol.result.law, sol.u):
         warn(line)
     js, vtu = _write(out, sol.result, scene.mesh, sol.u, cell_data=sol.cell_data)
