@@ -92,7 +92,7 @@ def solution_warnings(scene: Scene, law: str, u: np.ndarray) -> list[str]:
         strain = max_principal_strain(scene, u)
         if not strain <= SMALL_STRAIN:
             out.append(
-                f"the {law} (small-strain) solution reaches {strain:.1%} strain "
+                f"the {law} (small-strain) solution reaches {100 * strain:.3g}% strain "
                 f"(> {SMALL_STRAIN:.0%}): use a neo-hookean law (compare does)"
             )
     return out

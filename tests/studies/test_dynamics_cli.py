@@ -115,3 +115,10 @@ def test_fem_dynamic_needs_an_end_time(tmp_path, capsys):
 def test_output_section_is_validated(capsys):
     assert main([*SAG, "--set", "output.animation=avi"]) == 2
     assert "output.animation" in capsys.readouterr().err
+
+
+def test_fem_dynamics_are_p1_only(capsys):
+    argv = [*SAG, "--model", "fem", "--order", "2", "--set", "fem.solver=explicit",
+            "--set", "fem.steps=1"]  # fmt: skip
+    assert main(argv) == 2
+    assert "P1 only" in capsys.readouterr().err
