@@ -83,6 +83,9 @@ def animate_frames(
             imageio.mimsave(tmp, images, fps=fps)
     except (ValueError, RuntimeError, ImportError) as exc:
         tmp.unlink(missing_ok=True)
-        raise InputError(f"cannot write the {path.suffix[1:]} animation {path}: {exc}") from None
+        why = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        if path.suffix == ".mp4":
+            why = "mp4 needs the imageio-ffmpeg or av package (gif needs neither)"
+        raise InputError(f"cannot write the animation {path}: {why}") from None
     os.replace(tmp, path)
     return path

@@ -239,9 +239,13 @@ def cmd_solve(args: argparse.Namespace) -> int:
         from .animation import animate_frames, animation_path
 
         frames = sorted(Path(series).parent.glob("frame_*.vtu"))
-        anim = animate_frames(frames, animation_path(Path(series).parent, fmt))
-        sol.result.info["animation"] = str(anim)
-        js, vtu = _write(out, sol.result, scene.mesh, sol.u, cell_data=sol.cell_data)
+        try:
+            anim = animate_frames(frames, animation_path(Path(series).parent, fmt))
+        except Exception as exc:  # noqa: BLE001 - no ffmpeg/OpenGL must not lose the solve
+            warn(f"animation not written: {type(exc).__name__}: {exc}")
+        else:
+            sol.result.info["animation"] = str(anim)
+            js, vtu = _write(out, sol.result, scene.mesh, sol.u, cell_data=sol.cell_data)
     if args.json:
         _print_json(sol.result.to_dict())
     else:

@@ -122,3 +122,18 @@ def test_fem_dynamics_are_p1_only(capsys):
             "--set", "fem.steps=1"]  # fmt: skip
     assert main(argv) == 2
     assert "P1 only" in capsys.readouterr().err
+
+
+def test_mp4_without_a_video_backend_warns_and_keeps_the_series(tmp_path, capsys):
+    import importlib.util
+
+    if importlib.util.find_spec("imageio_ffmpeg") or importlib.util.find_spec("av"):
+        pytest.skip("a video backend is installed: the mp4 is written")
+    out = tmp_path / "sag"
+    argv = [*SAG, "--out", str(out), "--set", "spring.solver=explicit",
+            "--set", "spring.t_end=0.004", "--set", "output.interval=0.002",
+            "--set", "output.animation=mp4", "--set", "mesh.divisions=[8, 4, 2]"]  # fmt: skip
+    assert main(argv) == 0
+    err = [x for x in capsys.readouterr().err.splitlines() if x.startswith("warning:")]
+    assert len(err) == 1 and "mp4 needs the imageio-ffmpeg or av package" in err[0]
+    assert (out / "series" / "frame.pvd").is_file() and (out / "result.json").is_file()
