@@ -13,6 +13,7 @@ from typing import Any, Literal, get_args
 from springfem.scene import Scene, TableReader, register_section
 
 LinearSolver = Literal["auto", "direct", "amg"]
+Solver = Literal["static", "explicit", "implicit"]
 
 
 @dataclass(frozen=True)
@@ -32,6 +33,14 @@ class FemOptions:
         Newton iterations per load step.
     load_steps
         Initial number of load steps (adapted: cut back on divergence, grown on easy steps).
+    solver
+        ``static`` (Newton), or a time integration of the P1 FEM
+        (:class:`reference_fem.explicit.ExplicitFem`): ``explicit`` (symplectic Euler) or
+        ``implicit`` (backward Euler with the analytic tangent); both need ``t_end`` or
+        ``steps``.
+    t_end, steps, dt, mass_damping
+        End time (s) or number of steps, time step (default half the critical step) and
+        mass-proportional damping (1/s) of a dynamic solve.
     """
 
     order: int = 1
@@ -39,11 +48,17 @@ class FemOptions:
     tol: float = 1e-10
     max_iter: int = 25
     load_steps: int = 1
+    solver: Solver = "static"
+    t_end: float | None = None
+    steps: int | None = None
+    dt: float | None = None
+    mass_damping: float = 0.0
 
     @classmethod
     def choices(cls, name: str) -> tuple[str, ...]:
         """Valid string values of the option ``name`` (empty for non-string options)."""
-        return get_args(LinearSolver) if name == "linear_solver" else ()
+        kinds = {"linear_solver": LinearSolver, "solver": Solver}
+        return get_args(kinds[name]) if name in kinds else ()
 
     @classmethod
     def of(cls, scene: Scene) -> FemOptions:
@@ -72,12 +87,18 @@ def parse_fem_options(r: TableReader) -> FemOptions:
         kw["linear_solver"] = r.get(
             "linear_solver", "str", choices=FemOptions.choices("linear_solver")
         )
-    for key in ("tol",):
+    if r.has("solver"):
+        kw["solver"] = r.get("solver", "str", choices=FemOptions.choices("solver"))
+    for key in ("tol", "t_end", "dt"):
         if r.has(key):
             kw[key] = r.get(key, "float", positive=True)
-    for key in ("max_iter", "load_steps"):
+    if r.has("mass_damping"):
+        kw["mass_damping"] = r.get("mass_damping", "float", nonneg=True)
+    for key in ("max_iter", "load_steps", "steps"):
         if r.has(key):
             kw[key] = r.get(key, "int", positive=True)
+    if kw.get("solver", "static") != "static" and "t_end" not in kw and "steps" not in kw:
+        raise r.fail("solver", f"{kw['solver']!r} needs fem.t_end or fem.steps")
     r.finish()
     return FemOptions(**kw)
 

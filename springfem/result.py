@@ -49,7 +49,8 @@ class Result:
     wall_time
         Seconds spent solving (excluding file output).
     converged, iterations
-        Solver outcome.
+        Solver outcome. A dynamic (timed) run has no convergence: ``converged`` is false
+        and ``status`` says "end of run at t = …" and whether it reached rest.
     info
         Model-specific extras (e.g. time step, energy history, calibration mismatch).
     """
@@ -66,6 +67,9 @@ class Result:
     converged: bool
     iterations: int
     info: dict[str, Any] = field(default_factory=dict)
+    status: str = ""
+    """``converged``, ``end of run at t = … s after N steps: at rest|still moving``, or
+    ``stopped …`` (a time or step cap); empty when the model does not say."""
 
     def to_dict(self) -> dict[str, Any]:
         """The fields as plain Python (see :func:`~springfem.files.jsonable`).

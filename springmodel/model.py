@@ -18,12 +18,14 @@ from __future__ import annotations
 import sys
 import time
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
 
 from springfem.errors import SolverError
 from springfem.loads import external_forces, has_follower_loads, lumped_masses, reactions
+from springfem.mechanics.context import SolveStopped
 from springfem.result import Result, volume_summary
 from springfem.scene import Scene
 
@@ -168,8 +170,13 @@ def solve_spring(
     options: SpringOptions | None = None,
     verbose: bool = False,
     parallel: bool | None = None,
+    series_dir: str | Path | None = None,
 ) -> SpringSolution:
     """Build the spring model of ``scene`` and run the solver its options ask for.
+
+    A timed run (``steps`` or ``t_end``) of a scene with ``[output] interval`` writes its
+    time series into ``series_dir`` (:class:`springfem.series.SeriesWriter`); its result
+    says "end of run" and whether it reached rest (``info["at_rest"]``), not "converged".
 
     Raises
     ------
@@ -181,13 +188,16 @@ def solve_spring(
     t0 = time.perf_counter()
     model = SpringModel(scene, options, parallel=parallel)
     opts = model.options
+    writer = dynamic_series(scene, model, opts, series_dir)
     try:
-        info = solve_with_options(model, opts, progress=verbose)
-    except SolverError as exc:
+        info = solve_with_options(model, opts, progress=verbose, callback=writer)
+    except (SolverError, SolveStopped) as exc:
         state = exc.state
         if state is not None:
             state = np.asarray(state).reshape(-1, 3) - model.x0
-        raise SolverError(str(exc), state=state) from None
+        if writer is not None:
+            writer.close(plot=False)  # the frames reached stay a valid series
+        raise type(exc)(str(exc), state=state) from None
     wall = time.perf_counter() - t0
     x = info.x
     u = x - model.x0
@@ -209,6 +219,9 @@ def solve_spring(
         "steps": int(getattr(info, "steps", 0) or 0),
         "residual": float(info.residual_history[-1]) if info.residual_history else None,
     }
+    dynamic = opts.steps is not None or opts.t_end is not None
+    if dynamic:
+        extra.update(end_of_run(info, writer))
     result = Result(
         scene=scene.name,
         model="spring",
@@ -224,9 +237,10 @@ def solve_spring(
         volume=volume_summary(scene.mesh, u),
         reactions=reactions(scene, residual),
         wall_time=wall,
-        converged=bool(info.converged),
+        converged=bool(info.converged) and not dynamic,
         iterations=iterations,
         info=extra,
+        status=extra["status"] if dynamic else "converged",
     )
     if not info.converged:
         raise SolverError(
@@ -234,6 +248,48 @@ def solve_spring(
             state=u,
         )
     return SpringSolution(result=result, u=u, cell_data=model.cell_data(x), info=info)
+
+
+def dynamic_series(scene: Scene, model: SpringModel, opts: SpringOptions, folder) -> object:
+    """The :class:`~springfem.series.SeriesWriter` of a timed run with ``[output] interval``.
+
+    ``None`` for equilibrium solves, without a folder or without an interval.
+    """
+    from springfem.scene import OutputOptions
+    from springfem.series import SeriesWriter
+
+    out = OutputOptions.of(scene)
+    timed = opts.steps is not None or opts.t_end is not None
+    if folder is None or out.interval is None or not timed:
+        return None
+    return SeriesWriter(
+        Path(folder), scene.mesh, out.interval, masses=model.masses,
+        potential=model.energy, probes=scene.probe_displacements if out.probes_history else None,
+    )  # fmt: skip
+
+
+def end_of_run(info, writer) -> dict:
+    """``status`` ("end of run at t = … : at rest / still moving"), ``at_rest``, series files."""
+    from springfem.series import reached_rest
+
+    if writer is not None:
+        summary = writer.close(plot=writer.probes is not None)
+        return {
+            "status": summary.status_line(),
+            "at_rest": summary.at_rest,
+            "end_time": summary.end_time,
+            "series": str(summary.pvd),
+            "frames": len(summary.frames),
+        }
+    kinetic = np.asarray(getattr(info, "kinetic", []))
+    at_rest = reached_rest(kinetic) if kinetic.size else None
+    t_end = float(info.times[-1]) if len(getattr(info, "times", [])) else 0.0
+    rest = {True: "at rest", False: "still moving", None: "rest unknown"}[at_rest]
+    return {
+        "status": f"end of run at t = {t_end:.6g} s after {info.steps} steps: {rest}",
+        "at_rest": at_rest,
+        "end_time": t_end,
+    }
 
 
 def with_options(scene: Scene, **changes) -> Scene:

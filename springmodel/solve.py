@@ -9,6 +9,11 @@ True
 
 from __future__ import annotations
 
+import sys
+from collections.abc import Callable
+
+import numpy as np
+
 from springfem.mechanics import (
     SolveInfo,
     Trajectory,
@@ -31,8 +36,27 @@ PSEUDO_TIME_STEPS_PER_ITER = 10
 IMPLICIT_NEWTON_TOL = 1e-8
 
 
+def print_newton(iteration: int, load_factor: float, x: np.ndarray, residual: float) -> None:
+    """One stderr line per Newton iteration (``springfem solve -v``).
+
+    Parameters
+    ----------
+    iteration, load_factor, x, residual
+        As passed by :func:`~springfem.mechanics.static` to its ``callback``.
+    """
+    print(
+        f"newton iteration {iteration}: load factor {load_factor:.4g}, "
+        f"relative residual {residual:.3e}",
+        file=sys.stderr,
+        flush=True,
+    )
+
+
 def solve_with_options(
-    system: MechanicalSystem, options: SpringOptions, progress: bool = False
+    system: MechanicalSystem,
+    options: SpringOptions,
+    progress: bool = False,
+    callback: Callable[[int, float, np.ndarray, np.ndarray], bool | None] | None = None,
 ) -> SolveInfo | Trajectory:
     """Run the solver a scene's ``[spring]`` section asks for.
 
@@ -44,6 +68,10 @@ def solve_with_options(
         The scene's ``[spring]`` options.
     progress
         Show a progress bar (explicit and implicit runs).
+    callback
+        ``callback(step, t, x, v)`` after every step of a timed run (``steps`` or
+        ``t_end`` set), e.g. a :class:`springfem.series.SeriesWriter`; not called by the
+        equilibrium solves.
 
     Returns
     -------
@@ -64,12 +92,15 @@ def solve_with_options(
     o = options
     timed = o.steps is not None or o.t_end is not None
     if o.solver == "static":
-        return static(system, tol=o.tol, max_iter=o.max_iter)
+        return static(
+            system, tol=o.tol, max_iter=o.max_iter, callback=print_newton if progress else None
+        )
     if o.solver == "explicit":
         if timed:
             return explicit(
                 system, dt=o.dt, steps=o.steps, t_end=o.t_end, integrator=o.integrator,
                 mass_damping=o.mass_damping, progress=progress, dt_safety=o.dt_safety,
+                callback=callback,
             )  # fmt: skip
         return explicit_static(
             system, tol=o.tol, dt=o.dt, integrator=o.integrator, mass_damping=o.mass_damping,
@@ -80,6 +111,7 @@ def solve_with_options(
             return implicit(
                 system, dt=o.dt, steps=o.steps, t_end=o.t_end, mass_damping=o.mass_damping,
                 tol=min(o.tol, IMPLICIT_NEWTON_TOL), progress=progress, dt_safety=o.dt_safety,
+                callback=callback,
             )  # fmt: skip
         dt = o.dt if o.dt is not None else PSEUDO_TIME_DT_CRIT * stable_time_step(system)[0]
         return implicit(

@@ -75,11 +75,60 @@ def _subcommand(module: str, func: str) -> Callable[[argparse.Namespace], int]:
     return run
 
 
+def _positive_float(text: str) -> float:
+    """An argparse type: a positive number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    """An argparse type: a positive integer."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with usage errors as one line (exit 2), like every other bad input."""
 
     def error(self, message: str):
         self.exit(2, f"springfem: error: {message} (see {self.prog} --help)\n")
+
+
+class _StudyParser(_Parser):
+    """The ``study`` subcommand's parser: its help lists the registered studies.
+
+    The list is read from :data:`studies.registry.REGISTRY` only when the help is shown
+    (importing every study module would slow down every other command's start-up).
+    """
+
+    def format_help(self) -> str:
+        import inspect
+
+        from .runner import REGISTRY
+
+        names = "\n".join(
+            f"  {name.replace('_', '-'):<16}{_first_line(inspect.getmodule(spec.run).__doc__)}"
+            for name, spec in REGISTRY.items()
+        )
+        return super().format_help() + f"\nstudies:\n{names}\n"
+
+
+def _first_line(doc: str | None) -> str:
+    """The first line of a docstring (empty for none)."""
+    import re
+
+    line = (doc or "").strip().splitlines()[0] if (doc or "").strip() else ""
+    return re.sub(r"^Study ``[^`]*``:\s*", "", line)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -102,7 +151,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--law", default=None, help="FEM material law override")
     p.add_argument("--out", default=None, help="output folder (default: out/<scene>-<model>)")
     p.add_argument("--json", action="store_true", help="print result.json to stdout")
-    p.add_argument("--verbose", "-v", action="store_true", help="print solver progress")
+    p.add_argument("--verbose", "-v", action="store_true",
+                   help="print solver progress (Newton and relaxation residuals)")  # fmt: skip
+    p.add_argument("--max-time", type=_positive_float, default=None, metavar="SECONDS",
+                   help="stop the solve after this wall time (exit 3)")  # fmt: skip
+    p.add_argument("--max-steps", type=_positive_int, default=None, metavar="N",
+                   help="stop a time-stepping solve after N steps (exit 3)")  # fmt: skip
     add_set_option(p)  # sweeps: --set key=value
     p.set_defaults(func=_subcommand("studies.solve", "cmd_solve"))
 
@@ -114,7 +168,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_subcommand("studies.compare_output", "cmd_compare"))
 
     p = sub.add_parser("study", help="run one study into reports/")
-    p.add_argument("name", help="study name")
+    p.__class__ = _StudyParser  # lists the studies in its --help
+    p.add_argument("name", help="study name (listed below)")
     p.add_argument("--quick", action="store_true", help="coarser meshes, fewer points")
     p.add_argument(
         "--out", default=None, help="report folder (default reports/, quick: reports/quick/)"

@@ -193,6 +193,7 @@ def compare_scene(
     models: Sequence[str] | None = None,
     strain_limit: float = LARGE_STRAIN,
     log: Callable[[str], None] | None = None,
+    allow_no_reference: bool = False,
 ) -> Comparison:
     """Solve ``scene`` with the spring model and FEM and compare them.
 
@@ -208,6 +209,9 @@ def compare_scene(
         Large-strain threshold on :func:`max_principal_strain` of the P1 solution.
     log
         Called with one line per finished model (progress).
+    allow_no_reference
+        When every finite-strain reference failed, return the comparison with no
+        reference (``reference = ""``, errors NaN) instead of raising.
 
     Returns
     -------
@@ -217,7 +221,9 @@ def compare_scene(
     Raises
     ------
     SolverError
-        When no FEM model succeeded (there is no reference).
+        When no FEM model succeeded, or (unless ``allow_no_reference``) every
+        finite-strain reference failed: a small-strain solution is never ranked against
+        in their place.
     """
     say = log or (lambda _msg: None)
     solutions: dict[str, Solution] = {}
@@ -261,17 +267,21 @@ def compare_scene(
         if name not in solutions and name not in failures:
             run(name)
     solutions = {n: solutions[n] for n in models if n in solutions}  # table order
-    reference = next((n for n in REFERENCE_PREFERENCE if n in solutions), None)
+    reference = choose_reference(models, solutions, failures, notes)
     if reference is None:
-        raise SolverError(
-            f"{scene.name}: no FEM solution to compare against: "
-            + "; ".join(f"{k}: {v}" for k, v in failures.items())
-        )
+        tried = [n for n in REFERENCE_PREFERENCE if n in models]
+        if not any(n in solutions for n in tried):
+            raise SolverError(
+                f"{scene.name}: no FEM solution to compare against: "
+                + "; ".join(f"{k}: {v}" for k, v in failures.items())
+            )
+        if not allow_no_reference:
+            raise SolverError(f"{scene.name}: {notes[-1]}")
     cmp = Comparison(
         scene=scene,
         table=pd.DataFrame(),
         solutions=solutions,
-        reference=reference,
+        reference=reference or "",
         strain=strain,
         failures=failures,
         notes=notes,
@@ -280,12 +290,60 @@ def compare_scene(
     return cmp
 
 
+def choose_reference(
+    models: Sequence[str], solutions: dict, failures: dict[str, str], notes: list[str]
+) -> str | None:
+    """The reference: the finest solution of the strongest law that was run.
+
+    A neo-Hookean reference that failed is replaced only by the other neo-Hookean one (P1
+    for P2, said in a note), never by a small-strain solution; with none left the
+    reference is ``None`` and a note says why.
+
+    Parameters
+    ----------
+    models
+        The models that were run.
+    solutions, failures
+        Their outcomes.
+    notes
+        Appended to.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> notes = []
+    >>> choose_reference(["P1", "P2", "P1-NH", "P2-NH"], {"P1": 0, "P2": 0},
+    ...                  {"P1-NH": "diverged", "P2-NH": "diverged"}, notes)
+    >>> notes[-1][:45]
+    'no finite-strain reference: P1-NH and P2-NH f'
+    """
+    finite = [n for n in ("P2-NH", "P1-NH") if n in models]
+    pool = finite or [n for n in REFERENCE_PREFERENCE if n in models]
+    intended = pool[0] if pool else None
+    reference = next((n for n in pool if n in solutions), None)
+    if intended is not None and reference is not None and reference != intended:
+        notes.append(
+            f"the intended reference {intended} FAILED ({failures.get(intended, '')}); "
+            f"the reference is {reference} (weaker: same law, coarser element)"
+        )
+    if reference is None and finite:
+        notes.append(
+            f"no finite-strain reference: {' and '.join(sorted(finite))} failed; errors are "
+            "not computed (a small-strain solution would be no reference at these strains)"
+        )
+    return reference
+
+
 # ------------------------------------------------------------------------------- table
 
 
 def comparison_table(cmp: Comparison, models: Sequence[str]) -> pd.DataFrame:
     """One row per model: probes, errors against the reference, volume, reactions, time."""
-    ref = cmp.solutions[cmp.reference].result
+    ref_sol = cmp.solutions.get(cmp.reference) or next(iter(cmp.solutions.values()))
+    ref = ref_sol.result
     main = {name: int(np.argmax(np.abs(u))) for name, u in ref.probes.items()}
     regions = list(ref.reactions)
     rows = []
@@ -293,9 +351,10 @@ def comparison_table(cmp: Comparison, models: Sequence[str]) -> pd.DataFrame:
         row: dict[str, object] = {"model": name}
         sol = cmp.solutions.get(name)
         if sol is None:
-            row.update({"element": "", "law": "", "converged": False})
+            row.update({"status": "FAILED", "element": "", "law": "", "converged": False})
             rows.append(row)
             continue
+        row["status"] = "ok"
         r = sol.result
         row["element"] = r.element
         row["law"] = r.law

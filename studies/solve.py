@@ -1,9 +1,17 @@
-"""``springfem solve``: one scene, one model, ``result.json`` + VTU."""
+"""``springfem solve``: one scene, one model, ``result.json`` + VTU (+ a time series).
+
+Examples
+--------
+>>> model_label(Result("s", "spring", "spring", "spring[axial=linear]", {}, {}, {}, {},
+...                    0.0, True, 1))
+'spring [axial=linear]'
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -12,8 +20,17 @@ import numpy as np
 from reference_fem.options import FemOptions
 from springfem.errors import InputError, SolverError
 from springfem.files import safe_filename
+from springfem.mechanics.context import SolveStopped, solve_limits
 from springfem.result import Result, volume_summary, write_result
-from springfem.scene import Scene
+from springfem.scene import OutputOptions, Scene
+
+from . import guards
+
+#: ``info["vertex_output"]`` of a P2 solve: what its VTU holds.
+P2_VERTEX_NOTE = (
+    "P2 solution reduced to the mesh vertices in result.vtu (the mid-edge nodes are not "
+    "written); probes and volume_p2 use the full P2 field"
+)
 
 
 @dataclass
@@ -31,17 +48,105 @@ def solve_scene(
     order: int | None = None,
     law: str | None = None,
     verbose: bool = False,
+    series_dir: str | Path | None = None,
 ) -> Solution:
-    """Solve ``scene`` with the spring model or the FEM reference."""
+    """Solve ``scene`` with the spring model or the FEM reference.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    model
+        ``spring`` or ``fem``.
+    order, law
+        FEM order and law (FEM only: an :class:`InputError` for the spring model).
+    verbose
+        Solver progress on stderr (Newton residuals, relaxation residuals, progress bars).
+    series_dir
+        Folder of the time series of a dynamic run with ``[output] interval``.
+
+    Returns
+    -------
+    Solution
+    """
     if model == "fem":
+        if FemOptions.of(scene).solver != "static":
+            return solve_fem_dynamic(scene, order, law, verbose, series_dir)
         import reference_fem
 
         sol = reference_fem.solve(scene, order=order, law=law, verbose=verbose)
+        if sol.result.element == "P2":
+            sol.result.info["vertex_output"] = P2_VERTEX_NOTE
         return Solution(sol.result, sol.u_vertices, dict(sol.cell_data))
+    if order is not None or law is not None:
+        flag = "--order" if order is not None else "--law"
+        raise InputError(f"{flag} applies to --model fem only; the spring model has neither")
     from springmodel.model import solve_spring
 
-    sol = solve_spring(scene, verbose=verbose)
+    sol = solve_spring(scene, verbose=verbose, series_dir=series_dir)
     return Solution(sol.result, sol.u, dict(sol.cell_data))
+
+
+def solve_fem_dynamic(
+    scene: Scene, order: int | None, law: str | None, verbose: bool, series_dir
+) -> Solution:
+    """A time integration of the P1 FEM (``[fem] solver = "explicit"`` or ``"implicit"``)."""
+    from reference_fem.dynamics import dynamic_system, solve_dynamic
+    from springfem.loads import reactions
+    from springmodel.model import end_of_run
+
+    t0 = time.perf_counter()
+    opts = FemOptions.of(scene)
+    system = dynamic_system(scene, order, law)
+    writer = None
+    out = OutputOptions.of(scene)
+    if series_dir is not None and out.interval is not None:
+        from springfem.series import SeriesWriter
+
+        writer = SeriesWriter(
+            Path(series_dir), scene.mesh, out.interval, masses=system.masses,
+            potential=system.energy,
+            probes=scene.probe_displacements if out.probes_history else None,
+        )  # fmt: skip
+    try:
+        traj = solve_dynamic(system, opts, callback=writer, progress=verbose)
+    except (SolverError, SolveStopped) as exc:
+        if writer is not None:
+            writer.close(plot=False)
+        state = None if exc.state is None else np.asarray(exc.state).reshape(-1, 3) - system.x0
+        raise type(exc)(f"{scene.name} (fem P1 {opts.solver}): {exc}", state=state) from None
+    u = traj.x - system.x0
+    extra = {
+        "solver": opts.solver,
+        "dt": traj.dt,
+        "steps": traj.steps,
+        "integrator": traj.integrator,
+    }
+    extra.update(end_of_run(traj, writer))
+    result = Result(
+        scene=scene.name,
+        model="fem",
+        element="P1",
+        law=system.law,
+        counts={"nodes": scene.mesh.n_points, "tets": scene.mesh.n_tets,
+                "dofs": 3 * scene.mesh.n_points, "fixed_dofs": int(system.fixed_dofs.size)},
+        probes=scene.probe_displacements(u),
+        volume=volume_summary(scene.mesh, u),
+        reactions=reactions(scene, system.forces(traj.x, None)),
+        wall_time=time.perf_counter() - t0,
+        converged=False,
+        iterations=int(traj.iterations or traj.steps),
+        info=extra,
+        status=extra["status"],
+    )  # fmt: skip
+    return Solution(result, u, {})
+
+
+def model_label(r: Result) -> str:
+    """``spring [axial=…]`` or ``fem P1 linear``: the model, element and law, once each."""
+    if r.model == "spring":
+        return f"spring {r.law.removeprefix('spring')}".rstrip()
+    return f"{r.model} {r.element} {r.law}"
 
 
 def default_out(scene_name: str, tag: str) -> Path:
@@ -57,7 +162,9 @@ def _write(out: Path, *args, **kw) -> tuple[Path, Path]:
         raise InputError(f"cannot write to {out}: {exc.strerror or exc}") from None
 
 
-def write_last_good_state(out: Path, scene: Scene, model: str, exc: SolverError) -> str:
+def write_last_good_state(
+    out: Path, scene: Scene, model: str, exc: SolverError | SolveStopped
+) -> str:
     """Write ``last_good_state.json``/``.vtu`` for a failed solve; say what was written.
 
     ``exc.state`` is the last good nodal displacement; a solve that failed before its first
@@ -66,6 +173,7 @@ def write_last_good_state(out: Path, scene: Scene, model: str, exc: SolverError)
     initial = exc.state is None
     u = np.zeros((scene.mesh.n_points, 3)) if initial else np.asarray(exc.state).reshape(-1, 3)
     finite = bool(np.isfinite(u).all())
+    stopped = isinstance(exc, SolveStopped)
     res = Result(
         scene=scene.name,
         model=model,
@@ -79,13 +187,22 @@ def write_last_good_state(out: Path, scene: Scene, model: str, exc: SolverError)
         converged=False,
         iterations=0,
         info={"error": str(exc), "state": "initial" if initial else "last good"},
+        status=str(exc) if stopped else "failed",
     )
     try:
         write_result(out, res, scene.mesh, u, stem="last_good_state")
     except OSError as err:
-        return f"the last good state could not be written to {out}: {err.strerror or err}"
+        what = "last state" if stopped else "last good state"
+        return f"the {what} could not be written to {out}: {err.strerror or err}"
+    if stopped:
+        return f"last state written to {out}"
     what = "initial state (failed before the first step)" if initial else "last good state"
     return f"{what} written to {out}"
+
+
+def warn(line: str) -> None:
+    """One ``warning: …`` line on stderr."""
+    print(f"warning: {line}", file=sys.stderr, flush=True)
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
@@ -95,25 +212,56 @@ def cmd_solve(args: argparse.Namespace) -> int:
     scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))  # sweeps: --set
     for note in scene.mesh.notes:
         print(f"note: {note}", file=sys.stderr)
+    if (w := guards.modulus_warning(scene.material)) is not None:
+        warn(w)
     tag = (
         args.model if args.model == "spring" else f"fem-p{args.order or FemOptions.of(scene).order}"
     )
     out = Path(args.out) if args.out else default_out(scene.name, tag)
+    limits = {
+        "max_time": getattr(args, "max_time", None),
+        "max_steps": getattr(args, "max_steps", None),
+    }
     try:
-        sol = solve_scene(scene, args.model, args.order, args.law, args.verbose)
-    except SolverError as exc:
+        with solve_limits(**limits):
+            sol = solve_scene(scene, args.model, args.order, args.law, args.verbose, out / "series")
+    except (SolverError, SolveStopped) as exc:
         written = write_last_good_state(out, scene, args.model, exc)
-        raise SolverError(f"{exc} ({written})", state=exc.state) from None
+        text = f"{exc}; {written}" if isinstance(exc, SolveStopped) else f"{exc} ({written})"
+        raise type(exc)(text, state=exc.state) from None
+    for line in guards.solution_warnings(scene, sol.result.law, sol.u):
+        warn(line)
     js, vtu = _write(out, sol.result, scene.mesh, sol.u, cell_data=sol.cell_data)
+    anim = None
+    series = sol.result.info.get("series")
+    fmt = OutputOptions.of(scene).animation
+    if series and fmt:
+        from .animation import animate_frames, animation_path
+
+        frames = sorted(Path(series).parent.glob("frame_*.vtu"))
+        try:
+            anim = animate_frames(frames, animation_path(Path(series).parent, fmt))
+        except Exception as exc:  # noqa: BLE001 - no ffmpeg/OpenGL must not lose the solve
+            warn(f"animation not written: {type(exc).__name__}: {exc}")
+        else:
+            sol.result.info["animation"] = str(anim)
+            js, vtu = _write(out, sol.result, scene.mesh, sol.u, cell_data=sol.cell_data)
     if args.json:
         _print_json(sol.result.to_dict())
     else:
         r = sol.result
+        state = r.status if r.status and r.status != "converged" else f"converged={r.converged}"
         print(
-            f"{r.scene}: {r.model} {r.element} {r.law}: converged={r.converged} "
+            f"{r.scene}: {model_label(r)}: {state} "
             f"iterations={r.iterations} wall={r.wall_time:.3g}s"
         )
         for name, u in r.probes.items():
             print(f"  probe {name}: u = [{u[0]:.6g}, {u[1]:.6g}, {u[2]:.6g}]")
         print(f"  volume change {r.volume['relative_change']:.3e}; wrote {js} and {vtu}")
+        if series:
+            print(f"  time series {series} ({r.info.get('frames')} frames)")
+        if anim is not None:
+            print(f"  animation {anim}")
+        if "vertex_output" in r.info:
+            print(f"  note: {r.info['vertex_output']}")
     return 0

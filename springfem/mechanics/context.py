@@ -27,11 +27,15 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import contextlib
+import time
+from collections.abc import Callable, Iterator
 from typing import Literal
 
 import numpy as np
 import scipy.sparse as sp
+
+from springfem.errors import SpringFemError
 
 from .fd_jacobian import ColoredJacobian
 from .system import MechanicalSystem, constrained_positions, free_dofs
@@ -40,6 +44,64 @@ JacobianKind = Literal["auto", "analytic", "fd"]
 Scale = float | Callable[[float], float]
 
 _TET_EDGES = np.array([(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)])
+
+
+class SolveStopped(SpringFemError, RuntimeError):
+    """A solve ended by a cap (:func:`solve_limits`): wall time or time steps (exit code 3).
+
+    Not a :class:`~springfem.errors.SolverError`, so no solver mistakes it for a failed
+    step to retry or fall back from.
+
+    Parameters
+    ----------
+    message
+        ``stopped after N s / N steps at residual R``.
+    state
+        The positions ``(n, 3)`` at the stop.
+    """
+
+    exit_code = 3
+
+    def __init__(self, message: str, state: np.ndarray | None = None):
+        super().__init__(message)
+        self.state = state
+
+
+_LIMITS: dict[str, float | None] = {"max_time": None, "max_steps": None}
+
+
+@contextlib.contextmanager
+def solve_limits(max_time: float | None = None, max_steps: int | None = None) -> Iterator[None]:
+    """Cap every solve started inside the block: wall time and time steps.
+
+    A :class:`SolveContext` created inside takes a deadline ``max_time`` seconds after its
+    first force evaluation (which includes the one-time compilation of the force kernels,
+    seconds on a busy machine); every force evaluation past it (or past ``max_steps`` time
+    steps of an explicit, relaxation or implicit loop) raises :class:`SolveStopped`. One
+    check in the force evaluation every solver goes through caps all solver loops alike.
+
+    Parameters
+    ----------
+    max_time
+        Seconds per solve (``None``: no cap).
+    max_steps
+        Time steps per solve (``None``: no cap; Newton iterations are capped by
+        ``max_iter``).
+
+    Examples
+    --------
+    >>> with solve_limits(max_time=5.0):
+    ...     _LIMITS["max_time"]
+    5.0
+    >>> _LIMITS["max_time"] is None
+    True
+    """
+    saved = dict(_LIMITS)
+    _LIMITS.update(max_time=max_time, max_steps=max_steps)
+    try:
+        yield
+    finally:
+        _LIMITS.update(saved)
 
 
 class SolveContext:
@@ -79,12 +141,56 @@ class SolveContext:
         self._node_tets: tuple[np.ndarray, np.ndarray] | None = None
         self.jacobian_kind = "none"
         self.solvers_used: list[str] = []
+        self.start = time.monotonic()
+        max_time = _LIMITS["max_time"]
+        self.max_time = max_time
+        self.deadline = None if max_time is None else self.start + float(max_time)
+        self.max_steps = _LIMITS["max_steps"]
+        self.step = 0  # time steps taken (set by the time-stepping loops)
+        self.f_ref: float | None = None  # set by reference_norm
 
     # forces / energies
     def forces(self, x: np.ndarray, v: np.ndarray | None, s: float) -> np.ndarray:
-        """Nodal forces ``(n, 3)`` at positions ``x``, velocities ``v``, load factor ``s``."""
+        """Nodal forces ``(n, 3)`` at positions ``x``, velocities ``v``, load factor ``s``.
+
+        Raises :class:`SolveStopped` past the deadline or step cap of :func:`solve_limits`.
+        """
         self.n_evals += 1
-        return np.asarray(self.system.forces(x, v, s), dtype=float).reshape(self.n, 3)
+        f = np.asarray(self.system.forces(x, v, s), dtype=float).reshape(self.n, 3)
+        if self.n_evals == 1 and self.max_time is not None:
+            # the clock starts after the first evaluation, which compiles the kernels once
+            self.start = time.monotonic()
+            self.deadline = self.start + float(self.max_time)
+        elif self.deadline is not None or self.max_steps is not None:
+            self.check_limits(x, f)
+        return f
+
+    def check_limits(self, x: np.ndarray, f: np.ndarray) -> None:
+        """Raise :class:`SolveStopped` when the time or step cap is passed.
+
+        Parameters
+        ----------
+        x, f
+            The positions and the forces just evaluated there (for the message and state).
+        """
+        now = time.monotonic()
+        late = self.deadline is not None and now > self.deadline
+        many = self.max_steps is not None and self.step > self.max_steps
+        if not (late or many):
+            return
+        r = float(np.linalg.norm(f.reshape(-1)[self.free]))
+        res = f"relative residual {r / self.f_ref:.3g}" if self.f_ref else f"residual {r:.3g} N"
+        # the loops set ``step`` before evaluating its forces: ``step - 1`` are complete
+        what = f"{self.step - 1} steps" if self.step else f"{self.n_evals} force evaluations"
+        cap = (
+            f"the --max-time cap of {self.max_time:g} s"
+            if late
+            else (f"the cap of {self.max_steps} steps")
+        )
+        raise SolveStopped(
+            f"stopped after {now - self.start:.3g} s / {what} at {res} ({cap})",
+            state=np.array(x, dtype=float).reshape(self.n, 3),
+        )
 
     def free_force(self, x: np.ndarray, s: float) -> np.ndarray:
         """Forces on the free DOFs (flat)."""
@@ -269,9 +375,8 @@ def reference_norm(ctx: SolveContext, s: float) -> float:
     """
     x = constrained_positions(ctx.system, s)
     f_ref = float(np.linalg.norm(ctx.free_force(x, s)))
-    if f_ref > 0:
-        return f_ref
-    return 1.0
+    ctx.f_ref = f_ref if f_ref > 0 else 1.0
+    return ctx.f_ref
 
 
 def note_solver(ctx: SolveContext, name: str) -> None:

@@ -130,6 +130,7 @@ def explicit_loop(
     k = 0
     t = t0
     for k in range(1, n_steps + 1):
+        ctx.step = k
         t = t0 + k * dt
         if not const:
             s = s_of(t)

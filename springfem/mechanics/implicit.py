@@ -148,6 +148,7 @@ def implicit(
     converged = True
     message = ""
     for k in range(1, n_steps + 1):
+        ctx.step = k
         t0, t = t, k * dt
         x_new, v_new, its, r, ok = step(x, v, t0, dt, 0)
         total_iters += its

@@ -24,6 +24,7 @@ Examples
 
 from __future__ import annotations
 
+import sys
 import time
 from typing import Literal
 
@@ -40,6 +41,8 @@ from .timestep import choose_time_step
 Damping = Literal["auto", "kinetic", "mass"]
 #: Kinetic-energy growth that marks a blow-up (see :class:`~.blowup.BlowupMonitor`).
 BLOWUP_FACTOR = 1e4
+#: Seconds between residual lines on stderr with ``progress`` (``springfem solve -v``).
+PROGRESS_EVERY = 1.0
 
 
 def explicit_static(
@@ -118,8 +121,14 @@ def explicit_static(
             force_evaluations=ctx.n_evals,
         )  # fmt: skip
 
+    shown = [time.perf_counter()]
+
     def stop(k: int, t: float, x: np.ndarray) -> tuple[bool, float]:
         r = float(np.linalg.norm(ctx.free_force(x, s))) / f_ref
+        if progress and time.perf_counter() - shown[0] >= PROGRESS_EVERY:
+            shown[0] = time.perf_counter()
+            print(f"relaxation step {k}: relative residual {r:.3e} (tol {tol:.1e})",
+                  file=sys.stderr, flush=True)  # fmt: skip
         return r <= tol, r
 
     v = np.zeros_like(x)
@@ -159,8 +168,9 @@ def explicit_static(
     )
     if not done:
         info.message = (
-            f"dynamic relaxation ({damping} damping) did not reach the tolerance {tol:.3g} in "
-            f"{traj.steps} steps: relative residual {hist[-1]:.3g}"
+            f"dynamic relaxation ({damping} damping) stopped after "
+            f"{time.perf_counter() - t_start:.3g} s / {traj.steps} steps at relative residual "
+            f"{hist[-1]:.3g} (the cap of {int(max_steps)} steps; tolerance {tol:.3g})"
         )
         if raise_on_failure:
             raise SolverError(info.message, state=traj.x)

@@ -11,6 +11,7 @@ Examples
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 
@@ -157,9 +158,18 @@ def mesh_from_meshio(m, name: str = "mesh", scale: float = 1.0) -> TetMesh:
                     for bb, data in tri_blocks:
                         if bb == b:
                             facet_sets.setdefault(nm, data[ids].astype(np.int64))
+    region = m.cell_data.get(REGION_FIELD)
+    if region is not None and phys is None:
+        # springfem's own VTU: tet region ids named by the FieldData table
+        names_by_id = {int(np.ravel(v)[0]): nm for nm, v in getattr(m, "field_data", {}).items()}
+        for b, _ in tet_blocks:
+            ids_b = np.asarray(region[b]).astype(np.int64)
+            for rid in np.unique(ids_b[ids_b > 0]):
+                nm = names_by_id.get(int(rid), f"region:{int(rid)}")
+                cell_sets.setdefault(nm, np.flatnonzero(ids_b == rid) + block_offset[b])
     cell_data: dict[str, np.ndarray] = {}
     for key, per_block in m.cell_data.items():
-        if key.startswith("gmsh:") or key.startswith("medit:"):
+        if key.startswith("gmsh:") or key.startswith("medit:") or key == REGION_FIELD:
             continue
         arrays = [np.asarray(per_block[b]) for b, _ in tet_blocks]
         try:
@@ -210,12 +220,62 @@ def write_vtu(
     import meshio
 
     path = os.fspath(path)
+    cdata = {k: [np.asarray(v)] for k, v in (cell_data or {}).items()}
+    table = region_table(mesh)
+    if table and REGION_FIELD not in cdata:
+        ids = np.zeros(mesh.n_tets, dtype=np.int32)
+        for name, rid in table.items():
+            ids[np.asarray(mesh.cell_sets[name], dtype=np.int64)] = rid
+        cdata[REGION_FIELD] = [ids]
     out = meshio.Mesh(
         mesh.points,
         [("tetra", mesh.tets)],
         point_data={k: np.asarray(v) for k, v in (point_data or {}).items()},
-        cell_data={k: [np.asarray(v)] for k, v in (cell_data or {}).items()},
+        cell_data=cdata,
     )
     tmp = f"{path}.tmp-{os.getpid()}.vtu"
     meshio.write(tmp, out, file_format="vtu")
+    if table and REGION_FIELD in cdata:
+        _add_field_data(tmp, table)
     os.replace(tmp, path)
+
+
+#: Cell data of a written VTU: the id of each tet's region (0: none), named in its FieldData.
+REGION_FIELD = "region"
+
+
+def region_table(mesh: TetMesh) -> dict[str, int]:
+    """Region name -> id (1, 2, … in name order) of the mesh's tet sets.
+
+    A tet in several sets gets the id of the last (in name order) in the ``region`` cell
+    data; each set is still named in the table.
+
+    Parameters
+    ----------
+    mesh
+        The mesh.
+
+    Returns
+    -------
+    dict
+    """
+    return {name: i + 1 for i, name in enumerate(sorted(mesh.cell_sets))}
+
+
+def _add_field_data(path: str, table: dict[str, int]) -> None:
+    """Insert a VTK ``<FieldData>`` with one Int32 array per region name (its id).
+
+    meshio does not write field data to VTU but reads it back (as ParaView does), so the
+    names survive a round trip: ``field_data = {name: [id]}``, gmsh's convention.
+    """
+    from xml.sax.saxutils import quoteattr
+
+    text = Path(path).read_text(encoding="utf-8")
+    rows = "".join(
+        f'<DataArray type="Int32" Name={quoteattr(name)} NumberOfTuples="1" '
+        f'format="ascii">{rid}</DataArray>\n'
+        for name, rid in table.items()
+    )
+    i = text.index("<Piece")
+    Path(path).write_text(text[:i] + f"<FieldData>\n{rows}</FieldData>\n" + text[i:],
+                          encoding="utf-8")  # fmt: skip

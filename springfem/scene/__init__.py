@@ -25,6 +25,7 @@ from ..errors import SceneError
 from .build import MODEL_SECTIONS, SECTIONS, register_section, scene_from_dict
 from .limits import BYTES_PER_TET, MAX_TETS, check_mesh_size, machine_memory
 from .loader import load_scene, parse_scene
+from .output import OutputOptions, parse_output
 from .reader import MAX_INT, MAX_MAGNITUDE, MIN_MAGNITUDE, TableReader, suggestion
 from .sections import opt_splits
 from .types import (
@@ -42,6 +43,8 @@ from .types import (
     Scene,
 )
 
+register_section("output", parse_output)
+
 __all__ = [
     "AXES_TYPES",
     "BYTES_PER_TET",
@@ -54,6 +57,7 @@ __all__ = [
     "MAX_TETS",
     "MIN_MAGNITUDE",
     "MODEL_SECTIONS",
+    "OutputOptions",
     "SECTIONS",
     "VOLUMETRIC",
     "Boundary",

@@ -35,8 +35,9 @@ from .sections import (
 )
 from .types import Material, Scene
 
-MODEL_SECTIONS = ("spring", "fem")
-"""Sections that belong to a model: the core stores them, the model parses them."""
+MODEL_SECTIONS = ("spring", "fem", "output")
+"""Sections parsed by a registered parser: the models' (``spring``, ``fem``) and the core's
+``output`` (:mod:`springfem.scene.output`)."""
 
 _SECTION_PARSERS: dict[str, Callable[[TableReader], Any]] = {}
 

@@ -131,7 +131,9 @@ def test_cli_solve_twice_is_bit_identical(tmp_path, model):
     run_solve(scene, model, b, seed=2)
     ja = json.loads((a / "result.json").read_text())
     jb = json.loads((b / "result.json").read_text())
-    assert ja["converged"] and ja["probes"]["tip"][2] < 0  # a real solve, not an empty one
+    # a real solve, not an empty one (the spring run is timed: it ends, it does not converge)
+    assert ja["converged"] or ja["status"].startswith("end of run")
+    assert ja["probes"]["tip"][2] < 0
     assert without_timings(ja) == without_timings(jb)  # exact: JSON floats round-trip
     assert ja["wall_time"] > 0  # the timing we removed was there
     va, vb = meshio.read(a / "result.vtu"), meshio.read(b / "result.vtu")

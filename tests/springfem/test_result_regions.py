@@ -1,0 +1,46 @@
+"""Region names survive a VTU round trip: ``region`` cell data plus a FieldData name table.
+
+Independent check: the sets are chosen by geometry (tets left / right of the middle of a
+box), written with :func:`write_result`, and read back by meshio, pyvista and
+:func:`read_mesh`; before the change a VTU carried no region at all.
+"""
+
+import numpy as np
+import pytest
+
+from springfem.mesh import box_mesh, read_mesh
+from springfem.result import Result, write_result
+
+
+def _mesh_with_regions():
+    mesh = box_mesh((2.0, 1.0, 1.0), (4, 2, 2))
+    centres = mesh.points[mesh.tets].mean(axis=1)
+    left = np.flatnonzero(centres[:, 0] < 1.0)
+    right = np.flatnonzero(centres[:, 0] >= 1.0)
+    mesh.cell_sets.update({"muscle": left, "tendon sheath": right})
+    return mesh, left, right
+
+
+def _write(tmp_path, mesh):
+    res = Result("s", "fem", "P1", "linear", {}, {}, {}, {}, 0.0, True, 1)
+    return write_result(tmp_path, res, mesh, np.zeros((mesh.n_points, 3)))[1]
+
+
+def test_region_names_round_trip_through_read_mesh(tmp_path):
+    mesh, left, right = _mesh_with_regions()
+    back = read_mesh(_write(tmp_path, mesh))
+    assert set(back.cell_sets) >= {"muscle", "tendon sheath"}
+    assert not any(k.startswith(("tag:", "region:")) for k in back.cell_sets)
+    np.testing.assert_array_equal(np.sort(back.cell_sets["muscle"]), left)
+    np.testing.assert_array_equal(np.sort(back.cell_sets["tendon sheath"]), right)
+    assert "region" not in back.cell_data  # the ids became the sets, not a field
+
+
+def test_region_names_are_visible_to_paraview_readers(tmp_path):
+    pv = pytest.importorskip("pyvista")
+    mesh, left, _ = _mesh_with_regions()
+    grid = pv.read(str(_write(tmp_path, mesh)))
+    table = {name: int(grid.field_data[name][0]) for name in grid.field_data.keys()}
+    assert set(table) == {"muscle", "tendon sheath"}
+    ids = np.asarray(grid.cell_data["region"])
+    assert np.all(ids[left] == table["muscle"]) and set(np.unique(ids)) == set(table.values())
