@@ -30,6 +30,7 @@ from typing import Protocol
 import numpy as np
 
 from springfem.errors import SolverError
+from springfem.mechanics.context import Deadline
 from springfem.mechanics.newton import (
     LoadStepping,
     NewtonOutcome,
@@ -190,7 +191,13 @@ class FemStep:
 
 
 def newton_step(
-    problem: NonlinearProblem, u: np.ndarray, scale: float, opts: NewtonOptions, label: str
+    problem: NonlinearProblem,
+    u: np.ndarray,
+    scale: float,
+    opts: NewtonOptions,
+    label: str,
+    deadline: Deadline | None = None,
+    last_good: np.ndarray | None = None,
 ) -> NewtonOutcome:
     """Iterate to equilibrium at load factor ``scale`` from ``u`` with the one Newton.
 
@@ -206,14 +213,25 @@ def newton_step(
         Settings.
     label
         Prefix of the progress lines.
+    deadline
+        The solve's ``--max-time`` cap (checked once per iteration), if any.
+    last_good
+        The last converged vertex displacements, handed over when the cap stops the solve.
 
     Returns
     -------
     NewtonOutcome
         See :func:`springfem.mechanics.newton.newton`.
+
+    Raises
+    ------
+    SolveStopped
+        The ``deadline`` passed.
     """
 
     def monitor(it: int, state: np.ndarray, rel: float, alpha: float) -> None:
+        if deadline is not None and it > 0:
+            deadline.check(f"{label}, iteration {it}", rel, last_good)
         if 0 < alpha < 1.0:
             _log(opts, f"  {label} line search alpha = {alpha:g}")
         _log(opts, f"  {label} iteration {it:2d}  |R|/|f| = {rel:.3e}")
@@ -271,11 +289,12 @@ def solve_nonlinear(
     """
     report = NewtonReport()
     state = {"u": np.zeros(problem.n_dofs) if u0 is None else u0.copy(), "prev": None}
+    deadline = Deadline()
 
     def try_step(lam: float, target: float) -> tuple[bool, int, str]:
         label = f"step {len(report.steps) + 1} (load {target:.4g})"
         start = _predict(problem, state["u"], lam, target, state["prev"])
-        out = newton_step(problem, start, target, opts, label)
+        out = newton_step(problem, start, target, opts, label, deadline, problem.state(state["u"]))
         if not out.converged:
             _log(opts, f"  {label} failed: {out.reason}; load increment cut")
             return False, 0, out.reason

@@ -104,6 +104,50 @@ def solve_limits(max_time: float | None = None, max_steps: int | None = None) ->
         _LIMITS.update(saved)
 
 
+class Deadline:
+    """The :func:`solve_limits` time cap for a solve that runs no :class:`SolveContext`.
+
+    The FEM's Newton iterates on its own DOF vector; it starts one of these with the solve
+    and checks it once per Newton iteration.
+
+    Examples
+    --------
+    >>> with solve_limits(max_time=0.0):
+    ...     d = Deadline()
+    >>> try:
+    ...     d.check("1 Newton iterations", 0.5)
+    ... except SolveStopped as exc:
+    ...     print(str(exc).split(" at ")[1])
+    relative residual 0.5 (the --max-time cap of 0 s)
+    """
+
+    def __init__(self) -> None:
+        self.max_time = _LIMITS["max_time"]
+        self.start = time.monotonic()
+
+    def check(self, what: str, residual: float, state: np.ndarray | None = None) -> None:
+        """Raise :class:`SolveStopped` once the cap has passed.
+
+        Parameters
+        ----------
+        what
+            What has been done so far (``"12 Newton iterations"``), for the message.
+        residual
+            The current relative residual.
+        state
+            The last good state, handed to the caller in the exception.
+        """
+        if self.max_time is None:
+            return
+        elapsed = time.monotonic() - self.start
+        if elapsed > self.max_time:
+            raise SolveStopped(
+                f"stopped after {elapsed:.3g} s / {what} at relative residual {residual:.3g} "
+                f"(the --max-time cap of {self.max_time:g} s)",
+                state=state,
+            )
+
+
 class SolveContext:
     """Per-solve view of a system: DOF sets, masses, Jacobians, force-evaluation count.
 

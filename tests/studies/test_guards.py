@@ -175,3 +175,16 @@ def test_verbose_shows_the_fem_newton_residuals(tmp_path, capsys):
             "--set", "mesh.divisions=[4, 2, 1]"]  # fmt: skip
     assert main(argv) == 0
     assert "|R|/|f|" in capsys.readouterr().err
+
+
+def test_max_time_stops_the_fem_newton_with_exit_3(tmp_path, capsys):
+    # the FEM's Newton runs no SolveContext: its own deadline, checked once per iteration;
+    # a 1 ns cap stops it after the first iteration with the last converged state (rest)
+    argv = ["solve", "cantilever", "--model", "fem", "--out", str(tmp_path),
+            "--set", "material.law=neo-hookean", "--max-time", "1e-9"]  # fmt: skip
+    assert main(argv) == 3
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert re.search(r"stopped after [0-9.e+-]+ s / step 1 \(load 1\), iteration 1 at rel", err)
+    assert "the --max-time cap of 1e-09 s" in err and "last state written to" in err
+    state = json.loads((tmp_path / "last_good_state.json").read_text())
+    assert state["status"].startswith("stopped after")
