@@ -1,0 +1,463 @@
+"""Spring-force kernels specialised at compile time per variant, on a blocked layout.
+
+:func:`spring_kernel` builds (and caches) one numba kernel per *variant*: the switched-on
+parts and laws (:class:`Variant`). The laws are chosen in Python when the kernel is built,
+so the compiled loop holds only the arithmetic of that variant: no law codes, no branches.
+
+Layout (:mod:`springmodel.blocks`): elements in blocks of :data:`BLOCK`; per block the
+connectivity ``(4, B)`` int32 and the constants ``(ncol, B)`` structure-of-arrays. A block is
+gathered (vertex positions into a ``(12, B)`` scratch), computed in one branch-free loop over
+its lanes (which LLVM vectorises: ``error_model='numpy'``, contraction to FMA allowed), and
+scattered. Compact constants, from the identity of DESIGN §4, ``G[i,l] = grad N_i . zeta_l^0``:
+
+* ``G' = G / l0`` (rows of vertices 1..3: ``sum_i G[i] = 0`` gives vertex 0), so
+  ``zeta_l / l0_l = sum_{i>0} G'[i,l] (x_i - x_0)`` is the axis stretch vector;
+* the axial constant ``k l0^2`` (the force ``f_i = G'[i,l] (l0 s_l) zeta_hat_l``);
+* torsion: ``energy`` needs ``k`` only (``l0`` cancels), the force laws ``k_f l0_l`` and
+  ``k_f l0_m``; the rest cosines ``c0`` only when they are not zero to round-off (they are
+  zero for orthonormal frames, DESIGN §4b), the rest angles for ``angle``;
+* volume: ``k_s`` and ``sum_j |xi_j^0|``.
+
+The seed variant (linear axial, cosine torsion, gradient volume) reads 20 constants per
+element (160 B in f64) and 16 B of connectivity, against 256 B before.
+
+Precision (``precision``): ``float64``; ``mixed`` (constants stored in float32, arithmetic
+in float64); ``float32`` (constants, gathered positions and arithmetic in float32; forces
+accumulated in float64).
+
+Examples
+--------
+>>> v = Variant(axial="linear", torsion="cosine", volume="gradient")
+>>> v.columns()[:3]
+('g10', 'g11', 'g12')
+>>> len(v.columns())
+20
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numba
+import numpy as np
+from numba import njit
+
+from .blocks import BLOCK, block_drivers, block_layout, chunks, set_column
+
+#: Below this many elements ``SpringKernel(parallel=None)`` runs serially.
+PARALLEL_MIN_ELEMENTS = 20_000
+
+PRECISIONS = ("float64", "mixed", "float32")
+_PAIRS = ((0, 1), (0, 2), (1, 2))
+_FLAGS = {"error_model": "numpy", "fastmath": {"contract"}}
+
+
+@dataclass(frozen=True)
+class Variant:
+    """The compile-time choices of one spring kernel.
+
+    Parameters
+    ----------
+    axial
+        ``linear``, ``quadratic``, ``cubic`` or ``stress-scaled``.
+    torsion
+        ``off``, ``angle``, ``cosine``, ``cubic`` or ``energy``.
+    volume
+        ``off``, ``gradient`` or ``spec``.
+    damp_axial, damp_volume
+        Axial and volume damping coefficients (0 for off).
+    b2, b3, bt
+        Polynomial axial and cubic torsion coefficients.
+    c0
+        Whether rest cosines are read (``False``: they are zero to round-off).
+    precision
+        ``float64``, ``mixed`` or ``float32``.
+    """
+
+    axial: str = "linear"
+    torsion: str = "cosine"
+    volume: str = "gradient"
+    damp_axial: float = 0.0
+    damp_volume: float = 0.0
+    b2: float = 0.0
+    b3: float = 0.0
+    bt: float = 0.0
+    c0: bool = False
+    precision: str = "float64"
+
+    def columns(self) -> tuple[str, ...]:
+        """Names of the per-element constants this variant reads, in storage order."""
+        cols = [f"g{i}{l}" for i in (1, 2, 3) for l in range(3)]
+        cols += [f"ka{l}" for l in range(3)]
+        if self.axial == "stress-scaled":
+            cols.append("inv6v0")
+        if self.damp_axial:
+            cols += [f"ca{l}" for l in range(3)]
+        if self.torsion == "energy":
+            cols += [f"kt{p}" for p in range(3)]
+        elif self.torsion != "off":
+            cols += [f"kf{p}{s}" for p in range(3) for s in "lm"]
+        if self.torsion == "angle":
+            cols += [f"a0{p}" for p in range(3)]
+        elif self.torsion != "off" and self.c0:
+            cols += [f"c0{p}" for p in range(3)]
+        if self.volume != "off":
+            cols += ["ks", "lsum"]
+        return tuple(cols)
+
+    @property
+    def uses_velocity(self) -> bool:
+        return bool(self.damp_axial) or (self.volume != "off" and bool(self.damp_volume))
+
+
+def constant_columns(elements, variant: Variant) -> np.ndarray:
+    """The constants ``(ncol, m)`` of ``variant`` from :class:`SpringElements` rest data."""
+    el = elements
+    l0 = el.l0
+    Gp = el.G[:, 1:, :] / l0[:, None, :]  # (m, 3 vertices, 3 axes)
+    kf = el.k_torsion_force
+    data: dict[str, np.ndarray] = {}
+    for i in range(3):
+        for l in range(3):
+            data[f"g{i + 1}{l}"] = Gp[:, i, l]
+    for l in range(3):
+        data[f"ka{l}"] = el.k_axial[:, l] * l0[:, l] ** 2
+        data[f"ca{l}"] = variant.damp_axial * l0[:, l] ** 2
+    for p, (l, m) in enumerate(_PAIRS):
+        data[f"kt{p}"] = el.k_torsion[:, p]
+        data[f"kf{p}l"] = kf[:, p] * l0[:, l]
+        data[f"kf{p}m"] = kf[:, p] * l0[:, m]
+        data[f"c0{p}"] = el.c0[:, p]
+        data[f"a0{p}"] = el.alpha0[:, p]
+    data["inv6v0"] = 1.0 / (6.0 * el.V0)
+    data["ks"] = el.k_volume
+    data["lsum"] = el.L0
+    return np.stack([np.broadcast_to(data[c], (el.n_elements,)) for c in variant.columns()])
+
+
+def needs_c0(elements, tol: float = 1e-14) -> bool:
+    """False when every rest cosine is zero to round-off (orthonormal frames, DESIGN §4b)."""
+    return bool(np.abs(elements.c0).max(initial=0.0) > tol)
+
+
+# --------------------------------------------------------------------------- the factory
+
+
+def _parts(v: Variant):
+    """numba functions of the enabled parts, chosen here, in Python."""
+    at = np.float32 if v.precision == "float32" else np.float64
+    one, zero, quarter = at(1.0), at(0.0), at(0.25)
+    b2, b3, bt = at(v.b2), at(v.b3), at(v.bt)
+    B = BLOCK
+    cols = {c: i for i, c in enumerate(v.columns())}
+    KA, CA = cols["ka0"], cols.get("ca0", 0)
+    KT = cols.get("kt0", cols.get("kf0l", 0))
+    T0 = cols.get("a00", cols.get("c00", 0))
+    KS, INV6 = cols.get("ks", 0), cols.get("inv6v0", 0)
+    has_c0 = "c00" in cols or "a00" in cols
+    torsion, axial, volume = v.torsion, v.axial, v.volume
+
+    if axial == "linear":
+
+        @njit(inline="always", **_FLAGS)
+        def axial_s(lam, k, jac):
+            return -k * (lam - one)  # eq. 2.35, times l0
+    elif axial == "stress-scaled":
+
+        @njit(inline="always", **_FLAGS)
+        def axial_s(lam, k, jac):
+            return -k * (lam - one) / lam * jac  # E (d/l0) (V/|zeta|), times l0
+    else:
+
+        @njit(inline="always", **_FLAGS)
+        def axial_s(lam, k, jac):
+            e = lam - one
+            return -k * (e + b2 * e * e + b3 * e * e * e)  # eq. 2.36, times l0
+
+    if torsion == "energy":
+
+        @njit(inline="always", **_FLAGS)
+        def pair(ul, um, lam_l, lam_m, K, p, j):
+            c = ul[0] * um[0] + ul[1] * um[1] + ul[2] * um[2]  # eq. 2.32
+            dc = c - (at(K[(T0 + p) * B + j]) if has_c0 else zero)
+            kt = at(K[(KT + p) * B + j])
+            sl, sm = -kt * dc / lam_l, -kt * dc / lam_m
+            return (
+                (sl * (um[0] - c * ul[0]), sl * (um[1] - c * ul[1]), sl * (um[2] - c * ul[2])),
+                (sm * (ul[0] - c * um[0]), sm * (ul[1] - c * um[1]), sm * (ul[2] - c * um[2])),
+            )
+    elif torsion == "off":
+
+        @njit(inline="always", **_FLAGS)
+        def pair(ul, um, lam_l, lam_m, K, p, j):
+            return (zero, zero, zero), (zero, zero, zero)
+    else:
+        if torsion == "cosine":
+
+            @njit(inline="always", **_FLAGS)
+            def law(c, t0):
+                return -(c - t0)  # eqs. 2.44-2.45
+        elif torsion == "cubic":
+
+            @njit(inline="always", **_FLAGS)
+            def law(c, t0):
+                dc = c - t0
+                return -(dc + bt * dc * dc * dc)  # eqs. 2.47-2.50
+        else:
+
+            @njit(inline="always", **_FLAGS)
+            def law(c, t0):
+                return math.acos(min(max(c, -one), one)) - t0  # eqs. 2.40-2.41, restoring
+
+        @njit(inline="always", **_FLAGS)
+        def pair(ul, um, lam_l, lam_m, K, p, j):
+            c = ul[0] * um[0] + ul[1] * um[1] + ul[2] * um[2]
+            s = law(c, at(K[(T0 + p) * B + j]) if has_c0 else zero)
+            sl, sm = s * at(K[(KT + 2 * p) * B + j]), s * at(K[(KT + 2 * p + 1) * B + j])
+            return (sl * um[0], sl * um[1], sl * um[2]), (sm * ul[0], sm * ul[1], sm * ul[2])
+
+    spec = volume == "spec"
+    stress = axial == "stress-scaled"
+    vol_on = volume != "off"
+    tors_on = torsion != "off"
+    v_axial = bool(v.damp_axial)
+    v_volume = vol_on and bool(v.damp_volume)
+    damp_v = at(v.damp_volume)
+
+    @njit(inline="always", **_FLAGS)
+    def comb(g1, g2, g3, a, b, c):
+        return (
+            g1 * a[0] + g2 * b[0] + g3 * c[0],
+            g1 * a[1] + g2 * b[1] + g3 * c[1],
+            g1 * a[2] + g2 * b[2] + g3 * c[2],
+        )
+
+    @njit(inline="always", **_FLAGS)
+    def unit(z):
+        n = math.sqrt(z[0] * z[0] + z[1] * z[1] + z[2] * z[2])
+        return n, (z[0] / n, z[1] / n, z[2] / n)
+
+    @njit(inline="always", **_FLAGS)
+    def axpy(s, a, b):
+        return (s * a[0] + b[0], s * a[1] + b[1], s * a[2] + b[2])
+
+    @njit(inline="always", **_FLAGS)
+    def add(a, b):
+        return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+    @njit(inline="always", **_FLAGS)
+    def sub(a, b):
+        return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+    @njit(inline="always", **_FLAGS)
+    def dot(a, b):
+        return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+    @njit(inline="always", **_FLAGS)
+    def put(F, i, j, f):
+        F[(3 * i) * B + j] = f[0]
+        F[(3 * i + 1) * B + j] = f[1]
+        F[(3 * i + 2) * B + j] = f[2]
+
+    @njit(inline="always", **_FLAGS)
+    def row(X, i, j):
+        return (X[(3 * i) * B + j], X[(3 * i + 1) * B + j], X[(3 * i + 2) * B + j])
+
+    @njit(**_FLAGS)
+    def compute(X, W, K, F):
+        # one block, flat lane-major arrays: X, W (9 B) edge vectors x_i - x_0 (i = 1..3) of
+        # positions and velocities, K (ncol B) constants, F (12 B) vertex forces
+        for j in range(B):
+            a, b, c = row(X, 0, j), row(X, 1, j), row(X, 2, j)
+            g10, g11, g12 = at(K[0 * B + j]), at(K[1 * B + j]), at(K[2 * B + j])
+            g20, g21, g22 = at(K[3 * B + j]), at(K[4 * B + j]), at(K[5 * B + j])
+            g30, g31, g32 = at(K[6 * B + j]), at(K[7 * B + j]), at(K[8 * B + j])
+            # stretch vectors zeta_l / l0_l: their lengths (stretches) and directions
+            lam0, u0 = unit(comb(g10, g20, g30, a, b, c))
+            lam1, u1 = unit(comb(g11, g21, g31, a, b, c))
+            lam2, u2 = unit(comb(g12, g22, g32, a, b, c))
+            jac = one
+            if stress:
+                jac = at(K[INV6 * B + j]) * (
+                    a[0] * (b[1] * c[2] - b[2] * c[1])
+                    - a[1] * (b[0] * c[2] - b[2] * c[0])
+                    + a[2] * (b[0] * c[1] - b[1] * c[0])
+                )
+            s0 = axial_s(lam0, at(K[KA * B + j]), jac)
+            s1 = axial_s(lam1, at(K[(KA + 1) * B + j]), jac)
+            s2 = axial_s(lam2, at(K[(KA + 2) * B + j]), jac)
+            if v_axial:
+                wa, wb, wc = row(W, 0, j), row(W, 1, j), row(W, 2, j)
+                s0 -= at(K[CA * B + j]) * dot(comb(g10, g20, g30, wa, wb, wc), u0)
+                s1 -= at(K[(CA + 1) * B + j]) * dot(comb(g11, g21, g31, wa, wb, wc), u1)
+                s2 -= at(K[(CA + 2) * B + j]) * dot(comb(g12, g22, g32, wa, wb, wc), u2)
+            q0 = (s0 * u0[0], s0 * u0[1], s0 * u0[2])
+            q1 = (s1 * u1[0], s1 * u1[1], s1 * u1[2])
+            q2 = (s2 * u2[0], s2 * u2[1], s2 * u2[2])
+            if tors_on:
+                fl, fm = pair(u0, u1, lam0, lam1, K, 0, j)
+                q0, q1 = add(q0, fl), add(q1, fm)
+                fl, fm = pair(u0, u2, lam0, lam2, K, 1, j)
+                q0, q2 = add(q0, fl), add(q2, fm)
+                fl, fm = pair(u1, u2, lam1, lam2, K, 2, j)
+                q1, q2 = add(q1, fl), add(q2, fm)
+            # f_i = sum_l G'[i,l] q_l,  f_0 = -(f_1 + f_2 + f_3)
+            f1 = comb(g10, g11, g12, q0, q1, q2)
+            f2 = comb(g20, g21, g22, q0, q1, q2)
+            f3 = comb(g30, g31, g32, q0, q1, q2)
+            f0 = (-(f1[0] + f2[0] + f3[0]), -(f1[1] + f2[1] + f3[1]), -(f1[2] + f2[2] + f3[2]))
+            if vol_on:  # xi_j = x_j - x_b (eqs. 2.76-2.77)
+                xb = (
+                    quarter * (a[0] + b[0] + c[0]),
+                    quarter * (a[1] + b[1] + c[1]),
+                    quarter * (a[2] + b[2] + c[2]),
+                )
+                r0, h0 = unit((-xb[0], -xb[1], -xb[2]))
+                r1, h1 = unit(sub(a, xb))
+                r2, h2 = unit(sub(b, xb))
+                r3, h3 = unit(sub(c, xb))
+                coef = -at(K[KS * B + j]) * (r0 + r1 + r2 + r3 - at(K[(KS + 1) * B + j]))
+                if not spec:
+                    hm = (
+                        quarter * (h0[0] + h1[0] + h2[0] + h3[0]),
+                        quarter * (h0[1] + h1[1] + h2[1] + h3[1]),
+                        quarter * (h0[2] + h1[2] + h2[2] + h3[2]),
+                    )
+                    h0, h1, h2, h3 = sub(h0, hm), sub(h1, hm), sub(h2, hm), sub(h3, hm)
+                f0, f1 = axpy(coef, h0, f0), axpy(coef, h1, f1)
+                f2, f3 = axpy(coef, h2, f2), axpy(coef, h3, f3)
+                if v_volume:
+                    v1, v2, v3 = row(W, 0, j), row(W, 1, j), row(W, 2, j)  # v_0 = 0 here
+                    vm = (
+                        quarter * (v1[0] + v2[0] + v3[0]),
+                        quarter * (v1[1] + v2[1] + v3[1]),
+                        quarter * (v1[2] + v2[2] + v3[2]),
+                    )
+                    f0 = (f0[0] + damp_v * vm[0], f0[1] + damp_v * vm[1], f0[2] + damp_v * vm[2])
+                    f1, f2 = axpy(-damp_v, sub(v1, vm), f1), axpy(-damp_v, sub(v2, vm), f2)
+                    f3 = axpy(-damp_v, sub(v3, vm), f3)
+            put(F, 0, j, f0)
+            put(F, 1, j, f1)
+            put(F, 2, j, f2)
+            put(F, 3, j, f3)
+
+    return compute
+
+
+@lru_cache(maxsize=None)
+def spring_kernel(variant: Variant):
+    """``(serial, parallel)`` force drivers of ``variant`` (compiled on first call).
+
+    Both take ``(x, w, tets, K, nvalid, out)`` (``parallel`` also ``ptr, buf``); see
+    :func:`springmodel.blocks.block_drivers`.
+    """
+    at = np.float32 if variant.precision == "float32" else np.float64
+    return block_drivers(_parts(variant), at, variant.uses_velocity)
+
+
+def variant_of(elements, options, precision: str = "float64", velocity: bool = True) -> Variant:
+    """The :class:`Variant` of ``options`` on ``elements`` (``velocity=False``: no damping)."""
+    if options.axial not in ("linear", "quadratic", "cubic", "stress-scaled"):
+        raise ValueError(f"axial law {options.axial!r} is not one of linear, quadratic, cubic, "
+                         "stress-scaled")
+    if options.torsion not in ("off", "angle", "cosine", "cubic", "energy"):
+        raise ValueError(f"torsion law {options.torsion!r} is not one of off, angle, cosine, "
+                         "cubic, energy")
+    if precision not in PRECISIONS:
+        raise ValueError(f"precision {precision!r} is not one of {', '.join(PRECISIONS)}")
+    b2, b3 = (float(b) for b in options.axial_coefficients)
+    poly = options.axial in ("quadratic", "cubic")
+    volume = options.volume_form if options.volume else "off"
+    return Variant(
+        axial=options.axial,
+        torsion=options.torsion,
+        volume=volume,
+        damp_axial=float(options.axial_damping) if velocity else 0.0,
+        damp_volume=float(options.volume_damping) if velocity and options.volume else 0.0,
+        b2=b2 if poly else 0.0,
+        b3=b3 if options.axial == "cubic" else 0.0,
+        bt=float(options.torsion_cubic) if options.torsion == "cubic" else 0.0,
+        c0=options.torsion in ("energy", "cosine", "cubic") and needs_c0(elements),
+        precision=precision,
+    )
+
+
+class SpringKernel:
+    """Spring forces of a fixed set of elements and options, on the specialised kernel.
+
+    Parameters
+    ----------
+    elements
+        Rest data (:func:`~springmodel.elements.build_spring_elements`).
+    options
+        Which parts are on and their laws.
+    parallel
+        Use all numba threads (per-thread buffers); ``None`` (default): parallel from
+        :data:`PARALLEL_MIN_ELEMENTS` elements when there is more than one thread.
+    precision
+        ``float64`` (default), ``mixed`` or ``float32`` (see the module docstring).
+
+    Examples
+    --------
+    >>> kernel = SpringKernel(elements, SpringOptions(torsion="energy"))  # doctest: +SKIP
+    >>> f = kernel.forces(x)                                              # doctest: +SKIP
+    """
+
+    def __init__(self, elements, options, parallel: bool | None = None,
+                 precision: str = "float64"):  # fmt: skip
+        self.elements, self.options, self.precision = elements, options, precision
+        self.n_points = elements.n_points
+        self._variants = {vel: variant_of(elements, options, precision, vel) for vel in (0, 1)}
+        store = np.float64 if precision == "float64" else np.float32
+        self._T, self._K = block_layout(
+            elements.tets, constant_columns(elements, self._variants[1]), store
+        )
+        self._K0 = self._K if self._variants[0] == self._variants[1] else block_layout(
+            elements.tets, constant_columns(elements, self._variants[0]), store)[1]  # fmt: skip
+        if parallel is None:
+            parallel = elements.n_elements >= PARALLEL_MIN_ELEMENTS and numba.get_num_threads() > 1
+        self.parallel = bool(parallel)
+        self._ptr = chunks(self._T.shape[0])
+        nchunk = self._ptr.size - 1
+        self._buf = np.zeros((nchunk if self.parallel else 0, self.n_points, 3))
+        self._dummy = np.zeros((1, 3))
+
+    @property
+    def bytes_per_element(self) -> int:
+        """Bytes of constants and connectivity the kernel reads per element."""
+        return int(self._K.shape[1] * self._K.itemsize + 16)
+
+    def set_volume_stiffness(self, k_volume: np.ndarray) -> None:
+        """Replace the volume constants (LMS), ``(m,)`` in the elements' order."""
+        for K, v in ((self._K, self._variants[1]), (self._K0, self._variants[0])):
+            if "ks" in v.columns():
+                set_column(K, v.columns().index("ks"), np.asarray(k_volume, dtype=float))
+        self.elements = self.elements.with_volume_stiffness(k_volume)
+
+    def forces(self, x: np.ndarray, v: np.ndarray | None = None,
+               out: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+        """Nodal spring forces ``(n, 3)`` at positions ``x`` (and velocities ``v``)."""
+        x = np.ascontiguousarray(x, dtype=np.float64).reshape(self.n_points, 3)
+        if out is None:
+            out = np.empty((self.n_points, 3))
+        vel = v is not None and self._variants[1].uses_velocity
+        variant, K = (self._variants[1], self._K) if vel else (self._variants[0], self._K0)
+        w = np.ascontiguousarray(v, dtype=np.float64) if vel else self._dummy
+        serial, parallel = spring_kernel(variant)
+        m = self.elements.n_elements
+        if self.parallel:
+            parallel(x, w, self._T, K, m, self._ptr, self._buf, out)
+        else:
+            serial(x, w, self._T, K, m, out)
+        return out
+
+    def energy(self, x: np.ndarray) -> float:
+        """Total spring energy (see :func:`springmodel.springs.spring_energy`)."""
+        from .springs import spring_energy
+
+        return spring_energy(np.asarray(x, float), self.elements, self.options)[1]
+
+
+__all__ = ["BLOCK", "PRECISIONS", "SpringKernel", "Variant", "spring_kernel", "variant_of"]
