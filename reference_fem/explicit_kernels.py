@@ -80,91 +80,125 @@ def chunks(n_blocks: int, n_threads: int | None = None) -> np.ndarray:
     return np.linspace(0, n_blocks, n + 1).round().astype(np.int64)
 
 
-def _compute(law: str, at):
+@njit(cache=True, **_FLAGS)
+def _grad_F(X, K, j):
+    """``F`` (row-major 9-tuple) and ``grad N_1..3`` of lane ``j``."""
+    B = BLOCK
+    ax, ay, az = X[j], X[B + j], X[2 * B + j]
+    bx, by, bz = X[3 * B + j], X[4 * B + j], X[5 * B + j]
+    cx, cy, cz = X[6 * B + j], X[7 * B + j], X[8 * B + j]
+    g1 = (K[j], K[B + j], K[2 * B + j])
+    g2 = (K[3 * B + j], K[4 * B + j], K[5 * B + j])
+    g3 = (K[6 * B + j], K[7 * B + j], K[8 * B + j])
+    F = (
+        ax * g1[0] + bx * g2[0] + cx * g3[0],
+        ax * g1[1] + bx * g2[1] + cx * g3[1],
+        ax * g1[2] + bx * g2[2] + cx * g3[2],
+        ay * g1[0] + by * g2[0] + cy * g3[0],
+        ay * g1[1] + by * g2[1] + cy * g3[1],
+        ay * g1[2] + by * g2[2] + cy * g3[2],
+        az * g1[0] + bz * g2[0] + cz * g3[0],
+        az * g1[1] + bz * g2[1] + cz * g3[1],
+        az * g1[2] + bz * g2[2] + cz * g3[2],
+    )
+    return F, g1, g2, g3
+
+
+@njit(cache=True, **_FLAGS)
+def _cof0(F):
+    """First row of the cofactor matrix of ``F``."""
+    return (F[4] * F[8] - F[5] * F[7], F[5] * F[6] - F[3] * F[8], F[3] * F[7] - F[4] * F[6])
+
+
+@njit(cache=True, **_FLAGS)
+def _put(Fo, V, P, g1, g2, g3, j):
+    """``f_a = -V P grad N_a`` (a = 1..3) and ``f_0 = -(f_1 + f_2 + f_3)`` into lane ``j``."""
+    B = BLOCK
+    for r in range(3):
+        f1 = -V * (P[3 * r] * g1[0] + P[3 * r + 1] * g1[1] + P[3 * r + 2] * g1[2])
+        f2 = -V * (P[3 * r] * g2[0] + P[3 * r + 1] * g2[1] + P[3 * r + 2] * g2[2])
+        f3 = -V * (P[3 * r] * g3[0] + P[3 * r + 1] * g3[1] + P[3 * r + 2] * g3[2])
+        Fo[(3 + r) * B + j] = f1
+        Fo[(6 + r) * B + j] = f2
+        Fo[(9 + r) * B + j] = f3
+        Fo[r * B + j] = -(f1 + f2 + f3)
+
+
+def _block_run(law: str, at):
+    """The law's block loop ``run(lo, hi, x, T, K, m, mu, lam, out) -> n_inverted``.
+
+    It captures only numbers (numba compiles them as constants: the law branch folds away),
+    which keeps it disk-cacheable.
+    """
     B = BLOCK
     one, zero, two = at(1.0), at(0.0), at(2.0)
     neo = law == "neo-hookean"
 
-    @njit(inline="always", **_FLAGS)
-    def grad_F(X, K, j):
-        ax, ay, az = X[j], X[B + j], X[2 * B + j]
-        bx, by, bz = X[3 * B + j], X[4 * B + j], X[5 * B + j]
-        cx, cy, cz = X[6 * B + j], X[7 * B + j], X[8 * B + j]
-        g1 = (at(K[j]), at(K[B + j]), at(K[2 * B + j]))
-        g2 = (at(K[3 * B + j]), at(K[4 * B + j]), at(K[5 * B + j]))
-        g3 = (at(K[6 * B + j]), at(K[7 * B + j]), at(K[8 * B + j]))
-        F = (
-            ax * g1[0] + bx * g2[0] + cx * g3[0],
-            ax * g1[1] + bx * g2[1] + cx * g3[1],
-            ax * g1[2] + bx * g2[2] + cx * g3[2],
-            ay * g1[0] + by * g2[0] + cy * g3[0],
-            ay * g1[1] + by * g2[1] + cy * g3[1],
-            ay * g1[2] + by * g2[2] + cy * g3[2],
-            az * g1[0] + bz * g2[0] + cz * g3[0],
-            az * g1[1] + bz * g2[1] + cz * g3[1],
-            az * g1[2] + bz * g2[2] + cz * g3[2],
-        )
-        return F, g1, g2, g3
-
-    @njit(inline="always", **_FLAGS)
-    def cof0(F):
-        return (
-            F[4] * F[8] - F[5] * F[7],
-            F[5] * F[6] - F[3] * F[8],
-            F[3] * F[7] - F[4] * F[6],
-        )
-
-    @njit(inline="always", **_FLAGS)
-    def put(Fo, V, P, g1, g2, g3, j):
-        for a in range(3):
-            g = g1 if a == 0 else (g2 if a == 1 else g3)
-            for r in range(3):
-                f = -V * (P[3 * r] * g[0] + P[3 * r + 1] * g[1] + P[3 * r + 2] * g[2])
-                Fo[(3 * (a + 1) + r) * B + j] = f
-        for r in range(3):
-            Fo[r * B + j] = -(Fo[(3 + r) * B + j] + Fo[(6 + r) * B + j] + Fo[(9 + r) * B + j])
-
-    @njit(**_FLAGS)
-    def compute(X, K, S, Jb, mu, lam, Fo):  # Jb: the lanes' J (inverted-element count)
-        if neo:
+    @njit(cache=True, **_FLAGS)
+    def run(lo, hi, x, T, K, m, mu_, lam_, out):
+        X = np.empty(9 * B, at)
+        S = np.empty(B, at)
+        Jb = np.empty(B, at)
+        Fo = np.empty(12 * B, at)
+        mu, lam = at(mu_), at(lam_)
+        bad = 0
+        for blk in range(lo, hi):
+            Tb = T[blk]
+            Kb = K[blk]
             for j in range(B):
-                F, _, _, _ = grad_F(X, K, j)
-                c = cof0(F)
-                S[j] = F[0] * c[0] + F[1] * c[1] + F[2] * c[2]
-            for j in range(B):  # scalar: log
-                J = S[j]
-                S[j] = (lam * math.log(J) - mu) / J if J > zero else zero
-        for j in range(B):
-            F, g1, g2, g3 = grad_F(X, K, j)
-            V = at(K[9 * B + j])
-            c = cof0(F)
-            J = F[0] * c[0] + F[1] * c[1] + F[2] * c[2]
-            Jb[j] = J
+                i0 = Tb[j]
+                for k in range(3):
+                    i = Tb[(k + 1) * B + j]
+                    for d in range(3):
+                        X[(3 * k + d) * B + j] = at(x[i, d] - x[i0, d])
             if neo:
-                s = S[j]
-                V = V if J > zero else zero
-                P = (
-                    mu * F[0] + s * c[0],
-                    mu * F[1] + s * c[1],
-                    mu * F[2] + s * c[2],
-                    mu * F[3] + s * (F[2] * F[7] - F[1] * F[8]),
-                    mu * F[4] + s * (F[0] * F[8] - F[2] * F[6]),
-                    mu * F[5] + s * (F[1] * F[6] - F[0] * F[7]),
-                    mu * F[6] + s * (F[1] * F[5] - F[2] * F[4]),
-                    mu * F[7] + s * (F[2] * F[3] - F[0] * F[5]),
-                    mu * F[8] + s * (F[0] * F[4] - F[1] * F[3]),
-                )
-            else:
-                tr = lam * ((F[0] - one) + (F[4] - one) + (F[8] - one))
-                s01, s02, s12 = mu * (F[1] + F[3]), mu * (F[2] + F[6]), mu * (F[5] + F[7])
-                P = (
-                    two * mu * (F[0] - one) + tr, s01, s02,
-                    s01, two * mu * (F[4] - one) + tr, s12,
-                    s02, s12, two * mu * (F[8] - one) + tr,
-                )  # fmt: skip
-            put(Fo, V, P, g1, g2, g3, j)
+                for j in range(B):  # J, vectorised
+                    F, _, _, _ = _grad_F(X, Kb, j)
+                    c = _cof0(F)
+                    S[j] = F[0] * c[0] + F[1] * c[1] + F[2] * c[2]
+                for j in range(B):  # scalar: log
+                    J = S[j]
+                    S[j] = (lam * math.log(J) - mu) / J if J > zero else zero
+            for j in range(B):  # stress and forces, vectorised
+                F, g1, g2, g3 = _grad_F(X, Kb, j)
+                V = at(Kb[9 * B + j])
+                c = _cof0(F)
+                J = F[0] * c[0] + F[1] * c[1] + F[2] * c[2]
+                Jb[j] = J
+                if neo:
+                    s = S[j]
+                    V = V if J > zero else zero
+                    P = (
+                        mu * F[0] + s * c[0],
+                        mu * F[1] + s * c[1],
+                        mu * F[2] + s * c[2],
+                        mu * F[3] + s * (F[2] * F[7] - F[1] * F[8]),
+                        mu * F[4] + s * (F[0] * F[8] - F[2] * F[6]),
+                        mu * F[5] + s * (F[1] * F[6] - F[0] * F[7]),
+                        mu * F[6] + s * (F[1] * F[5] - F[2] * F[4]),
+                        mu * F[7] + s * (F[2] * F[3] - F[0] * F[5]),
+                        mu * F[8] + s * (F[0] * F[4] - F[1] * F[3]),
+                    )
+                else:
+                    tr = lam * ((F[0] - one) + (F[4] - one) + (F[8] - one))
+                    s01, s02, s12 = mu * (F[1] + F[3]), mu * (F[2] + F[6]), mu * (F[5] + F[7])
+                    P = (
+                        two * mu * (F[0] - one) + tr, s01, s02,
+                        s01, two * mu * (F[4] - one) + tr, s12,
+                        s02, s12, two * mu * (F[8] - one) + tr,
+                    )  # fmt: skip
+                _put(Fo, V, P, g1, g2, g3, j)
+            nv = min(B, m - blk * B)
+            for j in range(nv):
+                bad += 1 if Jb[j] <= zero else 0
+                for k in range(4):
+                    i = Tb[k * B + j]
+                    out[i, 0] += Fo[(3 * k) * B + j]
+                    out[i, 1] += Fo[(3 * k + 1) * B + j]
+                    out[i, 2] += Fo[(3 * k + 2) * B + j]
+        return bad
 
-    return compute
+    return run
 
 
 @lru_cache(maxsize=None)
@@ -179,38 +213,8 @@ def fem_kernel(law: str, precision: str = "float64"):
         raise ValueError(f"law {law!r} is not one of neo-hookean, linear")
     if precision not in PRECISIONS:
         raise ValueError(f"precision {precision!r} is not one of {', '.join(PRECISIONS)}")
-    at = np.float32 if precision == "float32" else np.float64
-    compute = _compute(law, at)
-    B = BLOCK
+    run = _block_run(law, np.float32 if precision == "float32" else np.float64)
 
-    @njit(**_FLAGS)
-    def run(lo, hi, x, T, K, m, mu, lam, out):
-        X = np.empty(9 * B, at)
-        S = np.empty(B, at)
-        Jb = np.empty(B, at)
-        Fo = np.empty(12 * B, at)
-        mu_, lam_ = at(mu), at(lam)
-        bad = 0
-        for b in range(lo, hi):
-            Tb = T[b]
-            for j in range(B):
-                i0 = Tb[j]
-                for k in range(3):
-                    i = Tb[(k + 1) * B + j]
-                    for d in range(3):
-                        X[(3 * k + d) * B + j] = at(x[i, d] - x[i0, d])
-            compute(X, K[b], S, Jb, mu_, lam_, Fo)
-            nv = min(B, m - b * B)
-            for j in range(nv):
-                bad += 1 if Jb[j] <= 0.0 else 0
-                for k in range(4):
-                    i = Tb[k * B + j]
-                    out[i, 0] += Fo[(3 * k) * B + j]
-                    out[i, 1] += Fo[(3 * k + 1) * B + j]
-                    out[i, 2] += Fo[(3 * k + 2) * B + j]
-        return bad
-
-    @njit(**_FLAGS)
     def serial(x, T, K, m, mu, lam, out):
         out[:] = 0.0
         return run(0, T.shape[0], x, T, K, m, mu, lam, out)

@@ -13,6 +13,7 @@ from typing import Any, Literal, get_args
 from springfem.scene import Scene, TableReader, register_section
 
 LinearSolver = Literal["auto", "direct", "amg"]
+Precision = Literal["float64", "mixed", "float32"]
 
 
 @dataclass(frozen=True)
@@ -32,6 +33,9 @@ class FemOptions:
         Newton iterations per load step.
     load_steps
         Initial number of load steps (adapted: cut back on divergence, grown on easy steps).
+    precision
+        Explicit force kernel: ``float64``, ``mixed`` (float32 constants, float64
+        arithmetic) or ``float32``.
     """
 
     order: int = 1
@@ -39,11 +43,13 @@ class FemOptions:
     tol: float = 1e-10
     max_iter: int = 25
     load_steps: int = 1
+    precision: Precision = "float64"
 
     @classmethod
     def choices(cls, name: str) -> tuple[str, ...]:
         """Valid string values of the option ``name`` (empty for non-string options)."""
-        return get_args(LinearSolver) if name == "linear_solver" else ()
+        hints = {"linear_solver": LinearSolver, "precision": Precision}
+        return get_args(hints[name]) if name in hints else ()
 
     @classmethod
     def of(cls, scene: Scene) -> FemOptions:
@@ -72,6 +78,8 @@ def parse_fem_options(r: TableReader) -> FemOptions:
         kw["linear_solver"] = r.get(
             "linear_solver", "str", choices=FemOptions.choices("linear_solver")
         )
+    if r.has("precision"):
+        kw["precision"] = r.get("precision", "str", choices=FemOptions.choices("precision"))
     for key in ("tol",):
         if r.has(key):
             kw[key] = r.get(key, "float", positive=True)

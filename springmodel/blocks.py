@@ -71,17 +71,14 @@ def chunks(n_blocks: int, n_threads: int | None = None) -> np.ndarray:
     return np.linspace(0, n_blocks, n + 1).round().astype(np.int64)
 
 
-def block_drivers(compute, at, uses_velocity: bool):
-    """Serial and parallel drivers around a block ``compute`` kernel.
+def block_drivers(run):
+    """Serial and parallel drivers around a variant's block loop.
 
     Parameters
     ----------
-    compute
-        numba function ``compute(X, W, Kb, F)`` over the lanes of one block.
-    at
-        Arithmetic type (positions are gathered in it).
-    uses_velocity
-        Whether ``compute`` reads velocities ``W``.
+    run
+        numba function ``run(lo, hi, x, w, T, K, m, out)`` adding the forces of blocks
+        ``lo..hi`` into ``out``.
 
     Returns
     -------
@@ -89,33 +86,7 @@ def block_drivers(compute, at, uses_velocity: bool):
         ``serial(x, w, T, K, m, out)`` and ``parallel(x, w, T, K, m, ptr, buf, out)``;
         both overwrite ``out (n, 3)`` float64 with the nodal forces.
     """
-    B = BLOCK
 
-    @njit(**_FLAGS)
-    def run(lo, hi, x, w, T, K, m, out):
-        X = np.empty(9 * B, at)
-        W = np.empty(9 * B, at) if uses_velocity else X
-        F = np.empty(12 * B, at)
-        for b in range(lo, hi):
-            Tb = T[b]
-            for j in range(B):  # edge vectors x_k - x_0, differences taken in float64
-                i0 = Tb[j]
-                for k in range(3):
-                    i = Tb[(k + 1) * B + j]
-                    for d in range(3):
-                        X[(3 * k + d) * B + j] = at(x[i, d] - x[i0, d])
-                        if uses_velocity:
-                            W[(3 * k + d) * B + j] = at(w[i, d] - w[i0, d])
-            compute(X, W, K[b], F)
-            nv = min(B, m - b * B)
-            for j in range(nv):
-                for k in range(4):
-                    i = Tb[k * B + j]
-                    out[i, 0] += F[(3 * k) * B + j]
-                    out[i, 1] += F[(3 * k + 1) * B + j]
-                    out[i, 2] += F[(3 * k + 2) * B + j]
-
-    @njit(**_FLAGS)
     def serial(x, w, T, K, m, out):
         out[:] = 0.0
         run(0, T.shape[0], x, w, T, K, m, out)

@@ -145,8 +145,84 @@ def needs_c0(elements, tol: float = 1e-14) -> bool:
 # --------------------------------------------------------------------------- the factory
 
 
-def _parts(v: Variant):
-    """numba functions of the enabled parts, chosen here, in Python."""
+_AXIAL = {"linear": 0, "quadratic": 1, "cubic": 1, "stress-scaled": 2}
+_TORSION = {"off": 0, "angle": 1, "cosine": 2, "cubic": 3, "energy": 4}
+
+
+@njit(cache=True, **_FLAGS)
+def _comb(g1, g2, g3, a, b, c):
+    return (
+        g1 * a[0] + g2 * b[0] + g3 * c[0],
+        g1 * a[1] + g2 * b[1] + g3 * c[1],
+        g1 * a[2] + g2 * b[2] + g3 * c[2],
+    )
+
+
+@njit(cache=True, **_FLAGS)
+def _unit(z):
+    n = math.sqrt(z[0] * z[0] + z[1] * z[1] + z[2] * z[2])
+    return n, (z[0] / n, z[1] / n, z[2] / n)
+
+
+@njit(cache=True, **_FLAGS)
+def _axpy(s, a, b):
+    return (s * a[0] + b[0], s * a[1] + b[1], s * a[2] + b[2])
+
+
+@njit(cache=True, **_FLAGS)
+def _add(a, b):
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+@njit(cache=True, **_FLAGS)
+def _sub(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+@njit(cache=True, **_FLAGS)
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@njit(cache=True, **_FLAGS)
+def _axial(law, lam, k, jac, b2, b3, one):
+    """``l0 s``: the axial force magnitude times the rest length."""
+    e = lam - one
+    if law == 0:
+        return -k * e  # eq. 2.35
+    if law == 2:
+        return -k * e / lam * jac  # E (d/l0) (V/|zeta|)
+    return -k * (e + b2 * e * e + b3 * e * e * e)  # eq. 2.36
+
+
+@njit(cache=True, **_FLAGS)
+def _pair(law, ul, um, lam_l, lam_m, k_l, k_m, t0, bt, one):
+    """Forces on the + ends of axes ``l`` and ``m`` of one torsion spring, times ``l0``."""
+    c = ul[0] * um[0] + ul[1] * um[1] + ul[2] * um[2]  # eq. 2.32
+    if law == 4:  # energy: k_l = k_m = k
+        dc = c - t0
+        sl, sm = -k_l * dc / lam_l, -k_l * dc / lam_m
+        return (
+            (sl * (um[0] - c * ul[0]), sl * (um[1] - c * ul[1]), sl * (um[2] - c * ul[2])),
+            (sm * (ul[0] - c * um[0]), sm * (ul[1] - c * um[1]), sm * (ul[2] - c * um[2])),
+        )
+    if law == 2:
+        s = -(c - t0)  # eqs. 2.44-2.45
+    elif law == 3:
+        dc = c - t0
+        s = -(dc + bt * dc * dc * dc)  # eqs. 2.47-2.50
+    else:
+        s = math.acos(min(max(c, -one), one)) - t0  # eqs. 2.40-2.41, restoring
+    sl, sm = s * k_l, s * k_m
+    return (sl * um[0], sl * um[1], sl * um[2]), (sm * ul[0], sm * ul[1], sm * ul[2])
+
+
+def _block_run(v: Variant):
+    """The variant's block loop ``run(lo, hi, x, w, T, K, m, out)``: gather, compute, scatter.
+
+    It captures only numbers (the law codes, coefficients and column offsets), which numba
+    compiles as constants (so the law branches fold away) and which keep it disk-cacheable.
+    """
     at = np.float32 if v.precision == "float32" else np.float64
     one, zero, quarter = at(1.0), at(0.0), at(0.25)
     b2, b3, bt = at(v.b2), at(v.b3), at(v.bt)
@@ -157,204 +233,139 @@ def _parts(v: Variant):
     T0 = cols.get("a00", cols.get("c00", 0))
     KS, INV6 = cols.get("ks", 0), cols.get("inv6v0", 0)
     has_c0 = "c00" in cols or "a00" in cols
-    torsion, axial, volume = v.torsion, v.axial, v.volume
-
-    if axial == "linear":
-
-        @njit(inline="always", **_FLAGS)
-        def axial_s(lam, k, jac):
-            return -k * (lam - one)  # eq. 2.35, times l0
-    elif axial == "stress-scaled":
-
-        @njit(inline="always", **_FLAGS)
-        def axial_s(lam, k, jac):
-            return -k * (lam - one) / lam * jac  # E (d/l0) (V/|zeta|), times l0
-    else:
-
-        @njit(inline="always", **_FLAGS)
-        def axial_s(lam, k, jac):
-            e = lam - one
-            return -k * (e + b2 * e * e + b3 * e * e * e)  # eq. 2.36, times l0
-
-    if torsion == "energy":
-
-        @njit(inline="always", **_FLAGS)
-        def pair(ul, um, lam_l, lam_m, K, p, j):
-            c = ul[0] * um[0] + ul[1] * um[1] + ul[2] * um[2]  # eq. 2.32
-            dc = c - (at(K[(T0 + p) * B + j]) if has_c0 else zero)
-            kt = at(K[(KT + p) * B + j])
-            sl, sm = -kt * dc / lam_l, -kt * dc / lam_m
-            return (
-                (sl * (um[0] - c * ul[0]), sl * (um[1] - c * ul[1]), sl * (um[2] - c * ul[2])),
-                (sm * (ul[0] - c * um[0]), sm * (ul[1] - c * um[1]), sm * (ul[2] - c * um[2])),
-            )
-    elif torsion == "off":
-
-        @njit(inline="always", **_FLAGS)
-        def pair(ul, um, lam_l, lam_m, K, p, j):
-            return (zero, zero, zero), (zero, zero, zero)
-    else:
-        if torsion == "cosine":
-
-            @njit(inline="always", **_FLAGS)
-            def law(c, t0):
-                return -(c - t0)  # eqs. 2.44-2.45
-        elif torsion == "cubic":
-
-            @njit(inline="always", **_FLAGS)
-            def law(c, t0):
-                dc = c - t0
-                return -(dc + bt * dc * dc * dc)  # eqs. 2.47-2.50
-        else:
-
-            @njit(inline="always", **_FLAGS)
-            def law(c, t0):
-                return math.acos(min(max(c, -one), one)) - t0  # eqs. 2.40-2.41, restoring
-
-        @njit(inline="always", **_FLAGS)
-        def pair(ul, um, lam_l, lam_m, K, p, j):
-            c = ul[0] * um[0] + ul[1] * um[1] + ul[2] * um[2]
-            s = law(c, at(K[(T0 + p) * B + j]) if has_c0 else zero)
-            sl, sm = s * at(K[(KT + 2 * p) * B + j]), s * at(K[(KT + 2 * p + 1) * B + j])
-            return (sl * um[0], sl * um[1], sl * um[2]), (sm * ul[0], sm * ul[1], sm * ul[2])
-
-    spec = volume == "spec"
-    stress = axial == "stress-scaled"
-    vol_on = volume != "off"
-    tors_on = torsion != "off"
+    AX, TO = _AXIAL[v.axial], _TORSION[v.torsion]
+    energy = v.torsion == "energy"
+    spec = v.volume == "spec"
+    stress = v.axial == "stress-scaled"
+    vol_on = v.volume != "off"
+    tors_on = v.torsion != "off"
     v_axial = bool(v.damp_axial)
     v_volume = vol_on and bool(v.damp_volume)
+    uses_w = v_axial or v_volume
     damp_v = at(v.damp_volume)
 
-    @njit(inline="always", **_FLAGS)
-    def comb(g1, g2, g3, a, b, c):
-        return (
-            g1 * a[0] + g2 * b[0] + g3 * c[0],
-            g1 * a[1] + g2 * b[1] + g3 * c[1],
-            g1 * a[2] + g2 * b[2] + g3 * c[2],
-        )
-
-    @njit(inline="always", **_FLAGS)
-    def unit(z):
-        n = math.sqrt(z[0] * z[0] + z[1] * z[1] + z[2] * z[2])
-        return n, (z[0] / n, z[1] / n, z[2] / n)
-
-    @njit(inline="always", **_FLAGS)
-    def axpy(s, a, b):
-        return (s * a[0] + b[0], s * a[1] + b[1], s * a[2] + b[2])
-
-    @njit(inline="always", **_FLAGS)
-    def add(a, b):
-        return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
-
-    @njit(inline="always", **_FLAGS)
-    def sub(a, b):
-        return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-    @njit(inline="always", **_FLAGS)
-    def dot(a, b):
-        return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-    @njit(inline="always", **_FLAGS)
-    def put(F, i, j, f):
-        F[(3 * i) * B + j] = f[0]
-        F[(3 * i + 1) * B + j] = f[1]
-        F[(3 * i + 2) * B + j] = f[2]
-
-    @njit(inline="always", **_FLAGS)
-    def row(X, i, j):
-        return (X[(3 * i) * B + j], X[(3 * i + 1) * B + j], X[(3 * i + 2) * B + j])
-
-    @njit(**_FLAGS)
-    def compute(X, W, K, F):
-        # one block, flat lane-major arrays: X, W (9 B) edge vectors x_i - x_0 (i = 1..3) of
-        # positions and velocities, K (ncol B) constants, F (12 B) vertex forces
-        for j in range(B):
-            a, b, c = row(X, 0, j), row(X, 1, j), row(X, 2, j)
-            g10, g11, g12 = at(K[0 * B + j]), at(K[1 * B + j]), at(K[2 * B + j])
-            g20, g21, g22 = at(K[3 * B + j]), at(K[4 * B + j]), at(K[5 * B + j])
-            g30, g31, g32 = at(K[6 * B + j]), at(K[7 * B + j]), at(K[8 * B + j])
-            # stretch vectors zeta_l / l0_l: their lengths (stretches) and directions
-            lam0, u0 = unit(comb(g10, g20, g30, a, b, c))
-            lam1, u1 = unit(comb(g11, g21, g31, a, b, c))
-            lam2, u2 = unit(comb(g12, g22, g32, a, b, c))
-            jac = one
-            if stress:
-                jac = at(K[INV6 * B + j]) * (
-                    a[0] * (b[1] * c[2] - b[2] * c[1])
-                    - a[1] * (b[0] * c[2] - b[2] * c[0])
-                    + a[2] * (b[0] * c[1] - b[1] * c[0])
-                )
-            s0 = axial_s(lam0, at(K[KA * B + j]), jac)
-            s1 = axial_s(lam1, at(K[(KA + 1) * B + j]), jac)
-            s2 = axial_s(lam2, at(K[(KA + 2) * B + j]), jac)
-            if v_axial:
-                wa, wb, wc = row(W, 0, j), row(W, 1, j), row(W, 2, j)
-                s0 -= at(K[CA * B + j]) * dot(comb(g10, g20, g30, wa, wb, wc), u0)
-                s1 -= at(K[(CA + 1) * B + j]) * dot(comb(g11, g21, g31, wa, wb, wc), u1)
-                s2 -= at(K[(CA + 2) * B + j]) * dot(comb(g12, g22, g32, wa, wb, wc), u2)
-            q0 = (s0 * u0[0], s0 * u0[1], s0 * u0[2])
-            q1 = (s1 * u1[0], s1 * u1[1], s1 * u1[2])
-            q2 = (s2 * u2[0], s2 * u2[1], s2 * u2[2])
-            if tors_on:
-                fl, fm = pair(u0, u1, lam0, lam1, K, 0, j)
-                q0, q1 = add(q0, fl), add(q1, fm)
-                fl, fm = pair(u0, u2, lam0, lam2, K, 1, j)
-                q0, q2 = add(q0, fl), add(q2, fm)
-                fl, fm = pair(u1, u2, lam1, lam2, K, 2, j)
-                q1, q2 = add(q1, fl), add(q2, fm)
-            # f_i = sum_l G'[i,l] q_l,  f_0 = -(f_1 + f_2 + f_3)
-            f1 = comb(g10, g11, g12, q0, q1, q2)
-            f2 = comb(g20, g21, g22, q0, q1, q2)
-            f3 = comb(g30, g31, g32, q0, q1, q2)
-            f0 = (-(f1[0] + f2[0] + f3[0]), -(f1[1] + f2[1] + f3[1]), -(f1[2] + f2[2] + f3[2]))
-            if vol_on:  # xi_j = x_j - x_b (eqs. 2.76-2.77)
-                xb = (
-                    quarter * (a[0] + b[0] + c[0]),
-                    quarter * (a[1] + b[1] + c[1]),
-                    quarter * (a[2] + b[2] + c[2]),
-                )
-                r0, h0 = unit((-xb[0], -xb[1], -xb[2]))
-                r1, h1 = unit(sub(a, xb))
-                r2, h2 = unit(sub(b, xb))
-                r3, h3 = unit(sub(c, xb))
-                coef = -at(K[KS * B + j]) * (r0 + r1 + r2 + r3 - at(K[(KS + 1) * B + j]))
-                if not spec:
-                    hm = (
-                        quarter * (h0[0] + h1[0] + h2[0] + h3[0]),
-                        quarter * (h0[1] + h1[1] + h2[1] + h3[1]),
-                        quarter * (h0[2] + h1[2] + h2[2] + h3[2]),
+    @njit(cache=True, **_FLAGS)
+    def run(lo, hi, x, w, T, K, m, out):
+        X = np.empty(9 * B, at)
+        W = np.empty(9 * B, at) if uses_w else X
+        F = np.empty(12 * B, at)
+        for blk in range(lo, hi):
+            Tb = T[blk]
+            Kb = K[blk]
+            for j in range(B):  # edge vectors x_k - x_0, differences taken in float64
+                i0 = Tb[j]
+                for k in range(3):
+                    i = Tb[(k + 1) * B + j]
+                    for d in range(3):
+                        X[(3 * k + d) * B + j] = at(x[i, d] - x[i0, d])
+                        if uses_w:
+                            W[(3 * k + d) * B + j] = at(w[i, d] - w[i0, d])
+            for j in range(B):  # the lanes: no gathers, no branches (vectorised)
+                a = (X[j], X[B + j], X[2 * B + j])
+                b = (X[3 * B + j], X[4 * B + j], X[5 * B + j])
+                c = (X[6 * B + j], X[7 * B + j], X[8 * B + j])
+                g10, g11, g12 = at(Kb[j]), at(Kb[B + j]), at(Kb[2 * B + j])
+                g20, g21, g22 = at(Kb[3 * B + j]), at(Kb[4 * B + j]), at(Kb[5 * B + j])
+                g30, g31, g32 = at(Kb[6 * B + j]), at(Kb[7 * B + j]), at(Kb[8 * B + j])
+                # stretch vectors zeta_l / l0_l: their lengths (stretches) and directions
+                lam0, u0 = _unit(_comb(g10, g20, g30, a, b, c))
+                lam1, u1 = _unit(_comb(g11, g21, g31, a, b, c))
+                lam2, u2 = _unit(_comb(g12, g22, g32, a, b, c))
+                jac = one
+                if stress:
+                    jac = at(Kb[INV6 * B + j]) * (
+                        a[0] * (b[1] * c[2] - b[2] * c[1])
+                        - a[1] * (b[0] * c[2] - b[2] * c[0])
+                        + a[2] * (b[0] * c[1] - b[1] * c[0])
                     )
-                    h0, h1, h2, h3 = sub(h0, hm), sub(h1, hm), sub(h2, hm), sub(h3, hm)
-                f0, f1 = axpy(coef, h0, f0), axpy(coef, h1, f1)
-                f2, f3 = axpy(coef, h2, f2), axpy(coef, h3, f3)
-                if v_volume:
-                    v1, v2, v3 = row(W, 0, j), row(W, 1, j), row(W, 2, j)  # v_0 = 0 here
-                    vm = (
-                        quarter * (v1[0] + v2[0] + v3[0]),
-                        quarter * (v1[1] + v2[1] + v3[1]),
-                        quarter * (v1[2] + v2[2] + v3[2]),
+                s0 = _axial(AX, lam0, at(Kb[KA * B + j]), jac, b2, b3, one)
+                s1 = _axial(AX, lam1, at(Kb[(KA + 1) * B + j]), jac, b2, b3, one)
+                s2 = _axial(AX, lam2, at(Kb[(KA + 2) * B + j]), jac, b2, b3, one)
+                if v_axial:
+                    wa = (W[j], W[B + j], W[2 * B + j])
+                    wb = (W[3 * B + j], W[4 * B + j], W[5 * B + j])
+                    wc = (W[6 * B + j], W[7 * B + j], W[8 * B + j])
+                    s0 -= at(Kb[CA * B + j]) * _dot(_comb(g10, g20, g30, wa, wb, wc), u0)
+                    s1 -= at(Kb[(CA + 1) * B + j]) * _dot(_comb(g11, g21, g31, wa, wb, wc), u1)
+                    s2 -= at(Kb[(CA + 2) * B + j]) * _dot(_comb(g12, g22, g32, wa, wb, wc), u2)
+                q0 = (s0 * u0[0], s0 * u0[1], s0 * u0[2])
+                q1 = (s1 * u1[0], s1 * u1[1], s1 * u1[2])
+                q2 = (s2 * u2[0], s2 * u2[1], s2 * u2[2])
+                if tors_on:
+                    for p in range(3):
+                        kl = at(Kb[(KT + (p if energy else 2 * p)) * B + j])
+                        km = kl if energy else at(Kb[(KT + 2 * p + 1) * B + j])
+                        t0 = at(Kb[(T0 + p) * B + j]) if has_c0 else zero
+                        if p == 0:
+                            fl, fm = _pair(TO, u0, u1, lam0, lam1, kl, km, t0, bt, one)
+                            q0, q1 = _add(q0, fl), _add(q1, fm)
+                        elif p == 1:
+                            fl, fm = _pair(TO, u0, u2, lam0, lam2, kl, km, t0, bt, one)
+                            q0, q2 = _add(q0, fl), _add(q2, fm)
+                        else:
+                            fl, fm = _pair(TO, u1, u2, lam1, lam2, kl, km, t0, bt, one)
+                            q1, q2 = _add(q1, fl), _add(q2, fm)
+                # f_i = sum_l G'[i,l] q_l,  f_0 = -(f_1 + f_2 + f_3)
+                f1 = _comb(g10, g11, g12, q0, q1, q2)
+                f2 = _comb(g20, g21, g22, q0, q1, q2)
+                f3 = _comb(g30, g31, g32, q0, q1, q2)
+                f0 = (-(f1[0] + f2[0] + f3[0]), -(f1[1] + f2[1] + f3[1]), -(f1[2] + f2[2] + f3[2]))
+                if vol_on:  # xi_j = x_j - x_b (eqs. 2.76-2.77)
+                    xb = (
+                        quarter * (a[0] + b[0] + c[0]),
+                        quarter * (a[1] + b[1] + c[1]),
+                        quarter * (a[2] + b[2] + c[2]),
                     )
-                    f0 = (f0[0] + damp_v * vm[0], f0[1] + damp_v * vm[1], f0[2] + damp_v * vm[2])
-                    f1, f2 = axpy(-damp_v, sub(v1, vm), f1), axpy(-damp_v, sub(v2, vm), f2)
-                    f3 = axpy(-damp_v, sub(v3, vm), f3)
-            put(F, 0, j, f0)
-            put(F, 1, j, f1)
-            put(F, 2, j, f2)
-            put(F, 3, j, f3)
+                    r0, h0 = _unit((-xb[0], -xb[1], -xb[2]))
+                    r1, h1 = _unit(_sub(a, xb))
+                    r2, h2 = _unit(_sub(b, xb))
+                    r3, h3 = _unit(_sub(c, xb))
+                    coef = -at(Kb[KS * B + j]) * (r0 + r1 + r2 + r3 - at(Kb[(KS + 1) * B + j]))
+                    if not spec:
+                        hm = (
+                            quarter * (h0[0] + h1[0] + h2[0] + h3[0]),
+                            quarter * (h0[1] + h1[1] + h2[1] + h3[1]),
+                            quarter * (h0[2] + h1[2] + h2[2] + h3[2]),
+                        )
+                        h0, h1, h2, h3 = _sub(h0, hm), _sub(h1, hm), _sub(h2, hm), _sub(h3, hm)
+                    f0, f1 = _axpy(coef, h0, f0), _axpy(coef, h1, f1)
+                    f2, f3 = _axpy(coef, h2, f2), _axpy(coef, h3, f3)
+                    if v_volume:  # v_0 = 0 in the differences
+                        v1 = (W[j], W[B + j], W[2 * B + j])
+                        v2 = (W[3 * B + j], W[4 * B + j], W[5 * B + j])
+                        v3 = (W[6 * B + j], W[7 * B + j], W[8 * B + j])
+                        vm = (
+                            quarter * (v1[0] + v2[0] + v3[0]),
+                            quarter * (v1[1] + v2[1] + v3[1]),
+                            quarter * (v1[2] + v2[2] + v3[2]),
+                        )
+                        f0 = _axpy(damp_v, vm, f0)
+                        f1, f2 = _axpy(-damp_v, _sub(v1, vm), f1), _axpy(-damp_v, _sub(v2, vm), f2)
+                        f3 = _axpy(-damp_v, _sub(v3, vm), f3)
+                for d in range(3):
+                    F[d * B + j] = f0[d]
+                    F[(3 + d) * B + j] = f1[d]
+                    F[(6 + d) * B + j] = f2[d]
+                    F[(9 + d) * B + j] = f3[d]
+            nv = min(B, m - blk * B)
+            for j in range(nv):  # scatter (two lanes may share a node: scalar)
+                for k in range(4):
+                    i = Tb[k * B + j]
+                    out[i, 0] += F[(3 * k) * B + j]
+                    out[i, 1] += F[(3 * k + 1) * B + j]
+                    out[i, 2] += F[(3 * k + 2) * B + j]
 
-    return compute
+    return run
 
 
 @lru_cache(maxsize=None)
 def spring_kernel(variant: Variant):
     """``(serial, parallel)`` force drivers of ``variant`` (compiled on first call).
 
-    Both take ``(x, w, tets, K, nvalid, out)`` (``parallel`` also ``ptr, buf``); see
+    ``serial(x, w, T, K, m, out)``, ``parallel(x, w, T, K, m, ptr, buf, out)``; see
     :func:`springmodel.blocks.block_drivers`.
     """
-    at = np.float32 if variant.precision == "float32" else np.float64
-    return block_drivers(_parts(variant), at, variant.uses_velocity)
+    return block_drivers(_block_run(variant))
 
 
 def variant_of(elements, options, precision: str = "float64", velocity: bool = True) -> Variant:
@@ -427,7 +438,7 @@ class SpringKernel:
     @property
     def bytes_per_element(self) -> int:
         """Bytes of constants and connectivity the kernel reads per element."""
-        return int(self._K.shape[1] * self._K.itemsize + 16)
+        return int(self._K.shape[1] // BLOCK * self._K.itemsize + 16)
 
     def set_volume_stiffness(self, k_volume: np.ndarray) -> None:
         """Replace the volume constants (LMS), ``(m,)`` in the elements' order."""

@@ -27,7 +27,7 @@ from springfem.result import Result, volume_summary
 from springfem.scene import Scene
 
 from .elements import SpringElements, build_spring_elements
-from .kernels import ForceKernel
+from .fastkernels import SpringKernel
 from .options import SpringOptions
 from .springs import is_conservative, lms_update, volume_measures
 
@@ -43,7 +43,7 @@ class SpringModel:
         Overrides ``SpringOptions.of(scene)`` (studies switch parts on and off this way).
     parallel
         Use the parallel fused kernel (both cores). ``None`` (default): the kernel's own
-        choice, parallel from ``ForceKernel.PARALLEL_MIN_ELEMENTS`` elements up; below that
+        choice, parallel from ``fastkernels.PARALLEL_MIN_ELEMENTS`` elements up; below that
         thread synchronisation costs more than a serial pass.
     """
 
@@ -56,7 +56,9 @@ class SpringModel:
         self.elements: SpringElements = build_spring_elements(
             mesh.points, mesh.tets, scene.frames, self.options, scene.material
         )
-        self.kernel = ForceKernel(self.elements, self.options, parallel=parallel)
+        self.kernel = SpringKernel(
+            self.elements, self.options, parallel=parallel, precision=self.options.precision
+        )
         self.x0 = mesh.points.copy()
         self.masses = lumped_masses(scene)
         self.fixed_dofs, self._fixed_values = scene.dirichlet()
