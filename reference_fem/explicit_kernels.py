@@ -32,7 +32,7 @@ Examples
 from __future__ import annotations
 
 import math
-from functools import lru_cache
+from functools import cache
 
 import numba
 import numpy as np
@@ -183,10 +183,16 @@ def _block_run(law: str, at):
                     tr = lam * ((F[0] - one) + (F[4] - one) + (F[8] - one))
                     s01, s02, s12 = mu * (F[1] + F[3]), mu * (F[2] + F[6]), mu * (F[5] + F[7])
                     P = (
-                        two * mu * (F[0] - one) + tr, s01, s02,
-                        s01, two * mu * (F[4] - one) + tr, s12,
-                        s02, s12, two * mu * (F[8] - one) + tr,
-                    )  # fmt: skip
+                        two * mu * (F[0] - one) + tr,
+                        s01,
+                        s02,
+                        s01,
+                        two * mu * (F[4] - one) + tr,
+                        s12,
+                        s02,
+                        s12,
+                        two * mu * (F[8] - one) + tr,
+                    )
                 _put(Fo, V, P, g1, g2, g3, j)
             nv = min(B, m - blk * B)
             for j in range(nv):
@@ -201,7 +207,7 @@ def _block_run(law: str, at):
     return run
 
 
-@lru_cache(maxsize=None)
+@cache
 def fem_kernel(law: str, precision: str = "float64"):
     """``(serial, parallel)`` force drivers of ``law`` at ``precision`` (compiled on first call).
 

@@ -1,13 +1,13 @@
 """Blocked structure-of-arrays element layout and the drivers that run a block kernel.
 
 Elements are stored in blocks of :data:`BLOCK`: connectivity ``T (nb, 4 B)`` int32 and
-constants ``K (nb, ncol B)`` (row ``b`` holds block ``b``, lane-major: ``K[b, c B + j]``). A driver gathers a block's
-edge vectors ``x_i - x_0`` (and velocity differences; taken in float64, then stored in the
-arithmetic type) into a flat ``9 B`` scratch, calls the variant's
-``compute(X, W, K[b], F)`` (one loop over the lanes, no gathers, no branches: LLVM
-vectorises it) and adds the ``12 B`` vertex forces into the nodal array (the only
-scattered writes, in a scalar loop: two lanes may share a node). The last block is padded
-with copies of the last element; its padded lanes are computed but never scattered.
+constants ``K (nb, ncol B)``, row ``b`` holding block ``b`` lane-major (``K[b, c B + j]``).
+A variant's block loop (:mod:`springmodel.fastkernels`) gathers a block's edge vectors
+``x_i - x_0`` (differences taken in float64, then stored in the arithmetic type) into a flat
+``9 B`` scratch, computes the lanes in one loop with no gathers and no branches (LLVM
+vectorises it), and adds the ``12 B`` vertex forces into the nodal array (the only scattered
+writes, in a scalar loop: two lanes may share a node). The last block is padded with copies
+of the last element; its padded lanes are computed but never scattered.
 
 Parallel passes split the blocks into one static contiguous chunk per thread, each adding
 into its own force buffer, summed in chunk order (deterministic for a given number of

@@ -4,11 +4,13 @@
 parts and laws (:class:`Variant`). The laws are chosen in Python when the kernel is built,
 so the compiled loop holds only the arithmetic of that variant: no law codes, no branches.
 
-Layout (:mod:`springmodel.blocks`): elements in blocks of :data:`BLOCK`; per block the
-connectivity ``(4, B)`` int32 and the constants ``(ncol, B)`` structure-of-arrays. A block is
-gathered (vertex positions into a ``(12, B)`` scratch), computed in one branch-free loop over
-its lanes (which LLVM vectorises: ``error_model='numpy'``, contraction to FMA allowed), and
-scattered. Compact constants, from the identity of DESIGN §4, ``G[i,l] = grad N_i . zeta_l^0``:
+Layout (:mod:`springmodel.blocks`): elements in blocks of :data:`BLOCK`, connectivity int32
+and constants lane-major. A block's edge vectors are gathered into a scratch, its lanes
+computed in one branch-free loop (LLVM vectorises it: ``error_model='numpy'``, contraction
+to FMA allowed; no law codes: the variant's choices are compile-time constants), and its
+vertex forces scattered. Each variant's block loop captures only numbers, so numba caches
+it on disk (``cache=True``). Compact constants, from DESIGN §4's identity
+``G[i,l] = grad N_i . zeta_l^0``:
 
 * ``G' = G / l0`` (rows of vertices 1..3: ``sum_i G[i] = 0`` gives vertex 0), so
   ``zeta_l / l0_l = sum_{i>0} G'[i,l] (x_i - x_0)`` is the axis stretch vector;
@@ -38,16 +40,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
-import numba
 import numpy as np
 from numba import njit
 
-from .blocks import BLOCK, block_drivers, block_layout, chunks, set_column
-
-#: Below this many elements ``SpringKernel(parallel=None)`` runs serially.
-PARALLEL_MIN_ELEMENTS = 20_000
+from .blocks import BLOCK, block_drivers
 
 PRECISIONS = ("float64", "mixed", "float32")
 _PAIRS = ((0, 1), (0, 2), (1, 2))
@@ -110,36 +108,6 @@ class Variant:
     @property
     def uses_velocity(self) -> bool:
         return bool(self.damp_axial) or (self.volume != "off" and bool(self.damp_volume))
-
-
-def constant_columns(elements, variant: Variant) -> np.ndarray:
-    """The constants ``(ncol, m)`` of ``variant`` from :class:`SpringElements` rest data."""
-    el = elements
-    l0 = el.l0
-    Gp = el.G[:, 1:, :] / l0[:, None, :]  # (m, 3 vertices, 3 axes)
-    kf = el.k_torsion_force
-    data: dict[str, np.ndarray] = {}
-    for i in range(3):
-        for l in range(3):
-            data[f"g{i + 1}{l}"] = Gp[:, i, l]
-    for l in range(3):
-        data[f"ka{l}"] = el.k_axial[:, l] * l0[:, l] ** 2
-        data[f"ca{l}"] = variant.damp_axial * l0[:, l] ** 2
-    for p, (l, m) in enumerate(_PAIRS):
-        data[f"kt{p}"] = el.k_torsion[:, p]
-        data[f"kf{p}l"] = kf[:, p] * l0[:, l]
-        data[f"kf{p}m"] = kf[:, p] * l0[:, m]
-        data[f"c0{p}"] = el.c0[:, p]
-        data[f"a0{p}"] = el.alpha0[:, p]
-    data["inv6v0"] = 1.0 / (6.0 * el.V0)
-    data["ks"] = el.k_volume
-    data["lsum"] = el.L0
-    return np.stack([np.broadcast_to(data[c], (el.n_elements,)) for c in variant.columns()])
-
-
-def needs_c0(elements, tol: float = 1e-14) -> bool:
-    """False when every rest cosine is zero to round-off (orthonormal frames, DESIGN §4b)."""
-    return bool(np.abs(elements.c0).max(initial=0.0) > tol)
 
 
 # --------------------------------------------------------------------------- the factory
@@ -358,7 +326,7 @@ def _block_run(v: Variant):
     return run
 
 
-@lru_cache(maxsize=None)
+@cache
 def spring_kernel(variant: Variant):
     """``(serial, parallel)`` force drivers of ``variant`` (compiled on first call).
 
@@ -368,107 +336,4 @@ def spring_kernel(variant: Variant):
     return block_drivers(_block_run(variant))
 
 
-def variant_of(elements, options, precision: str = "float64", velocity: bool = True) -> Variant:
-    """The :class:`Variant` of ``options`` on ``elements`` (``velocity=False``: no damping)."""
-    if options.axial not in ("linear", "quadratic", "cubic", "stress-scaled"):
-        raise ValueError(f"axial law {options.axial!r} is not one of linear, quadratic, cubic, "
-                         "stress-scaled")
-    if options.torsion not in ("off", "angle", "cosine", "cubic", "energy"):
-        raise ValueError(f"torsion law {options.torsion!r} is not one of off, angle, cosine, "
-                         "cubic, energy")
-    if precision not in PRECISIONS:
-        raise ValueError(f"precision {precision!r} is not one of {', '.join(PRECISIONS)}")
-    b2, b3 = (float(b) for b in options.axial_coefficients)
-    poly = options.axial in ("quadratic", "cubic")
-    volume = options.volume_form if options.volume else "off"
-    return Variant(
-        axial=options.axial,
-        torsion=options.torsion,
-        volume=volume,
-        damp_axial=float(options.axial_damping) if velocity else 0.0,
-        damp_volume=float(options.volume_damping) if velocity and options.volume else 0.0,
-        b2=b2 if poly else 0.0,
-        b3=b3 if options.axial == "cubic" else 0.0,
-        bt=float(options.torsion_cubic) if options.torsion == "cubic" else 0.0,
-        c0=options.torsion in ("energy", "cosine", "cubic") and needs_c0(elements),
-        precision=precision,
-    )
-
-
-class SpringKernel:
-    """Spring forces of a fixed set of elements and options, on the specialised kernel.
-
-    Parameters
-    ----------
-    elements
-        Rest data (:func:`~springmodel.elements.build_spring_elements`).
-    options
-        Which parts are on and their laws.
-    parallel
-        Use all numba threads (per-thread buffers); ``None`` (default): parallel from
-        :data:`PARALLEL_MIN_ELEMENTS` elements when there is more than one thread.
-    precision
-        ``float64`` (default), ``mixed`` or ``float32`` (see the module docstring).
-
-    Examples
-    --------
-    >>> kernel = SpringKernel(elements, SpringOptions(torsion="energy"))  # doctest: +SKIP
-    >>> f = kernel.forces(x)                                              # doctest: +SKIP
-    """
-
-    def __init__(self, elements, options, parallel: bool | None = None,
-                 precision: str = "float64"):  # fmt: skip
-        self.elements, self.options, self.precision = elements, options, precision
-        self.n_points = elements.n_points
-        self._variants = {vel: variant_of(elements, options, precision, vel) for vel in (0, 1)}
-        store = np.float64 if precision == "float64" else np.float32
-        self._T, self._K = block_layout(
-            elements.tets, constant_columns(elements, self._variants[1]), store
-        )
-        self._K0 = self._K if self._variants[0] == self._variants[1] else block_layout(
-            elements.tets, constant_columns(elements, self._variants[0]), store)[1]  # fmt: skip
-        if parallel is None:
-            parallel = elements.n_elements >= PARALLEL_MIN_ELEMENTS and numba.get_num_threads() > 1
-        self.parallel = bool(parallel)
-        self._ptr = chunks(self._T.shape[0])
-        nchunk = self._ptr.size - 1
-        self._buf = np.zeros((nchunk if self.parallel else 0, self.n_points, 3))
-        self._dummy = np.zeros((1, 3))
-
-    @property
-    def bytes_per_element(self) -> int:
-        """Bytes of constants and connectivity the kernel reads per element."""
-        return int(self._K.shape[1] // BLOCK * self._K.itemsize + 16)
-
-    def set_volume_stiffness(self, k_volume: np.ndarray) -> None:
-        """Replace the volume constants (LMS), ``(m,)`` in the elements' order."""
-        for K, v in ((self._K, self._variants[1]), (self._K0, self._variants[0])):
-            if "ks" in v.columns():
-                set_column(K, v.columns().index("ks"), np.asarray(k_volume, dtype=float))
-        self.elements = self.elements.with_volume_stiffness(k_volume)
-
-    def forces(self, x: np.ndarray, v: np.ndarray | None = None,
-               out: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
-        """Nodal spring forces ``(n, 3)`` at positions ``x`` (and velocities ``v``)."""
-        x = np.ascontiguousarray(x, dtype=np.float64).reshape(self.n_points, 3)
-        if out is None:
-            out = np.empty((self.n_points, 3))
-        vel = v is not None and self._variants[1].uses_velocity
-        variant, K = (self._variants[1], self._K) if vel else (self._variants[0], self._K0)
-        w = np.ascontiguousarray(v, dtype=np.float64) if vel else self._dummy
-        serial, parallel = spring_kernel(variant)
-        m = self.elements.n_elements
-        if self.parallel:
-            parallel(x, w, self._T, K, m, self._ptr, self._buf, out)
-        else:
-            serial(x, w, self._T, K, m, out)
-        return out
-
-    def energy(self, x: np.ndarray) -> float:
-        """Total spring energy (see :func:`springmodel.springs.spring_energy`)."""
-        from .springs import spring_energy
-
-        return spring_energy(np.asarray(x, float), self.elements, self.options)[1]
-
-
-__all__ = ["BLOCK", "PRECISIONS", "SpringKernel", "Variant", "spring_kernel", "variant_of"]
+__all__ = ["BLOCK", "PRECISIONS", "Variant", "spring_kernel"]

@@ -27,8 +27,8 @@ from springfem.result import Result, volume_summary
 from springfem.scene import Scene
 
 from .elements import SpringElements, build_spring_elements
-from .fastkernels import SpringKernel
 from .options import SpringOptions
+from .spring_kernel import SpringKernel
 from .springs import is_conservative, lms_update, volume_measures
 
 
@@ -43,7 +43,7 @@ class SpringModel:
         Overrides ``SpringOptions.of(scene)`` (studies switch parts on and off this way).
     parallel
         Use the parallel fused kernel (both cores). ``None`` (default): the kernel's own
-        choice, parallel from ``fastkernels.PARALLEL_MIN_ELEMENTS`` elements up; below that
+        choice, parallel from ``spring_kernel.PARALLEL_MIN_ELEMENTS`` elements up; below that
         thread synchronisation costs more than a serial pass.
     """
 

@@ -20,8 +20,9 @@ from springfem.mesh import box_mesh
 from springmodel import springs
 from springmodel.blocks import BLOCK, block_layout
 from springmodel.elements import build_spring_elements
-from springmodel.fastkernels import SpringKernel, Variant, needs_c0, variant_of
+from springmodel.fastkernels import Variant
 from springmodel.options import SpringOptions
+from springmodel.spring_kernel import SpringKernel, needs_c0, variant_of
 
 MATERIAL = {"law": "linear", "E": 1.0e3, "nu": 0.3}
 
@@ -65,9 +66,13 @@ def all_variants():
     torsion = ("off", "angle", "cosine", "cubic", "energy")
     for a, t in itertools.product(axial, torsion):
         yield SpringOptions(
-            axial=a, axial_coefficients=(0.6, 0.4), torsion=t, torsion_cubic=1.3,
-            axial_damping=0.2, volume_damping=0.3,
-        )  # fmt: skip
+            axial=a,
+            axial_coefficients=(0.6, 0.4),
+            torsion=t,
+            torsion_cubic=1.3,
+            axial_damping=0.2,
+            volume_damping=0.3,
+        )
     for form, damping in itertools.product(("gradient", "spec"), (0.0, 0.5)):
         yield SpringOptions(torsion="energy", volume_form=form, volume_damping=damping)
     yield SpringOptions(torsion="cosine", volume=False)
@@ -75,11 +80,21 @@ def all_variants():
 
 FAST = [
     SpringOptions(),  # the seed variant: linear, cosine, gradient
-    SpringOptions(axial="cubic", axial_coefficients=(0.6, 0.4), torsion="energy",
-                  axial_damping=0.2, volume_damping=0.3),  # fmt: skip
+    SpringOptions(
+        axial="cubic",
+        axial_coefficients=(0.6, 0.4),
+        torsion="energy",
+        axial_damping=0.2,
+        volume_damping=0.3,
+    ),
     SpringOptions(axial="stress-scaled", torsion="angle", volume_form="spec"),
-    SpringOptions(axial="quadratic", axial_coefficients=(0.6, 0.4), torsion="cubic",
-                  torsion_cubic=1.3, volume=False),  # fmt: skip
+    SpringOptions(
+        axial="quadratic",
+        axial_coefficients=(0.6, 0.4),
+        torsion="cubic",
+        torsion_cubic=1.3,
+        volume=False,
+    ),
 ]
 
 
@@ -108,9 +123,13 @@ def test_every_variant_matches_oracle(mesh_state, options):
 
 
 @pytest.mark.parametrize(
-    "torsion", ["energy", pytest.param("cosine", marks=pytest.mark.slow),
-                pytest.param("angle", marks=pytest.mark.slow)]
-)  # fmt: skip
+    "torsion",
+    [
+        "energy",
+        pytest.param("cosine", marks=pytest.mark.slow),
+        pytest.param("angle", marks=pytest.mark.slow),
+    ],
+)
 def test_rest_cosines_are_read_when_not_zero(skewed, torsion):
     el, x, v = skewed
     options = SpringOptions(torsion=torsion)
