@@ -7,7 +7,7 @@ export MPLBACKEND := Agg
 export OPENBLAS_NUM_THREADS ?= 1
 export OMP_WAIT_POLICY ?= passive
 
-.PHONY: demo test lint report quick-report bench clean
+.PHONY: demo test test-slow lint report quick-report bench clean
 
 $(BIN)/python:
 	$(PY) -m venv $(VENV)
@@ -24,9 +24,14 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 demo: $(VENV)/.installed
 	$(BIN)/springfem compare
 
+# Default selection (not slow); it checks reports/quick/ when `make quick-report` wrote it.
 test: $(VENV)/.installed-test
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q
+
+# The slow tests alone (full-size studies, a fresh quick report).
+test-slow: $(VENV)/.installed-test
+	$(BIN)/python -m pytest -q -m slow
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check .
@@ -35,7 +40,7 @@ report: $(VENV)/.installed
 	$(BIN)/springfem report
 
 quick-report: $(VENV)/.installed
-	$(BIN)/springfem report --quick
+	$(BIN)/springfem report --quick --out reports/quick
 
 bench: $(VENV)/.installed
 	$(BIN)/springfem bench forces

@@ -17,6 +17,7 @@ import numpy as np
 from scipy.sparse.csgraph import connected_components
 
 from springfem.errors import SolverError
+from springfem.mechanics import rigid_body_modes
 from springfem.scene import Scene
 
 from .space import Space
@@ -59,22 +60,6 @@ def dirichlet(scene: Scene, space: Space) -> Dirichlet:
         per_boundary.append((b.region.name, dofs, np.tile(comps, len(nodes))))
     dofs = np.flatnonzero(~np.isnan(values))
     return Dirichlet(dofs, values[dofs], per_boundary, space.n_dofs)
-
-
-def rigid_body_modes(coords: np.ndarray) -> np.ndarray:
-    """The six rigid-body motions ``(3 n, 6)`` at node ``coords`` (n, 3), interleaved DOFs.
-
-    Columns: translations x, y, z; rotations about z, x, y through the centroid.
-    """
-    x = coords - coords.mean(axis=0)
-    n = len(x)
-    B = np.zeros((3 * n, 6))
-    for c in range(3):
-        B[c::3, c] = 1.0
-    B[0::3, 3], B[1::3, 3] = -x[:, 1], x[:, 0]
-    B[1::3, 4], B[2::3, 4] = -x[:, 2], x[:, 1]
-    B[2::3, 5], B[0::3, 5] = -x[:, 0], x[:, 2]
-    return B
 
 
 def check_rigid_motions(space: Space, fixed_dofs: np.ndarray, where: str = "") -> None:

@@ -1,11 +1,11 @@
-"""Newton's method with a backtracking line search and adaptive load stepping.
+"""The FEM's Newton iteration (displacement form, prescribed values reached by the
+update) under the shared load-stepping rule :class:`springfem.mechanics.newton.LoadStepping`.
 
 The load factor ``lambda`` scales every load and every prescribed displacement. A load step
 that fails (too many iterations, a growing or non-finite residual, an inverted element, a
-failed linear solve) is retried with a quarter of the increment; a step that converges in
-few iterations lets the next one grow by half. When the increment falls below
-``min_increment`` the solve stops with :class:`~springfem.errors.SolverError` carrying
-the last converged displacement.
+failed linear solve) is retried with a smaller increment (the shared rule); when it gives
+up, the solve stops with :class:`~springfem.errors.SolverError` carrying the last converged
+displacement.
 
 Convergence: ``|R_free| <= tol * max(|f_int|, |f_ext|)`` with the prescribed values reached.
 """
@@ -19,6 +19,7 @@ from typing import Protocol
 import numpy as np
 
 from springfem.errors import SolverError
+from springfem.mechanics.newton import LoadStepping
 
 
 class InvertedElements(Exception):
@@ -49,13 +50,28 @@ class NonlinearProblem(Protocol):
 
 @dataclass
 class NewtonOptions:
+    """Settings of :func:`solve_nonlinear`.
+
+    Parameters
+    ----------
+    tol
+        Relative residual tolerance ``|R_free| / max(|f_int|, |f_ext|)``.
+    max_iter
+        Newton iterations per load step.
+    load_steps
+        Nominal number of load increments.
+    max_cutbacks
+        Increment halvings in a row before giving up (see ``LoadStepping``).
+    max_backtracks
+        Line-search halvings of a Newton step.
+    verbose
+        Print the residual history to stderr.
+    """
+
     tol: float = 1e-10
     max_iter: int = 25
     load_steps: int = 1
-    min_increment: float = 1e-5
-    grow: float = 1.5
-    cut: float = 0.25
-    easy_iterations: int = 5
+    max_cutbacks: int = 8
     max_backtracks: int = 8
     verbose: bool = False
 
@@ -115,7 +131,9 @@ def newton_step(
                 f"residual at FE node {worst // 3}, component {'xyz'[worst % 3]})"
             )
         if r0 is None:
-            r0 = rel
+            # divergence is judged against the first residual with the prescribed values
+            # reached: before that (a prescribed displacement from rest) it can be 0
+            r0 = rel if gap == 0.0 else None
         elif rel > 1e6 * max(r0, opts.tol):
             raise _StepFailed(f"residual grew to {rel:.2e}")
         du = np.zeros_like(u)
@@ -181,40 +199,54 @@ def _predict(
 def solve_nonlinear(
     problem: NonlinearProblem, opts: NewtonOptions, u0: np.ndarray | None = None
 ) -> tuple[np.ndarray, NewtonReport]:
-    """Adaptive load stepping from ``lambda = 0`` (displacement ``u0``) to ``lambda = 1``."""
+    """Adaptive load stepping from ``lambda = 0`` (displacement ``u0``) to ``lambda = 1``.
+
+    Parameters
+    ----------
+    problem
+        The discrete problem.
+    opts
+        Newton and load-stepping settings.
+    u0
+        Start displacement (default zero).
+
+    Returns
+    -------
+    u, report
+        The converged DOF vector and the :class:`NewtonReport`.
+
+    Raises
+    ------
+    SolverError
+        When the load stepping gives up; ``state`` holds the last converged vertex
+        displacements.
+    """
     report = NewtonReport()
-    u = np.zeros(problem.n_dofs) if u0 is None else u0.copy()
-    lam = 0.0
-    dlam = 1.0 / max(1, opts.load_steps)
-    step = 0
-    last_reason = ""
-    prev: tuple[float, np.ndarray] | None = None  # last converged (load, displacement)
-    while lam < 1.0:
-        target = 1.0 if lam + dlam >= 1.0 - 1e-12 else lam + dlam
-        label = f"step {step + 1} (load {target:.4g})"
-        start = _predict(problem, u, lam, target, prev)
+    state = {"u": np.zeros(problem.n_dofs) if u0 is None else u0.copy(), "prev": None}
+
+    def try_step(lam: float, target: float) -> tuple[bool, int, str]:
+        label = f"step {len(report.steps) + 1} (load {target:.4g})"
+        start = _predict(problem, state["u"], lam, target, state["prev"])
         try:
             u_new, hist, its = newton_step(problem, start, target, opts, label)
         except _StepFailed as exc:
-            last_reason = str(exc)
-            report.cutbacks += 1
-            dlam *= opts.cut
-            _log(opts, f"  {label} failed: {last_reason}; load increment cut to {dlam:.3g}")
-            if dlam < opts.min_increment:
-                raise SolverError(
-                    f"Newton failed at load step {step + 1}, load factor {lam:.4g} -> "
-                    f"{min(1.0, lam + dlam / opts.cut):.4g}: {last_reason}; the load increment "
-                    f"fell below {opts.min_increment:g} after {report.cutbacks} cut-backs",
-                    state=problem.state(u),
-                ) from None
-            continue
-        step += 1
+            _log(opts, f"  {label} failed: {exc}; load increment cut")
+            return False, 0, str(exc)
         report.iterations += its
         report.steps.append({"load": target, "iterations": its, "residuals": hist})
-        _log(opts, f"step {step}: load {target:.4g} converged in {its} iterations")
-        prev = (lam, u)
-        u, lam = u_new, target
-        if its <= opts.easy_iterations:
-            dlam *= opts.grow
+        _log(opts, f"step {len(report.steps)}: load {target:.4g} converged in {its} iterations")
+        state["prev"] = (lam, state["u"])  # last converged (load, displacement)
+        state["u"] = u_new
+        return True, its, ""
+
+    path = LoadStepping(opts.load_steps, opts.max_cutbacks).run(try_step)
+    report.cutbacks = path.cutbacks
+    if not path.converged:
+        raise SolverError(
+            f"Newton failed at load step {len(report.steps) + 1}, load factor {path.load:.4g} "
+            f"-> {path.failed_at:.4g}: {path.reason}; gave up after {path.cutbacks} cut-backs "
+            "of the load increment",
+            state=problem.state(state["u"]),
+        )
     report.converged = True
-    return u, report
+    return state["u"], report

@@ -1,9 +1,9 @@
 """Scenes built in code: verification problems that no bundled TOML file describes.
 
-:func:`make_scene` assembles a :class:`~springfem.scene.Scene` from a mesh and short
-specs (regions as in scene files: box-face names, mesh sets, ``{"box": ...}``,
-``{"point": ...}``). :func:`thick_cylinder_scene` maps a box mesh to a quarter of a thick
-cylinder (Lamé's problem in plane strain); :func:`bench_scene` is the speed benchmark.
+Each builds the scene's table as a dict and passes it to
+:func:`springfem.scene.scene_from_dict`, the one way scenes are made.
+:func:`thick_cylinder_scene` maps a box mesh to a quarter of a thick cylinder (Lamé's
+problem in plane strain); :func:`bench_scene` is the speed benchmark.
 
 Examples
 --------
@@ -14,75 +14,12 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 
-from springfem.axes import uniform_frames
-from springfem.errors import InputError
 from springfem.mesh import TetMesh, boundary_facets, box_mesh
-from springfem.regions import locate_points, resolve_region
-from springfem.scene import Boundary, Load, Material, Probe, Scene
+from springfem.scene import Scene, scene_from_dict
 
-from .options import FemOptions
-
-_AXES = {"x": 0, "y": 1, "z": 2}
-
-
-def make_scene(
-    mesh: TetMesh,
-    material: Material,
-    boundaries: Sequence[tuple] = (),
-    loads: Sequence[tuple] = (),
-    probes: dict[str, Sequence[float]] | None = None,
-    frames: np.ndarray | None = None,
-    fem: FemOptions | None = None,
-    name: str = "scene",
-) -> Scene:
-    """A scene from a mesh and specs.
-
-    Parameters
-    ----------
-    boundaries
-        ``(region, "xyz", displacement)`` tuples (``displacement`` optional, default 0).
-    loads
-        ``(type, value, region)`` tuples (``region`` omitted for gravity).
-    probes
-        Name -> point; each must lie in the mesh.
-    frames
-        ``(m, 3, 3)`` element frames (default: the global axes).
-    """
-    bnd = []
-    for spec in boundaries:
-        region, comps = spec[0], spec[1]
-        value = np.zeros(3) if len(spec) < 3 else np.asarray(spec[2], dtype=float)
-        idx = tuple(sorted(_AXES[c] for c in comps))
-        bnd.append(Boundary(resolve_region(mesh, region), idx, value))
-    lds = []
-    for spec in loads:
-        kind, value = spec[0], spec[1]
-        region = resolve_region(mesh, spec[2]) if len(spec) > 2 else None
-        value = np.atleast_1d(np.asarray(value, dtype=float))
-        lds.append(Load(kind, value, region))
-    prb = []
-    for pname, point in (probes or {}).items():
-        point = np.asarray(point, dtype=float)
-        tet, bary = locate_points(mesh.points, mesh.tets, point[None])
-        if tet[0] < 0:
-            raise InputError(f"probe {pname!r} at {point.tolist()} is outside the mesh")
-        prb.append(Probe(pname, point, int(tet[0]), bary[0]))
-    if frames is None:
-        frames = uniform_frames(mesh.n_tets, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
-    return Scene(
-        name=name,
-        mesh=mesh,
-        material=material,
-        frames=np.asarray(frames, dtype=float),
-        boundaries=bnd,
-        loads=lds,
-        probes=prb,
-        options={"fem": fem or FemOptions()},
-    )
+from . import options as _options  # noqa: F401  (registers the [fem] section)
 
 
 def thick_cylinder_mesh(
@@ -91,8 +28,21 @@ def thick_cylinder_mesh(
     """Quarter of a thick-walled cylinder (``0 <= theta <= pi/2``), axis along z.
 
     A box mesh in ``(r, theta, z)`` is mapped by ``(r cos theta, r sin theta, z)``
-    (positive Jacobian ``r``, so orientation is kept). The inner and outer surfaces are the
-    facet sets ``inner`` and ``outer``.
+    (positive Jacobian ``r``, so orientation is kept).
+
+    Parameters
+    ----------
+    inner, outer
+        Inner and outer radius.
+    divisions
+        Hexahedra along ``r``, ``theta`` and ``z``.
+    height
+        Length along the axis (default ``0.2 inner``).
+
+    Returns
+    -------
+    TetMesh
+        With the inner and outer surfaces as the facet sets ``inner`` and ``outer``.
     """
     nr, nt, nz = divisions
     height = 0.2 * inner if height is None else height
@@ -124,28 +74,67 @@ def thick_cylinder_scene(
 
     Symmetry planes ``x = 0`` and ``y = 0`` slide (``ux = 0``, ``uy = 0``); ``uz = 0`` on
     both end faces gives plane strain.
+
+    Parameters
+    ----------
+    inner, outer
+        Inner and outer radius.
+    pressure
+        Internal pressure (Pa).
+    divisions
+        Hexahedra along ``r``, ``theta`` and ``z`` (see :func:`thick_cylinder_mesh`).
+    E, nu, law
+        The material.
+    order
+        FEM element order (the scene's ``[fem] order``).
+
+    Returns
+    -------
+    Scene
     """
-    mesh = thick_cylinder_mesh(inner, outer, divisions)
-    return make_scene(
-        mesh,
-        Material(law, E=E, nu=nu),
-        boundaries=[("x_min", "x"), ("y_min", "y"), ("z_min", "z"), ("z_max", "z")],
-        loads=[("pressure", pressure, "inner")],
-        fem=FemOptions(order=order),
-        name="thick-cylinder",
+    slide = [("x_min", "x"), ("y_min", "y"), ("z_min", "z"), ("z_max", "z")]
+    return scene_from_dict(
+        {
+            "name": "thick-cylinder",
+            "mesh": thick_cylinder_mesh(inner, outer, divisions),
+            "material": {"law": law, "E": E, "nu": nu},
+            "boundary": [{"region": r, "fix": [c]} for r, c in slide],
+            "load": [{"type": "pressure", "value": pressure, "region": "inner"}],
+            "fem": {"order": order},
+        }
     )
 
 
 def bench_scene(n_tets: int = 100_000, linear_solver: str = "amg") -> Scene:
-    """A 2:1:1 block of about ``n_tets`` tets, clamped at ``x_min``, pulled down at ``x_max``."""
+    """A 2:1:1 block of about ``n_tets`` tets, clamped at ``x_min``, pulled down at ``x_max``.
+
+    Parameters
+    ----------
+    n_tets
+        Wanted number of tets (the block has ``12 k^3``, ``k`` the nearest integer).
+    linear_solver
+        The FEM's ``[fem] linear_solver``.
+
+    Returns
+    -------
+    Scene
+        Named ``bench-<tets>``, with a probe ``tip`` at the middle of the loaded end.
+
+    Examples
+    --------
+    >>> s = bench_scene(100)
+    >>> s.name, s.probes[0].name
+    ('bench-96', 'tip')
+    """
     k = max(1, round((n_tets / 12.0) ** (1.0 / 3.0)))
-    mesh = box_mesh((2.0, 1.0, 1.0), (2 * k, k, k))
-    return make_scene(
-        mesh,
-        Material("linear", E=1.0e4, nu=0.3),
-        boundaries=[("x_min", "xyz")],
-        loads=[("traction", [0.0, 0.0, -1.0], "x_max")],
-        probes={"tip": [2.0, 0.5, 0.5]},
-        fem=FemOptions(order=1, linear_solver=linear_solver),
-        name=f"bench-{mesh.n_tets}",
+    return scene_from_dict(
+        {
+            "name": f"bench-{12 * k**3}",
+            "mesh": {"generator": "box", "size": [2.0, 1.0, 1.0], "divisions": [2 * k, k, k]},
+            "material": {"law": "linear", "E": 1.0e4, "nu": 0.3},
+            "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+            "load": [{"type": "traction", "value": [0.0, 0.0, -1.0], "region": "x_max"}],
+            "probe": [{"name": "tip", "point": [2.0, 0.5, 0.5]}],
+            "fem": {"order": 1, "linear_solver": linear_solver},
+        }
     )

@@ -44,6 +44,7 @@ import scipy.sparse as sp
 
 from springfem.errors import InputError, SolverError
 from springfem.materials import voigt_to_tensor
+from springfem.mechanics import LinearSolver, rigid_body_modes
 from springfem.result import Result, volume_summary
 from springfem.scene import FORMULATIONS, VOLUMETRIC, Scene
 
@@ -53,9 +54,8 @@ from .assembly import (
     hyperelastic_element_arrays,
     linear_element_blocks,
 )
-from .constraints import check_rigid_motions, dirichlet, rigid_body_modes
+from .constraints import check_rigid_motions, dirichlet
 from .hyperelastic import NeoHookean, _det
-from .linsolve import LinearSolver
 from .loads import ExternalLoads
 from .materials import material_groups
 from .newton import InvertedElements, NewtonOptions, solve_nonlinear

@@ -19,6 +19,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .errors import format_ids
+
 #: ``sin`` of the smallest angle accepted between fiber and sheet.
 PARALLEL_TOL = 1e-6
 
@@ -37,6 +39,11 @@ def rotation_matrix(
     angle_rad
         Angle in radians; a scalar gives one ``(3, 3)`` matrix, an array of shape ``s``
         gives ``s + (3, 3)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(3, 3)`` or ``s + (3, 3)`` proper rotations.
 
     Examples
     --------
@@ -107,7 +114,20 @@ def orthonormal_frame(
 def uniform_frames(
     n_elements: int, fiber: Sequence[float] | np.ndarray, sheet: Sequence[float] | np.ndarray
 ) -> np.ndarray:
-    """The same frame ``orthonormal_frame(fiber, sheet)`` for all ``n_elements`` tets."""
+    """The same frame ``orthonormal_frame(fiber, sheet)`` for all ``n_elements`` tets.
+
+    Parameters
+    ----------
+    n_elements
+        Number of tets.
+    fiber, sheet
+        One fiber and one sheet direction ``(3,)`` (see :func:`orthonormal_frame`).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n_elements, 3, 3)``; row ``l`` of each frame is axis ``l``.
+    """
     frame = orthonormal_frame(fiber, sheet)
     if frame.shape != (3, 3):
         raise ValueError("uniform frames need one fiber and one sheet vector of 3 components")
@@ -214,6 +234,11 @@ def cell_frames(fiber_vectors: np.ndarray, sheet_vectors: np.ndarray | None = No
         choice can jump between neighbouring cells, so use it only with laws that do not
         distinguish sheet from normal (e.g. transversely isotropic).
 
+    Returns
+    -------
+    numpy.ndarray
+        ``(m, 3, 3)`` orthonormal frames, rows fiber, sheet, normal.
+
     Raises
     ------
     ValueError
@@ -245,6 +270,4 @@ def _where(bad: np.ndarray, limit: int = 8) -> str:
     if bad.ndim == 0:
         return ""
     idx = np.argwhere(bad)
-    ids = [str(int(i[0])) if len(i) == 1 else str(tuple(int(v) for v in i)) for i in idx]
-    more = f" … ({len(ids)} in all)" if len(ids) > limit else ""
-    return " at elements " + ", ".join(ids[:limit]) + more
+    return " at elements " + format_ids(idx if idx.shape[1] > 1 else idx[:, 0], limit)

@@ -5,6 +5,16 @@ independent check of the FEM load vectors. Tractions are dead loads on the refer
 surface; pressure is a follower load ``t = -p n`` on the current surface; gravity is
 lumped to vertices with ``rho V / 4``; a total force is spread over a region by facet
 area (or equally over its nodes when it has no boundary facets).
+
+Examples
+--------
+>>> from springfem.scene import scene_from_dict
+>>> s = scene_from_dict({
+...     "mesh": {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [1, 1, 1]},
+...     "material": {"law": "linear", "E": 1.0, "nu": 0.25, "density": 2.0},
+...     "load": [{"type": "gravity", "value": [0.0, 0.0, -10.0]}]})
+>>> external_forces(s).sum(axis=0).round(12).tolist()  # the weight, rho V g
+[0.0, 0.0, -20.0]
 """
 
 from __future__ import annotations
@@ -16,7 +26,18 @@ from .scene import Scene
 
 
 def lumped_masses(scene: Scene) -> np.ndarray:
-    """Nodal masses ``(n,)``: each tet gives ``rho V / 4`` to each of its vertices."""
+    """Nodal masses: each tet gives ``rho V / 4`` to each of its vertices.
+
+    Parameters
+    ----------
+    scene
+        The scene (its mesh and material density).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n,)`` mass per node (kg).
+    """
     m = np.zeros(scene.mesh.n_points)
     np.add.at(m, scene.mesh.tets, (scene.material.density * scene.mesh.volumes() / 4)[:, None])
     return m
@@ -40,6 +61,11 @@ def external_forces(scene: Scene, x: np.ndarray | None = None, scale: float = 1.
         Current node positions for follower (pressure) loads; default: the rest positions.
     scale
         Load factor (for load stepping).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, 3)`` force per node (N).
     """
     mesh = scene.mesh
     n = mesh.n_points
@@ -66,7 +92,18 @@ def external_forces(scene: Scene, x: np.ndarray | None = None, scale: float = 1.
 
 
 def has_follower_loads(scene: Scene) -> bool:
-    """Whether any load depends on the deformed configuration."""
+    """Whether any load depends on the deformed configuration.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+
+    Returns
+    -------
+    bool
+        ``True`` when the scene has a (follower) pressure load.
+    """
     return any(load.type == "pressure" for load in scene.loads)
 
 
@@ -75,9 +112,17 @@ def reactions(scene: Scene, residual: np.ndarray) -> dict[str, list[float]]:
 
     Parameters
     ----------
+    scene
+        The scene (its boundaries name the regions).
     residual
         Nodal force ``(n, 3)`` the body feels without its supports (internal + external).
         At equilibrium the supports supply ``-residual`` on the constrained DOFs.
+
+    Returns
+    -------
+    dict
+        Region name -> total reaction ``[Fx, Fy, Fz]`` over its constrained components
+        (regions named twice are summed).
     """
     r = np.asarray(residual).reshape(-1, 3)
     out: dict[str, list[float]] = {}

@@ -3,6 +3,14 @@
 A region is given in a scene as a name (box faces ``x_min`` … ``z_max`` of the bounding
 box, or a node/cell/facet set from the mesh file), as ``{ box = [[x0,y0,z0],[x1,y1,z1]] }``
 or as ``{ point = [x, y, z] }`` (the nearest node).
+
+Examples
+--------
+>>> from springfem.mesh import box_mesh
+>>> m = box_mesh((1.0, 1.0, 1.0), (2, 2, 2))
+>>> r = resolve_region(m, "x_max")
+>>> r.nodes.size, r.facets.shape  # a 3 x 3 grid of nodes, 2 x 2 squares of 2 triangles
+(9, (8, 3))
 """
 
 from __future__ import annotations
@@ -19,7 +27,17 @@ BOX_FACES = ("x_min", "x_max", "y_min", "y_max", "z_min", "z_max")
 
 @dataclass(frozen=True)
 class Region:
-    """Nodes of a region and the boundary triangles (outward oriented) that lie in it."""
+    """Nodes of a region and the boundary triangles (outward oriented) that lie in it.
+
+    Attributes
+    ----------
+    name
+        The region's label (:func:`region_label` of its spec).
+    nodes
+        Node indices ``(k,)``.
+    facets
+        Boundary triangles ``(f, 3)`` whose three nodes are in the region.
+    """
 
     name: str
     nodes: np.ndarray
@@ -27,7 +45,23 @@ class Region:
 
 
 def region_label(spec: str | dict) -> str:
-    """Short human-readable label of a region spec (used in messages and result keys)."""
+    """Short human-readable label of a region spec (used in messages and result keys).
+
+    Parameters
+    ----------
+    spec
+        A name, ``{"box": [[x0, y0, z0], [x1, y1, z1]]}`` or ``{"point": [x, y, z]}``.
+
+    Returns
+    -------
+    str
+        The name, or ``box[[...], [...]]`` / ``point[x, y, z]`` with plain floats.
+
+    Examples
+    --------
+    >>> region_label({"point": [1, 0, 0]})
+    'point[1.0, 0.0, 0.0]'
+    """
     if isinstance(spec, str):
         return spec
     if "box" in spec:
@@ -37,6 +71,22 @@ def region_label(spec: str | dict) -> str:
 
 def resolve_region(mesh: TetMesh, spec: str | dict, where: str = "region") -> Region:
     """Resolve a region spec on ``mesh``.
+
+    Parameters
+    ----------
+    mesh
+        The mesh.
+    spec
+        A box face (``x_min`` … ``z_max`` of the bounding box, within ``1e-9`` of its
+        largest extent), a node, cell or facet set of the mesh file,
+        ``{"box": [[x0, y0, z0], [x1, y1, z1]]}`` or ``{"point": [x, y, z]}`` (the nearest
+        node).
+    where
+        What to name in error messages (file and key).
+
+    Returns
+    -------
+    Region
 
     Raises
     ------
@@ -93,7 +143,22 @@ def resolve_region(mesh: TetMesh, spec: str | dict, where: str = "region") -> Re
 
 
 def facet_areas_normals(points: np.ndarray, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Areas ``(k,)`` and unit outward normals ``(k, 3)`` of triangles at ``points``."""
+    """Areas and unit normals of triangles at ``points``.
+
+    Parameters
+    ----------
+    points
+        Node positions ``(n, 3)``.
+    facets
+        Triangles ``(k, 3)``; the normal follows the right-hand rule of their node order.
+
+    Returns
+    -------
+    area : numpy.ndarray
+        ``(k,)``.
+    normal : numpy.ndarray
+        ``(k, 3)`` unit normals (outward for :func:`~springfem.mesh.boundary_facets`).
+    """
     x = points[facets]
     a = 0.5 * np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
     area = np.linalg.norm(a, axis=1)
@@ -105,8 +170,21 @@ def locate_points(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Find the tet containing each query point and its barycentric coordinates.
 
-    Returns ``(tet_index, bary)`` with ``tet_index = -1`` for points outside the mesh
-    (beyond a relative tolerance ``tol`` in barycentric coordinates).
+    Parameters
+    ----------
+    points, tets
+        The mesh.
+    query
+        Points ``(q, 3)`` (or one point ``(3,)``).
+    tol
+        How far below 0 a barycentric coordinate may be for a point on a face.
+
+    Returns
+    -------
+    tet_index : numpy.ndarray
+        ``(q,)`` containing tet, ``-1`` for points outside the mesh.
+    bary : numpy.ndarray
+        ``(q, 4)`` barycentric coordinates in that tet (zeros outside).
     """
     from scipy.spatial import cKDTree
 

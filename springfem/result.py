@@ -2,20 +2,27 @@
 
 A :class:`Result` is written as ``result.json`` (atomically) next to a VTU file with the
 displacement and per-element data for ParaView.
+
+Examples
+--------
+>>> from springfem.mesh import box_mesh
+>>> m = box_mesh((1.0, 1.0, 1.0), (1, 1, 1))
+>>> u = 0.1 * m.points * [1.0, 0.0, 0.0]  # stretch x by 10 %
+>>> round(volume_summary(m, u)["relative_change"], 12)
+0.1
 """
 
 from __future__ import annotations
 
 import json
 import os
-import re
-import tempfile
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .files import atomic_write_text, jsonable, remove_stale_temp_files
 from .mesh import TetMesh, write_vtu
 
 TIMING_FIELDS = ("wall_time",)
@@ -61,117 +68,39 @@ class Result:
     info: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
-        return _jsonable(asdict(self))
+        """The fields as plain Python (see :func:`~springfem.files.jsonable`).
+
+        Returns
+        -------
+        dict
+        """
+        return jsonable(asdict(self))
 
     def to_json(self) -> str:
+        """The fields as indented JSON with sorted keys (the ``result.json`` text).
+
+        Returns
+        -------
+        str
+        """
         return json.dumps(self.to_dict(), indent=2, sort_keys=True)
 
 
-def _jsonable(obj: Any) -> Any:
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _jsonable(obj.tolist())
-    if isinstance(obj, (np.floating,)):
-        return float(obj)
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (np.bool_,)):
-        return bool(obj)
-    if isinstance(obj, float) and not np.isfinite(obj):
-        return None
-    return obj
-
-
-def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` via a temporary file in the same folder and a rename."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    # the writer's pid in the name lets remove_stale_temp_files tell a killed writer's
-    # leftovers from a live writer's file
-    fd, tmp = tempfile.mkstemp(
-        dir=path.parent, prefix=f".{path.name}.", suffix=f".{os.getpid()}.tmp"
-    )
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-# Temporary files of the atomic writers, with the writing process's id: atomic_write_text
-# (".<name>.<random>.<pid>.tmp"), studies.tables.save_figure (".<stem>.<pid>.tmp.png") and
-# mesh.write_vtu ("<name>.tmp-<pid>.vtu").
-_TEMP_PATTERNS = (
-    re.compile(r"^\..+\.(\d+)\.tmp$"),
-    re.compile(r"^\..+\.(\d+)\.tmp\.png$"),
-    re.compile(r"^.+\.tmp-(\d+)\.vtu$"),
-)
-
-
-def _process_alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OSError):
-        return True  # exists (another user's) or can't tell: keep the file
-    return True
-
-
-def remove_stale_temp_files(folder: str | os.PathLike) -> list[Path]:
-    """Delete temporary files that writers killed mid-write left in ``folder``.
-
-    A writer interrupted by SIGKILL or a power cut can't clean up; its temporary file
-    (never the target: targets are replaced by an atomic rename) stays behind. Files whose
-    writer process is still alive are kept. Returns the files removed.
-    """
-    removed = []
-    try:
-        entries = list(Path(folder).iterdir())
-    except (FileNotFoundError, NotADirectoryError):
-        return removed
-    for p in entries:
-        for pattern in _TEMP_PATTERNS:
-            m = pattern.match(p.name)
-            if m and not _process_alive(int(m.group(1))):
-                try:
-                    p.unlink()
-                    removed.append(p)
-                except FileNotFoundError:
-                    pass
-                break
-    return removed
-
-
-def safe_filename(name: str, limit: int = 80) -> str:
-    """``name`` as one file or folder name that stays inside the folder it is joined to.
-
-    Path separators (``/``, ``\\``), drive colons and non-printable characters become
-    ``_``, leading dots are dropped (no ``.`` or ``..``, no hidden folders), and the result
-    is cut to ``limit`` characters (``scene`` if nothing is left). Scene names pass through
-    it when a scene is loaded, so ``out/<name>-<model>`` never leaves ``out``.
-
-    Examples
-    --------
-    >>> safe_filename("../../etc/x"), safe_filename("/abs"), safe_filename("Liver (coarse)")
-    ('_.._etc_x', '_abs', 'Liver (coarse)')
-    """
-    text = "".join(c if c.isprintable() and c not in "/\\:" else "_" for c in name)
-    return text.lstrip(".")[:limit] or "scene"
-
-
 def volume_summary(mesh: TetMesh, u: np.ndarray) -> dict[str, float]:
-    """Initial and final (deformed) mesh volume and their relative change."""
+    """Initial and final (deformed) mesh volume and their relative change.
+
+    Parameters
+    ----------
+    mesh
+        The mesh at rest.
+    u
+        Nodal displacement, ``(n, 3)`` or flat ``(3 n,)``.
+
+    Returns
+    -------
+    dict
+        ``initial``, ``final`` and ``relative_change`` (``(final - initial) / initial``).
+    """
     v0 = float(mesh.volumes().sum())
     v1 = float(mesh.volumes(mesh.points + np.asarray(u).reshape(-1, 3)).sum())
     return {"initial": v0, "final": v1, "relative_change": (v1 - v0) / v0}
@@ -188,7 +117,25 @@ def write_result(
 ) -> tuple[Path, Path]:
     """Write ``<stem>.json`` and ``<stem>.vtu`` into ``out_dir`` (both atomically).
 
-    ``displacement`` is nodal ``(n, 3)`` on the mesh's vertices.
+    Parameters
+    ----------
+    out_dir
+        Output folder (created; stale temporary files of killed writers are removed).
+    result
+        What goes into the JSON file.
+    mesh
+        The mesh of the VTU file.
+    displacement
+        Nodal ``(n, 3)`` on the mesh's vertices (point data ``displacement``).
+    cell_data, point_data
+        More per-tet and per-node arrays for the VTU file.
+    stem
+        File name without extension.
+
+    Returns
+    -------
+    tuple of pathlib.Path
+        The JSON and the VTU file.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

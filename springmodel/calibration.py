@@ -41,10 +41,18 @@ mismatch is reported, not hidden. Negative ``C_ll - b`` is clipped to zero.
 the volume term ``k_s R R`` to ``b V I I``; equal to the above when ``R = rho I`` and about
 half of it on the six-tet split, where it cuts the mismatch from 0.58 to 0.41 (nu = 0.3).
 
-``nnls``: per element, non-negative least squares of ``D_k(k) - C`` in the Frobenius norm
-of the Mandel representation (the rotation-invariant norm of the fourth-order tensor).
+``nnls``: per element, bounded least squares of the tangent against ``C`` with axial and
+torsion constants kept positive, so that every element is positive definite
+(:mod:`springmodel.nnls`). ``exact``: closed-form constants that reproduce the P1 element on
+any tet with the axis-volume spring, energy torsion and (anisotropic) Poisson coupling
+(:mod:`springmodel.exact`).
 
-The mismatch (:func:`calibration_mismatch`) is ``||D_k - C|| / ||C||`` in that same norm.
+The mismatch an element's constants leave (:attr:`Calibrated.mismatch`) is measured on the
+small-strain tangent of the parts that are switched on, including the non-symmetric part of
+the cosine-type torsion laws, as ``||A_k - C|| / ||C||`` in the Frobenius norm of the
+fourth-order tensor (= the Frobenius norm of the Mandel matrices, the "Mandel Frobenius
+norm"; :mod:`springmodel.tangent`). :func:`calibration_mismatch` is the same norm on Voigt
+matrices of the energy forms.
 """
 
 from __future__ import annotations
@@ -52,12 +60,10 @@ from __future__ import annotations
 from typing import Any, Literal, NamedTuple
 
 import numpy as np
-from scipy.optimize import nnls as _scipy_nnls
 
 from springfem.materials import (
     is_transverse,
     material_matrix,
-    sym_to_mandel,
     to_mandel,
     voigt_vector,
 )
@@ -91,8 +97,10 @@ class Calibrated(NamedTuple):
 
     k_axial: np.ndarray  # (m, 3)  N/m
     k_torsion: np.ndarray  # (m, 3) J (energy units: U = k/2 (c - c0)^2)
-    k_volume: np.ndarray  # (m,)   N/m
-    mismatch: np.ndarray  # (m,)   relative Frobenius (Mandel) ||D_k - C|| / ||C||
+    k_volume: np.ndarray  # (m,)   N/m  barycentric volume springs
+    mismatch: np.ndarray  # (m,)   relative Frobenius (Mandel) ||A_k - C|| / ||C||
+    k_axis_volume: np.ndarray | None = None  # (m,) Pa  axis-volume spring V0 U(J)
+    k_coupling: np.ndarray | None = None  # (m, 3) J  Poisson coupling c_lm s_l s_m
 
 
 # --------------------------------------------------------------------------- tensors
@@ -230,53 +238,12 @@ def analytic_constants(
     return k_axial, k_torsion, k_volume
 
 
-def _unique_rows(A: np.ndarray, decimals: int = 10) -> tuple[np.ndarray, np.ndarray]:
-    """Indices of representative rows and the inverse map, up to relative rounding."""
-    scale = np.abs(A).max(axis=0)
-    scale[scale == 0] = 1.0
-    key = np.round(A / scale, decimals)
-    # two fixed random projections of the rounded rows: equal rows give equal keys exactly
-    proj = key @ np.random.default_rng(12345).standard_normal((A.shape[1], 2))
-    _, first, inverse = np.unique(proj, axis=0, return_index=True, return_inverse=True)
-    return first, inverse.ravel()
-
-
-def nnls_constants(
-    geometry: Any, C_global: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per-element non-negative least squares of ``D_k(k) ~ C`` (Mandel Frobenius norm).
-
-    ``D_k`` is linear in the seven constants, so each element is a 36 x 7 NNLS problem
-    (scipy's Lawson-Hanson, columns scaled to unit norm). Elements with the same rest
-    geometry and material matrix up to translation (structured meshes: a handful of
-    shapes) are solved once.
-    """
-    m = geometry.V0.shape[0]
-    Cm = np.broadcast_to(to_mandel(np.asarray(C_global, float)), (m, 6, 6)).reshape(m, 36)
-    features = np.concatenate(
-        [geometry.zeta0.reshape(m, 9), geometry.xi0.reshape(m, 12), geometry.V0[:, None], Cm],
-        axis=1,
-    )
-    first, inverse = _unique_rows(features)
-    xs = np.empty((first.size, 7))
-    for start in range(0, first.size, 20000):  # bounded memory on unstructured meshes
-        rep = first[start : start + 20000]
-        v = sym_to_mandel(spring_strain_tensors(geometry.zeta0[rep], geometry.xi0[rep]))
-        A = (v[..., :, None] * v[..., None, :]).reshape(rep.size, 7, 36).transpose(0, 2, 1)
-        A = A / geometry.V0[rep, None, None]  # (r, 36, 7): columns are D_k basis matrices
-        scale = np.linalg.norm(A, axis=1)
-        scale[scale == 0] = 1.0
-        for u, k in enumerate(rep):  # the optimum is invariant under column scaling
-            xs[start + u] = _scipy_nnls(A[u] / scale[u], Cm[k])[0] / scale[u]
-    k_all = xs[inverse]
-    return k_all[:, :3], k_all[:, 3:6], k_all[:, 6]
-
-
 def calibrate(
     geometry: Any,
     frames: np.ndarray,
     material: Any,
-    method: Literal["analytic", "analytic-lsq", "nnls"] = "analytic",
+    method: Literal["analytic", "analytic-lsq", "nnls", "exact"] = "analytic",
+    options: Any = None,
 ) -> Calibrated:
     """Spring constants of every element, and the mismatch they leave.
 
@@ -290,8 +257,25 @@ def calibrate(
         See :func:`material_matrix`.
     method
         ``analytic`` (``k_s`` from the mean eigenvalue of ``R``), ``analytic-lsq`` (``k_s``
-        by least squares, see :func:`analytic_constants`) or ``nnls``.
+        by least squares, see :func:`analytic_constants`), ``nnls`` (bounded least squares,
+        :mod:`springmodel.nnls`) or ``exact`` (:mod:`springmodel.exact`). With
+        ``volume = "axes"`` or ``coupling`` the analytic methods use the exact formulas for
+        those parts (they are exact on any tet).
+    options
+        :class:`~springmodel.options.SpringOptions`: which parts are on (default: the seed's).
+
+    Returns
+    -------
+    Calibrated
+        Constants and the per-element mismatch of the switched-on parts
+        (:func:`springmodel.tangent.tangent_mismatch`).
     """
+    from .exact import exact_constants
+    from .nnls import nnls_fit
+    from .options import SpringOptions
+    from .tangent import basis_names, element_mismatch
+
+    options = options or SpringOptions()
     m = geometry.V0.shape[0]
     if is_transverse(material):
         C_global = material_matrix(material, frames)
@@ -299,15 +283,51 @@ def calibrate(
     else:  # isotropic: the same in every frame, no per-element copies
         C_global = C_local = material_matrix(material)
     C_local = np.broadcast_to(C_local, (m, 6, 6))
-    if method in ("analytic", "analytic-lsq"):
+    seed_parts = not options.axis_volume and not options.coupling
+    k = exact_constants(geometry, C_local, options.volume, options.coupling)
+    if method in ("analytic", "analytic-lsq") and seed_parts:
         volume = "lsq" if method == "analytic-lsq" else "mean"
-        ka, kt, kv = analytic_constants(geometry, C_local, volume)
+        k["k_axial"], k["k_torsion"], k["k_volume"] = analytic_constants(geometry, C_local, volume)
     elif method == "nnls":
-        ka, kt, kv = nnls_constants(geometry, C_global)
-    else:
-        raise ValueError(f"calibration {method!r} is not one of analytic, analytic-lsq, nnls")
-    D = effective_matrix(geometry, ka, kt, kv)
-    return Calibrated(ka, kt, kv, calibration_mismatch(D, C_global))
+        fit = nnls_fit(geometry, C_global, C_local, options)
+        names = basis_names(options.torsion, options.volume, options.coupling)
+        col = {n: fit[:, i] for i, n in enumerate(names)}
+        k["k_axial"] = fit[:, :3]
+        if options.torsion != "off":
+            k["k_torsion"] = fit[:, 3:6]
+        k["k_volume"] = col.get("volume", k["k_volume"])
+        k["k_axis_volume"] = col.get("axis_volume", k["k_axis_volume"])
+        if options.coupling:
+            k["k_coupling"] = np.stack([col[f"coupling{p}"] for p in ("01", "02", "12")], 1)
+    elif method not in ("analytic", "analytic-lsq", "exact"):
+        raise ValueError(
+            f"calibration {method!r} is not one of analytic, analytic-lsq, nnls, exact"
+        )
+    if not options.barycentric_volume:
+        k["k_volume"] = np.zeros(m)
+    mismatch = element_mismatch(
+        RestGeometry(geometry.zeta0, geometry.xi0, geometry.V0),
+        constants_of(k, options),
+        C_global,
+        options,
+    )
+    return Calibrated(
+        k["k_axial"], k["k_torsion"], k["k_volume"], mismatch, k["k_axis_volume"], k["k_coupling"]
+    )
+
+
+def constants_of(k: dict[str, np.ndarray], options: Any) -> np.ndarray:
+    """Constants ``(m, nb)`` of the switched-on parts in the order of the tangent basis."""
+    cols = [k["k_axial"]]
+    if options.torsion != "off":
+        cols.append(k["k_torsion"])
+    if options.volume is True:
+        cols.append(k["k_volume"][:, None])
+    elif options.volume == "axes":
+        cols.append(k["k_axis_volume"][:, None])
+    if options.coupling:
+        cols.append(k["k_coupling"])
+    return np.concatenate(cols, axis=1)
 
 
 # --------------------------------------------------------------------------- W_k(F)

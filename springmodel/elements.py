@@ -16,6 +16,7 @@ import numpy as np
 from . import calibration as cal
 from .intersections import intersection_coefficients
 from .options import SpringOptions
+from .tangent import element_mismatch
 
 
 @dataclass
@@ -48,10 +49,17 @@ class SpringElements:
         Current and calibrated volume constants ``(m,)`` (N/m); LMS changes the first and
         clamps relative to the second.
     mismatch
-        ``(m,)`` relative Frobenius mismatch of the effective matrix vs the material
-        (``nan`` when no material was given).
+        ``(m,)`` relative mismatch of the small-strain tangent of the switched-on parts vs
+        the material, in the Frobenius norm of the fourth-order tensor (= Mandel Frobenius,
+        :mod:`springmodel.tangent`); ``nan`` when no material was given.
     n_points
         Number of mesh nodes (size of the force array).
+    k_axis_volume
+        Axis-volume stiffness ``kappa`` ``(m,)`` (Pa): energy ``V0 U(J)``.
+    k_coupling
+        Poisson-coupling constants ``(m, 3)`` (J) for the pairs (0,1), (0,2), (1,2).
+    det0
+        Rest triple products ``det[zeta_1^0 zeta_2^0 zeta_3^0]`` ``(m,)``: ``J = det / det0``.
     """
 
     tets: np.ndarray
@@ -71,6 +79,18 @@ class SpringElements:
     k_volume0: np.ndarray
     mismatch: np.ndarray
     n_points: int
+    k_axis_volume: np.ndarray | None = None
+    k_coupling: np.ndarray | None = None
+    det0: np.ndarray | None = None
+
+    def __post_init__(self):
+        m = self.tets.shape[0]
+        if self.k_axis_volume is None:
+            self.k_axis_volume = np.zeros(m)
+        if self.k_coupling is None:
+            self.k_coupling = np.zeros((m, 3))
+        if self.det0 is None:
+            self.det0 = np.linalg.det(self.zeta0.transpose(0, 2, 1))
 
     @property
     def n_elements(self) -> int:
@@ -141,22 +161,28 @@ def build_spring_elements(
     if material is None and any(v is None for v in overrides):
         raise ValueError("a material is needed unless k_axial, k_torsion, k_volume are all given")
     calib = None
+    kj, kc = np.zeros(m), np.zeros((m, 3))
     if material is not None and any(v is None for v in overrides):
-        calib = cal.calibrate(geom, frames, material, options.calibration)
+        calib = cal.calibrate(geom, frames, material, options.calibration, options)
         ka, kt, kv = calib.k_axial, calib.k_torsion, calib.k_volume
+        kj, kc = calib.k_axis_volume, calib.k_coupling
     else:
         ka = kt = kv = None
     if options.k_axial is not None:
         ka = np.full((m, 3), float(options.k_axial))
     if options.k_torsion is not None:
         kt = np.full((m, 3), float(options.k_torsion))
-    if options.k_volume is not None:
+    if options.k_volume is not None:  # the volume constant of whichever volume part is on
         kv = np.full(m, float(options.k_volume))
+        if options.axis_volume:
+            kj = kv.copy()
     if calib is not None and all(v is None for v in overrides):
         mismatch = calib.mismatch
     elif material is not None:
-        D = cal.effective_matrix(geom, ka, kt, kv)
-        mismatch = cal.calibration_mismatch(D, cal.material_matrix(material, frames))
+        k = {"k_axial": ka, "k_torsion": kt, "k_volume": kv, "k_axis_volume": kj}
+        k["k_coupling"] = kc
+        C_global = cal.material_matrix(material, frames)
+        mismatch = element_mismatch(geom, cal.constants_of(k, options), C_global, options)
     else:
         mismatch = np.full(m, np.nan)
 
@@ -178,4 +204,6 @@ def build_spring_elements(
         k_volume0=np.array(kv, dtype=float),
         mismatch=mismatch,
         n_points=int(points.shape[0]),
+        k_axis_volume=np.ascontiguousarray(kj, dtype=float),
+        k_coupling=np.ascontiguousarray(kc, dtype=float),
     )

@@ -18,7 +18,11 @@ it on disk (``cache=True``). Compact constants, from DESIGN §4's identity
 * torsion: ``energy`` needs ``k`` only (``l0`` cancels), the force laws ``k_f l0_l`` and
   ``k_f l0_m``; the rest cosines ``c0`` only when they are not zero to round-off (they are
   zero for orthonormal frames, DESIGN §4b), the rest angles for ``angle``;
-* volume: ``k_s`` and ``sum_j |xi_j^0|``.
+* barycentric volume: ``k_s`` and ``sum_j |xi_j^0|``;
+* axis volume (``J = det[zeta] / det[zeta^0] = c_J det[zeta / l0]``, ``c_J = l0_0 l0_1 l0_2 /
+  det0``): ``c_J``, ``V0 kappa c_J`` (and ``eta V0 c_J`` with damping), its force on axis
+  ``l`` being ``-V0 U'(J) c_J (z_m x z_n)`` for the cyclic ``(l, m, n)``, times ``l0_l``;
+* Poisson coupling: ``c_lm`` (``l0`` cancels: ``l0_l g_l = -c_lm s_m zeta_hat_l``).
 
 The seed variant (linear axial, cosine torsion, gradient volume) reads 20 constants per
 element (160 B in f64) and 16 B of connectivity, against 256 B before.
@@ -63,7 +67,11 @@ class Variant:
     torsion
         ``off``, ``angle``, ``cosine``, ``cubic`` or ``energy``.
     volume
-        ``off``, ``gradient`` or ``spec``.
+        ``off``, ``gradient``, ``spec`` (barycentric) or ``axes`` (axis volume).
+    volumetric
+        ``U(J)`` of the axis volume: ``quadratic``, ``log`` or ``simo-taylor``.
+    coupling
+        Poisson-coupling springs on.
     damp_axial, damp_volume
         Axial and volume damping coefficients (0 for off).
     b2, b3, bt
@@ -77,6 +85,8 @@ class Variant:
     axial: str = "linear"
     torsion: str = "cosine"
     volume: str = "gradient"
+    volumetric: str = "quadratic"
+    coupling: bool = False
     damp_axial: float = 0.0
     damp_volume: float = 0.0
     b2: float = 0.0
@@ -101,8 +111,12 @@ class Variant:
             cols += [f"a0{p}" for p in range(3)]
         elif self.torsion != "off" and self.c0:
             cols += [f"c0{p}" for p in range(3)]
-        if self.volume != "off":
+        if self.volume in ("gradient", "spec"):
             cols += ["ks", "lsum"]
+        elif self.volume == "axes":
+            cols += ["kj", "cj"] + (["ej"] if self.damp_volume else [])
+        if self.coupling:
+            cols += [f"cp{p}" for p in range(3)]
         return tuple(cols)
 
     @property
@@ -115,6 +129,22 @@ class Variant:
 
 _AXIAL = {"linear": 0, "quadratic": 1, "cubic": 1, "stress-scaled": 2}
 _TORSION = {"off": 0, "angle": 1, "cosine": 2, "cubic": 3, "energy": 4}
+_VOLUMETRIC = {"quadratic": 0, "log": 1, "simo-taylor": 2}
+
+
+@njit(cache=True, **_FLAGS)
+def _cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+@njit(cache=True, **_FLAGS)
+def _dU(law, J, one):
+    """``U'(J) / kappa`` of the volumetric energies (quadratic, log, Simo-Taylor)."""
+    if law == 0:
+        return J - one
+    if law == 1:
+        return math.log(J) / J
+    return (J - one / J) / (one + one)
 
 
 @njit(cache=True, **_FLAGS)
@@ -200,16 +230,21 @@ def _block_run(v: Variant):
     KT = cols.get("kt0", cols.get("kf0l", 0))
     T0 = cols.get("a00", cols.get("c00", 0))
     KS, INV6 = cols.get("ks", 0), cols.get("inv6v0", 0)
+    KJ, CP, EJ = cols.get("kj", 0), cols.get("cp0", 0), cols.get("ej", 0)
+    axes = v.volume == "axes"
+    VL = _VOLUMETRIC[v.volumetric]
+    coupling = v.coupling
     has_c0 = "c00" in cols or "a00" in cols
     AX, TO = _AXIAL[v.axial], _TORSION[v.torsion]
     energy = v.torsion == "energy"
     spec = v.volume == "spec"
     stress = v.axial == "stress-scaled"
-    vol_on = v.volume != "off"
+    vol_on = v.volume in ("gradient", "spec")
     tors_on = v.torsion != "off"
     v_axial = bool(v.damp_axial)
     v_volume = vol_on and bool(v.damp_volume)
-    uses_w = v_axial or v_volume
+    v_axes = axes and bool(v.damp_volume)
+    uses_w = v_axial or v_volume or v_axes
     damp_v = at(v.damp_volume)
 
     @njit(cache=True, **_FLAGS)
@@ -249,6 +284,13 @@ def _block_run(v: Variant):
                 s0 = _axial(AX, lam0, at(Kb[KA * B + j]), jac, b2, b3, one)
                 s1 = _axial(AX, lam1, at(Kb[(KA + 1) * B + j]), jac, b2, b3, one)
                 s2 = _axial(AX, lam2, at(Kb[(KA + 2) * B + j]), jac, b2, b3, one)
+                if coupling:  # c_lm s_l s_m, s_l = lam_l - 1
+                    c01, c02 = at(Kb[CP * B + j]), at(Kb[(CP + 1) * B + j])
+                    c12 = at(Kb[(CP + 2) * B + j])
+                    e0, e1, e2 = lam0 - one, lam1 - one, lam2 - one
+                    s0 -= c01 * e1 + c02 * e2
+                    s1 -= c01 * e0 + c12 * e2
+                    s2 -= c02 * e0 + c12 * e1
                 if v_axial:
                     wa = (W[j], W[B + j], W[2 * B + j])
                     wb = (W[3 * B + j], W[4 * B + j], W[5 * B + j])
@@ -273,6 +315,23 @@ def _block_run(v: Variant):
                         else:
                             fl, fm = _pair(TO, u1, u2, lam1, lam2, kl, km, t0, bt, one)
                             q1, q2 = _add(q1, fl), _add(q2, fm)
+                if axes:  # V0 U(J), J = c_J det[z], z_l = lam_l u_l
+                    z0 = (lam0 * u0[0], lam0 * u0[1], lam0 * u0[2])
+                    z1 = (lam1 * u1[0], lam1 * u1[1], lam1 * u1[2])
+                    z2 = (lam2 * u2[0], lam2 * u2[1], lam2 * u2[2])
+                    x12, x20, x01 = _cross(z1, z2), _cross(z2, z0), _cross(z0, z1)
+                    J = at(Kb[(KJ + 1) * B + j]) * _dot(z0, x12)
+                    sv = -at(Kb[KJ * B + j]) * _dU(VL, J, one)
+                    if v_axes:  # volume viscosity on dJ/dt = c_J sum_l (z_m x z_n) . dz_l/dt
+                        wa = (W[j], W[B + j], W[2 * B + j])
+                        wb = (W[3 * B + j], W[4 * B + j], W[5 * B + j])
+                        wc = (W[6 * B + j], W[7 * B + j], W[8 * B + j])
+                        dz0 = _comb(g10, g20, g30, wa, wb, wc)
+                        dz1 = _comb(g11, g21, g31, wa, wb, wc)
+                        dz2 = _comb(g12, g22, g32, wa, wb, wc)
+                        rate = _dot(x12, dz0) + _dot(x20, dz1) + _dot(x01, dz2)
+                        sv -= at(Kb[EJ * B + j]) * rate
+                    q0, q1, q2 = _axpy(sv, x12, q0), _axpy(sv, x20, q1), _axpy(sv, x01, q2)
                 # f_i = sum_l G'[i,l] q_l,  f_0 = -(f_1 + f_2 + f_3)
                 f1 = _comb(g10, g11, g12, q0, q1, q2)
                 f2 = _comb(g20, g21, g22, q0, q1, q2)

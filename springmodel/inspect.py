@@ -8,15 +8,39 @@ import numpy as np
 
 from springfem.scene import Scene
 
+from .advice import scene_warnings
 from .intersections import axis_vectors, cast_rays
 from .options import SpringOptions
+from .tangent import MISMATCH_NORM
 
 
 def inspect_scene(scene: Scene, calibration: bool = True) -> dict[str, Any]:
     """Counts, volume, element quality, axis lengths and ray-cast success of a scene.
 
     With ``calibration`` (and the spring calibration module present) the distribution of
-    the spring element's calibration mismatch is included too.
+    the spring element's calibration mismatch is included too (its norm named in
+    ``calibration_mismatch_norm``), and ``warnings`` lists the predicted model errors and the
+    options that fix them (:mod:`springmodel.advice`).
+
+    Parameters
+    ----------
+    scene
+        The scene to describe.
+    calibration
+        Include the calibration mismatch and warnings.
+
+    Returns
+    -------
+    dict
+        JSON-ready statistics.
+
+    Examples
+    --------
+    >>> from springfem.scene import load_scene
+    >>> from studies.cli import DEFAULT_SCENE
+    >>> report = inspect_scene(load_scene(DEFAULT_SCENE))
+    >>> report["tets"], len(report["warnings"])
+    (3840, 1)
     """
     mesh = scene.mesh
     q = mesh.quality()
@@ -50,11 +74,14 @@ def _calibration_stats(scene: Scene) -> dict[str, Any]:
         from .model import SpringModel
     except ImportError:  # spring model not built yet
         return {}
-    model = SpringModel(scene)
+    options = SpringOptions.of(scene)
+    model = SpringModel(scene, options)
     mm = np.asarray(model.elements.mismatch)
     return {
-        "calibration": SpringOptions.of(scene).calibration,
+        "calibration": options.calibration,
+        "calibration_mismatch_norm": MISMATCH_NORM,
         "calibration_mismatch_min": float(mm.min()),
         "calibration_mismatch_median": float(np.median(mm)),
         "calibration_mismatch_max": float(mm.max()),
+        "warnings": scene_warnings(scene, mm, options),
     }

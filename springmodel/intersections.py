@@ -38,7 +38,7 @@ from typing import NamedTuple
 import numpy as np
 import scipy.sparse as sp
 
-from springfem.errors import MeshError
+from springfem.errors import MeshError, format_ids
 
 #: A tet is degenerate when ``|det[x1-x0, x2-x0, x3-x0]| <= DEGENERATE_TOL * L^3``, with
 #: ``L`` the longest edge from vertex 0 (the determinant is ``6 V``).
@@ -123,7 +123,7 @@ def cast_rays(points: np.ndarray, tets: np.ndarray, frames: np.ndarray) -> RayCa
     axis_len2 = np.einsum("klc,klc->kl", frames, frames)
     bad = np.flatnonzero(~(np.isfinite(axis_len2) & (axis_len2 > 0)).all(axis=1))
     if bad.size:
-        raise ValueError(f"zero or non-finite anisotropy axes at elements {_ids(bad)}")
+        raise ValueError(f"zero or non-finite anisotropy axes at elements {format_ids(bad)}")
     if m == 0:
         return RayCast(np.empty((0, 4, 6)), np.empty((0, 6), dtype=np.int64), np.empty(0, bool))
     # Work with the element index last (contiguous): G[i, c, k] = component c of grad N_i.
@@ -306,7 +306,7 @@ def _shape_gradients_t(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
     bad = np.flatnonzero(~(np.abs(det) > DEGENERATE_TOL * scale))
     if bad.size:
         raise MeshError(
-            f"degenerate (zero-volume or non-finite) tets {_ids(bad)}: no interior "
+            f"degenerate (zero-volume or non-finite) tets {format_ids(bad)}: no interior "
             "barycenter to cast anisotropy axes from"
         )
     G[1:] /= det
@@ -322,9 +322,3 @@ def _first_index(s: np.ndarray, value: np.ndarray) -> np.ndarray:
     idx = np.where(s[2] == value, 2, 3)
     idx = np.where(s[1] == value, 1, idx)
     return np.where(s[0] == value, 0, idx)
-
-
-def _ids(idx: np.ndarray, limit: int = 8) -> str:
-    idx = np.asarray(idx).ravel()
-    shown = ", ".join(str(int(i)) for i in idx[:limit])
-    return shown + (f" … ({idx.size} in all)" if idx.size > limit else "")

@@ -15,6 +15,7 @@ Examples
 
 from __future__ import annotations
 
+import sys
 import time
 from dataclasses import dataclass, field, replace
 
@@ -26,10 +27,12 @@ from springfem.loads import external_forces, has_follower_loads, lumped_masses, 
 from springfem.result import Result, volume_summary
 from springfem.scene import Scene
 
+from .advice import scene_warnings
 from .elements import SpringElements, build_spring_elements
 from .options import SpringOptions
 from .spring_kernel import SpringKernel
 from .springs import is_conservative, lms_update, volume_measures
+from .tangent import MISMATCH_NORM
 
 
 class SpringModel:
@@ -109,7 +112,7 @@ class SpringModel:
     def post_step(self, x: np.ndarray, dt: float) -> None:
         """LMS adaptive volume stiffness (eq. 2.81), once per time step."""
         lms = self.options.lms
-        if lms is None or not self.options.volume:
+        if lms is None or not self.options.barycentric_volume:
             return
         V, sum_xi = volume_measures(x, self.elements)
         k = lms_update(
@@ -150,7 +153,12 @@ class SpringSolution:
 def variant_label(options: SpringOptions) -> str:
     """Short description of the enabled spring parts, e.g. ``axial=linear,torsion=cosine``."""
     parts = [f"axial={options.axial}", f"torsion={options.torsion}"]
-    parts.append(f"volume={options.volume_form}" if options.volume else "volume=off")
+    if options.axis_volume:
+        parts.append(f"volume=axes/{options.volumetric}")
+    else:
+        parts.append(f"volume={options.volume_form}" if options.volume else "volume=off")
+    if options.coupling:
+        parts.append("coupling")
     if options.lms is not None:
         parts.append(f"lms={options.lms.rule}")
     parts.append(f"calibration={options.calibration}")
@@ -187,12 +195,17 @@ def solve_spring(
     u = x - model.x0
     residual = model.forces(x, None)
     iterations = int(getattr(info, "iterations", 0) or getattr(info, "steps", 0))
+    warnings = scene_warnings(scene, model.elements.mismatch, opts)
+    for line in warnings:
+        print(f"springfem: warning: {line}", file=sys.stderr)
     extra = {
         "solver": opts.solver,
         "variant": variant_label(opts),
         "calibration_mismatch_median": float(np.nanmedian(model.elements.mismatch))
         if np.isfinite(model.elements.mismatch).any()
         else None,
+        "calibration_mismatch_norm": MISMATCH_NORM,
+        "warnings": warnings,
         "message": getattr(info, "message", ""),
         "dt": getattr(info, "dt", None),
         "steps": int(getattr(info, "steps", 0) or 0),

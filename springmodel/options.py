@@ -12,15 +12,18 @@ from dataclasses import dataclass, fields
 from typing import Any, Literal, get_args
 
 from springfem.scene import Scene, TableReader, register_section
+from springfem.volumetric import VOLUMETRIC_ENERGIES, Volumetric
 
 AxialLaw = Literal["linear", "quadratic", "cubic", "stress-scaled"]
 TorsionLaw = Literal["off", "angle", "cosine", "cubic", "energy"]
 LMSRule = Literal["spec", "abs"]
-Calibration = Literal["analytic", "analytic-lsq", "nnls"]
+Calibration = Literal["analytic", "analytic-lsq", "nnls", "exact"]
 SolverKind = Literal["static", "explicit", "implicit"]
 Integrator = Literal["symplectic-euler", "verlet"]
 VolumeForm = Literal["gradient", "spec"]
 Precision = Literal["float64", "mixed", "float32"]
+#: ``True``: the seed's barycentric volume springs; ``"axes"``: the axis-volume spring.
+VolumeKind = bool | Literal["axes"]
 
 
 @dataclass(frozen=True)
@@ -59,13 +62,22 @@ class SpringOptions:
     torsion_cubic
         Dimensionless cubic coefficient of the ``cubic`` torsion law.
     volume
-        Barycentric volume springs on/off (2.76–2.77).
+        ``True``: the seed's barycentric volume springs (2.76–2.77); ``False``: off;
+        ``"axes"``: the axis-volume spring, energy ``V0 U(J)`` with the exact volume ratio
+        ``J = det[zeta_1 zeta_2 zeta_3] / det[zeta_1^0 zeta_2^0 zeta_3^0]`` (DESIGN §4b).
+    volumetric
+        ``U(J)`` of the axis-volume spring: ``quadratic``, ``log`` or ``simo-taylor``
+        (:mod:`springfem.volumetric`, the FEM's choices).
+    coupling
+        Poisson-coupling springs: energy ``c_lm s_l s_m`` for each axis pair, with the axial
+        strains ``s_l = |zeta_l| / l_l^0 - 1``.
     volume_form
         ``gradient``: the exact gradient of ``k_s/2 dL^2`` (net force zero); ``spec``: the
         force ``-k_s dL xi_hat_j`` as written in eq. 2.77 (with the restoring sign), whose
         net force is not zero on irregular tets.
     volume_damping
-        Damping coefficient ``c`` of the volume springs (N s/m), acting on ``v_j - v_b``.
+        Damping of the volume springs: barycentric, ``c`` (N s/m) acting on ``v_j - v_b``;
+        axis-volume, a volume viscosity ``eta`` (Pa s), force ``-eta V0 (dJ/dt) dJ/dx``.
     axial_damping
         Relative damping along the axial springs (N s/m); off by default.
     lms
@@ -73,10 +85,15 @@ class SpringOptions:
     calibration
         ``analytic`` (match the small-strain element energy, DESIGN §4), ``analytic-lsq``
         (the same with a least-squares volume constant ``k_s = lam V tr(R)^2 / |R|^4``, equal
-        when ``R = rho I``) or ``nnls`` (per-element non-negative least squares of the
-        effective 6x6 matrix).
+        when ``R = rho I``), ``nnls`` (per-element non-negative least squares of the
+        effective 6x6 matrix, with positive axial and torsion constants so that every element
+        is positive definite) or ``exact`` (closed-form constants that reproduce the
+        material's P1 element exactly when ``volume = "axes"``, ``torsion = "energy"`` and,
+        for anisotropic materials, ``coupling = true``; see
+        :mod:`springmodel.calibration`).
     k_axial, k_torsion, k_volume
-        Explicit spring constants (N/m, N m, N/m) overriding the calibration.
+        Explicit spring constants (N/m, J, and N/m for the barycentric volume spring or Pa
+        for the axis-volume spring) overriding the calibration.
     solver, integrator, dt, dt_safety, t_end, steps, mass_damping, tol, max_iter
         Solver settings. ``dt = None`` means ``dt_safety * 2 / omega_max``.
         ``mass_damping`` (1/s) is a Rayleigh mass-proportional damping used to bring an
@@ -90,7 +107,9 @@ class SpringOptions:
     axial_coefficients: tuple[float, float] = (0.0, 0.0)
     torsion: TorsionLaw = "cosine"
     torsion_cubic: float = 0.0
-    volume: bool = True
+    volume: VolumeKind = True
+    volumetric: Volumetric = "quadratic"
+    coupling: bool = False
     volume_form: VolumeForm = "gradient"
     volume_damping: float = 0.0
     axial_damping: float = 0.0
@@ -110,6 +129,24 @@ class SpringOptions:
     max_iter: int = 200
     precision: Precision = "float64"
 
+    def __post_init__(self):
+        if self.volume not in (True, False, "axes"):
+            raise ValueError(f"volume {self.volume!r} is not one of True, False, 'axes'")
+        if self.volumetric not in VOLUMETRIC_ENERGIES:
+            raise ValueError(
+                f"volumetric {self.volumetric!r} is not one of {', '.join(VOLUMETRIC_ENERGIES)}"
+            )
+
+    @property
+    def barycentric_volume(self) -> bool:
+        """The seed's barycentric volume springs are on (``volume = true``)."""
+        return self.volume is True
+
+    @property
+    def axis_volume(self) -> bool:
+        """The axis-volume spring is on (``volume = "axes"``)."""
+        return self.volume == "axes"
+
     @classmethod
     def choices(cls, name: str) -> tuple[str, ...]:
         """Valid string values of the option ``name`` (empty for non-string options)."""
@@ -121,6 +158,7 @@ class SpringOptions:
             "integrator": Integrator,
             "volume_form": VolumeForm,
             "precision": Precision,
+            "volumetric": Volumetric,
         }
         return get_args(hints[name]) if name in hints else ()
 
@@ -155,7 +193,11 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
     if r.has("volume_form"):
         kw["volume_form"] = r.get("volume_form", "str", choices=S.choices("volume_form"))
     if r.has("volume"):
-        kw["volume"] = r.get("volume", "bool")
+        kw["volume"] = _volume_kind(r)
+    if r.has("volumetric"):
+        kw["volumetric"] = r.get("volumetric", "str", choices=VOLUMETRIC_ENERGIES)
+    if r.has("coupling"):
+        kw["coupling"] = r.get("coupling", "bool")
     for key in ("volume_damping", "axial_damping", "mass_damping", "torsion_cubic"):
         if r.has(key):
             kw[key] = r.get(key, "float", nonneg=key != "torsion_cubic")
@@ -187,6 +229,17 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
         kw["lms"] = lms
     r.finish()
     return SpringOptions(**kw)
+
+
+def _volume_kind(r: TableReader) -> VolumeKind:
+    """``volume = true | false | "axes"``."""
+    value = r.t["volume"]
+    if isinstance(value, bool):
+        return r.get("volume", "bool")
+    if value == "axes":
+        r.used.add("volume")
+        return "axes"
+    raise r.fail("volume", f'{value!r} is not one of true, false, "axes"')
 
 
 register_section("spring", parse_spring_options)

@@ -53,6 +53,12 @@ def constant_columns(elements, variant: Variant) -> np.ndarray:
         data[f"a0{p}"] = el.alpha0[:, p]
     data["inv6v0"] = 1.0 / (6.0 * el.V0)
     data["ks"] = el.k_volume
+    cj = l0.prod(axis=1) / el.det0  # J = c_J det[zeta / l0]
+    data["cj"] = cj
+    data["kj"] = el.V0 * el.k_axis_volume * cj
+    data["ej"] = variant.damp_volume * el.V0 * cj**2  # eta V0 dJ/dt c_J (...)
+    for p in range(3):
+        data[f"cp{p}"] = el.k_coupling[:, p]
     data["lsum"] = el.L0
     return np.stack([np.broadcast_to(data[c], (el.n_elements,)) for c in variant.columns()])
 
@@ -76,13 +82,18 @@ def variant_of(elements, options, precision: str = "float64", velocity: bool = T
         raise ValueError(f"precision {precision!r} is not one of {', '.join(PRECISIONS)}")
     b2, b3 = (float(b) for b in options.axial_coefficients)
     poly = options.axial in ("quadratic", "cubic")
-    volume = options.volume_form if options.volume else "off"
+    if options.volume == "axes":
+        volume = "axes"
+    else:
+        volume = options.volume_form if options.volume else "off"
     return Variant(
         axial=options.axial,
         torsion=options.torsion,
         volume=volume,
+        volumetric=getattr(options, "volumetric", "quadratic"),
+        coupling=bool(getattr(options, "coupling", False)),
         damp_axial=float(options.axial_damping) if velocity else 0.0,
-        damp_volume=float(options.volume_damping) if velocity and options.volume else 0.0,
+        damp_volume=float(options.volume_damping) if velocity and volume != "off" else 0.0,
         b2=b2 if poly else 0.0,
         b3=b3 if options.axial == "cubic" else 0.0,
         bt=float(options.torsion_cubic) if options.torsion == "cubic" else 0.0,

@@ -57,6 +57,7 @@ from typing import Literal
 
 import numpy as np
 
+from .axis_springs import axis_spring_energy, axis_volume_axis_forces, coupling_axis_forces
 from .calibration import TORSION_PAIRS
 from .elements import SpringElements
 from .options import LMSOptions, SpringOptions
@@ -249,6 +250,30 @@ def lms_update(
     return np.clip(ratio, opts.k_min, opts.k_max) * k_s0
 
 
+def axis_forces(
+    x: np.ndarray, v: np.ndarray | None, elements: SpringElements, options: SpringOptions
+) -> np.ndarray:
+    """Axis-volume and Poisson-coupling forces (:mod:`springmodel.axis_springs`), ``(n, 3)``."""
+    q = intersection_points(x, elements)
+    zeta = q[:, 0::2] - q[:, 1::2]
+    g = np.zeros_like(zeta)
+    if options.axis_volume:
+        zeta_dot = None
+        if v is not None and options.volume_damping > 0:
+            vq = intersection_points(v, elements)
+            zeta_dot = vq[:, 0::2] - vq[:, 1::2]
+        g += axis_volume_axis_forces(
+            zeta, zeta_dot, elements, options.volumetric, options.volume_damping
+        )
+    if options.coupling:
+        g += coupling_axis_forces(zeta, elements)
+    fq = np.zeros_like(q)
+    for l in range(3):
+        fq[:, 2 * l] += g[:, l]
+        fq[:, 2 * l + 1] -= g[:, l]
+    return scatter(distribute(fq, elements), elements.tets, x.shape[0])
+
+
 # --------------------------------------------------------------------------- totals
 
 
@@ -262,13 +287,16 @@ def internal_forces(
     """Sum of the enabled spring forces at positions ``x`` and velocities ``v``, ``(n, 3)``.
 
     Only the enabled parts are computed: axial always, torsion unless ``off``, volume if
-    ``options.volume``; damping terms only if their coefficient is positive and ``v`` given.
+    ``options.volume`` (barycentric or axes), coupling if on; damping terms only if their
+    coefficient is positive and ``v`` given.
     """
     f = axial_forces(x, v, elements, options)
     if options.torsion != "off":
         f += torsion_forces(x, elements, options)
-    if options.volume:
+    if options.barycentric_volume:
         f += volume_forces(x, v, elements, options, volume_form)
+    if options.axis_volume or options.coupling:
+        f += axis_forces(x, v, elements, options)
     return f
 
 
@@ -277,10 +305,13 @@ def is_conservative(options: SpringOptions, volume_form: VolumeForm | None = Non
     return (
         options.axial in ("linear", "quadratic", "cubic")
         and options.torsion in ("off", "energy")
-        and (not options.volume or _resolve_volume_form(options, volume_form) == "gradient")
+        and (
+            not options.barycentric_volume
+            or _resolve_volume_form(options, volume_form) == "gradient"
+        )
         and options.axial_damping == 0
         and (not options.volume or options.volume_damping == 0)
-        and options.lms is None
+        and (options.lms is None or not options.barycentric_volume)
     )
 
 
@@ -318,8 +349,10 @@ def spring_energy(
                 W += kt * (dc**2 / 2 + options.torsion_cubic * dc**4 / 4)
             else:
                 W += 0.5 * kt * dc**2
-    if options.volume:
+    if options.barycentric_volume:
         r = np.linalg.norm(X - X.mean(axis=1, keepdims=True), axis=-1)
         dL = r.sum(axis=1) - elements.L0
         W += 0.5 * elements.k_volume * dL**2
+    if options.axis_volume or options.coupling:
+        W += axis_spring_energy(q[:, 0::2] - q[:, 1::2], elements, options)
     return W, float(W.sum())

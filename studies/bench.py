@@ -82,14 +82,18 @@ def spring_variants() -> list[SpringOptions]:
     out.append(SpringOptions(volume_form="spec"))
     out.append(SpringOptions(volume=False))
     out.append(SpringOptions(axial_damping=0.1, volume_damping=0.1))
+    for vol in ("quadratic", "log", "simo-taylor"):
+        out.append(SpringOptions(torsion="energy", volume="axes", volumetric=vol))
+    out.append(SpringOptions(torsion="energy", volume="axes", coupling=True))
     return out
 
 
 def short_label(o: SpringOptions) -> str:
     """``axial/torsion/volume[/damped]`` of a spring variant, e.g. ``linear/cosine/gradient``."""
-    vol = o.volume_form if o.volume else "off"
+    vol = o.volume_form if o.volume is True else (f"axes-{o.volumetric}" if o.volume else "off")
     damped = "/damped" if (o.axial_damping or o.volume_damping) else ""
-    return f"{o.axial}/{o.torsion}/{vol}{damped}"
+    coupled = "/coupling" if o.coupling else ""
+    return f"{o.axial}/{o.torsion}/{vol}{coupled}{damped}"
 
 
 def _warp_note() -> str:
@@ -357,7 +361,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     else:  # argparse restricts the choices
         raise InputError(f"unknown benchmark {what!r}; valid: forces, fem, step")
     if as_json:
-        from springfem.result import _jsonable
+        from springfem.files import jsonable as _jsonable
 
         print(json.dumps(_jsonable(res), indent=2, sort_keys=True))
     return 0

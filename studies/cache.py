@@ -29,7 +29,8 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from springfem.result import _jsonable, atomic_write_text, remove_stale_temp_files
+from springfem.files import atomic_write_text, remove_stale_temp_files
+from springfem.files import jsonable as _jsonable
 
 CACHE_VERSION = "1"
 

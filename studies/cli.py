@@ -107,7 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene", nargs="?", default=None, help="scene (default: cantilever)")
     p.add_argument("--out", default=None, help="output folder (default: out/compare-<scene>)")
     p.add_argument("--json", action="store_true", help="print the table as JSON")
-    p.set_defaults(func=_subcommand("studies.compare", "cmd_compare"))
+    p.set_defaults(func=_subcommand("studies.compare_output", "cmd_compare"))
 
     p = sub.add_parser("study", help="run one study into reports/")
     p.add_argument("name", help="study name")

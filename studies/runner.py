@@ -1,112 +1,82 @@
-"""Study registry, ``springfem study NAME`` and ``springfem report``.
+"""``springfem study NAME`` and ``springfem report``: run registered studies.
 
-A study is a module ``studies/study_<name>.py`` with a function
-``run(ctx: StudyContext) -> StudyOutput``. Each study writes CSV + Markdown tables and PNG
-figures into ``<out>/<name>/`` and caches every finished case (see :mod:`studies.cache`),
-so an interrupted report resumes where it stopped.
+A study is a function ``run(ctx, settings) -> StudyOutput`` registered with
+:func:`studies.registry.study`; importing its module registers it. Each study writes CSV +
+Markdown tables and PNG figures into ``<out>/<name>/`` and caches every finished case
+(see :mod:`studies.cache`), so an interrupted report resumes where it stopped.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
-from springfem.errors import InputError
-from springfem.result import _jsonable, atomic_write_text, remove_stale_temp_files
+from springfem.files import atomic_write_text, remove_stale_temp_files
+from springfem.files import jsonable as _jsonable
 
 from .cache import CaseCache, source_fingerprint
+from .registry import REGISTRY, StudyContext, StudyOutput, get_study
 
-STUDIES = (
-    "convergence",
-    "accuracy",
-    "volume_drift",
-    "anisotropy",
-    "stability",
-    "speed_accuracy",
-    "scaling",
-    "ablation",
-)
-
-
-@dataclass
-class StudyContext:
-    """Where a study writes, how big it runs, and its case cache."""
-
-    name: str
-    out: Path
-    quick: bool
-    cache: CaseCache
-    progress: bool = True
-
-    def path(self, filename: str) -> Path:
-        self.out.mkdir(parents=True, exist_ok=True)
-        return self.out / filename
-
-
-@dataclass
-class Figure:
-    path: Path
-    caption: str
-
-
-@dataclass
-class Table:
-    path: Path  # the Markdown file (a CSV sits beside it)
-    caption: str
-
-
-@dataclass
-class StudyOutput:
-    """What a study found: a title, findings, tables, figures and headline numbers."""
-
-    name: str
-    title: str
-    findings: list[str] = field(default_factory=list)
-    tables: list[Table] = field(default_factory=list)
-    figures: list[Figure] = field(default_factory=list)
-    headline: dict[str, float] = field(default_factory=dict)
-    seconds: float = 0.0
-
-
-def study_names() -> tuple[str, ...]:
-    return STUDIES
-
-
-def _module_name(name: str) -> str:
-    key = name.replace("-", "_")
-    if key not in STUDIES:
-        valid = ", ".join(s.replace("_", "-") for s in STUDIES)
-        raise InputError(f"unknown study {name!r}; valid studies: {valid}")
-    return f"studies.study_{key}"
+# Importing a study module registers it; the import order is the report's order.
+# isort: off
+from . import study_convergence  # noqa: F401, E402
+from . import study_accuracy  # noqa: F401, E402
+from . import study_volume_drift  # noqa: F401, E402
+from . import study_anisotropy  # noqa: F401, E402
+from . import study_stability  # noqa: F401, E402
+from . import study_speed_accuracy  # noqa: F401, E402
+from . import study_scaling  # noqa: F401, E402
+from . import study_ablation  # noqa: F401, E402
+# isort: on
 
 
 def run_study(
-    name: str, out: str | Path = "reports", quick: bool = False, progress: bool = True
+    name: str,
+    out: str | Path = "reports",
+    quick: bool = False,
+    progress: bool = True,
+    settings: object | None = None,
 ) -> StudyOutput:
-    """Run one study and write its tables and figures under ``out/<name>``."""
-    mod = importlib.import_module(_module_name(name))
-    key = name.replace("-", "_")
+    """Run one study and write its tables, figures and ``headline.json`` under ``out/<name>``.
+
+    Parameters
+    ----------
+    name
+        A registered study name (dashes or underscores).
+    out
+        The report folder; the case cache is ``out/.cache``.
+    quick
+        Use the quick preset (when ``settings`` is not given) and say so in the findings.
+    progress
+        Show a progress bar.
+    settings
+        The study's settings (default: its ``quick()`` or ``full()`` preset).
+
+    Returns
+    -------
+    StudyOutput
+        Findings, tables, figures, headline numbers and the wall time.
+    """
+    spec = get_study(name)
     root = Path(out)
     import reference_fem
     import springmodel
 
+    source = spec.source.parent if spec.source.name == "__init__.py" else spec.source
     code = source_fingerprint(
         Path(springmodel.__file__).parent,
         Path(reference_fem.__file__).parent,
-        mod.__file__,
+        source,
         Path(__file__).parent / "metrics.py",
         Path(__file__).parent / "compare.py",
     )
-    cache = CaseCache(root / ".cache", key, fingerprint=code)
-    ctx = StudyContext(key, root / key, quick, cache, progress)
+    cache = CaseCache(root / ".cache", spec.name, fingerprint=code)
+    ctx = StudyContext(spec.name, root / spec.name, quick, cache, progress)
     remove_stale_temp_files(ctx.out)  # tables/figures of a run killed mid-write
     t0 = time.perf_counter()
-    result: StudyOutput = mod.run(ctx)
+    result = spec.run(ctx, settings if settings is not None else spec.settings_for(quick))
     result.seconds = time.perf_counter() - t0
     atomic_write_text(
         ctx.path("headline.json"), json.dumps(_jsonable(result.headline), indent=2, sort_keys=True)
@@ -182,8 +152,24 @@ def write_report(outputs: list[StudyOutput], root: Path, quick: bool) -> Path:
 def run_report(
     out: str | Path = "reports", quick: bool = False, names: tuple[str, ...] | None = None
 ) -> list[StudyOutput]:
+    """Run the studies (default: all registered, in report order) and write ``REPORT.md``.
+
+    Parameters
+    ----------
+    out
+        The report folder.
+    quick
+        The quick preset of every study.
+    names
+        Only these studies.
+
+    Returns
+    -------
+    list of StudyOutput
+        One per study, in the order run.
+    """
     outputs = []
-    for name in names or STUDIES:
+    for name in names or tuple(REGISTRY):
         print(f"study {name} …", flush=True)
         outputs.append(run_study(name, out, quick))
     write_report(outputs, Path(out), quick)
@@ -196,7 +182,3 @@ def cmd_report(args: argparse.Namespace) -> int:
     total = sum(o.seconds for o in outputs)
     print(f"wrote {out / 'REPORT.md'} ({len(outputs)} studies, {total:.0f} s)")
     return 0
-
-
-def headline(outputs: list[StudyOutput]) -> dict[str, Any]:
-    return {o.name: o.headline for o in outputs}

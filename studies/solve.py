@@ -11,7 +11,8 @@ import numpy as np
 
 from reference_fem.options import FemOptions
 from springfem.errors import InputError, SolverError
-from springfem.result import Result, safe_filename, volume_summary, write_result
+from springfem.files import safe_filename
+from springfem.result import Result, volume_summary, write_result
 from springfem.scene import Scene, load_scene
 
 

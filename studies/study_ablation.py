@@ -1,6 +1,6 @@
 """Study ``ablation``: "model no more than a scene needs".
 
-For every bundled scene (coarse meshes in ``--quick``) the spring model is solved with its
+For every bundled scene (coarse meshes in the quick settings) the spring model is solved with its
 parts switched on one by one:
 
 ============================  ===========================================================
@@ -37,7 +37,7 @@ from __future__ import annotations
 import re
 import time
 import warnings
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -49,7 +49,7 @@ from springmodel.options import LMSOptions, SpringOptions
 
 from .cli import SCENES
 from .metrics import median_time, relative_l2_error
-from .runner import Figure, StudyContext, StudyOutput, Table
+from .registry import Figure, StudyContext, StudyOutput, Table, study
 from .tables import save_figure, write_table
 
 #: Variants in order of the parts they switch on: label -> changes to ``[spring]``.
@@ -63,14 +63,8 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "+LMS (abs)": {"torsion": "energy", "volume": True, "lms": "abs"},
     "+volume (nnls cal.)": {"torsion": "energy", "volume": True, "calibration": "nnls"},
 }
-#: Bundled scenes and their coarse (quick) divisions.
+#: Bundled scenes.
 SCENE_NAMES = ("cantilever", "stretch-fiber", "stretch-cross", "sag")
-COARSE = {
-    "cantilever": (20, 2, 2),
-    "stretch-fiber": (3, 3, 3),
-    "stretch-cross": (3, 3, 3),
-    "sag": (8, 4, 2),
-}
 #: A variant is adequate when its model error is at most (1 + TOLERANCE) x the best one's.
 TOLERANCE = 0.10
 #: Solve times within this fraction of the fastest count as a tie (timer noise).
@@ -81,6 +75,40 @@ MAX_ERROR = 0.10
 NEWTON = {"tol": 1e-8, "max_iter": 25, "max_cutbacks": 4}
 #: Dynamic relaxation (LMS variant): residual tolerance and step budget.
 DR_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Meshes and step budget of the ablation study.
+
+    Parameters
+    ----------
+    divisions
+        Scene name -> box divisions (``None``: the bundled scene's mesh).
+    dr_steps
+        Dynamic-relaxation step budget of the LMS variant.
+    """
+
+    divisions: dict[str, tuple[int, int, int] | None] = field(
+        default_factory=lambda: dict.fromkeys(SCENE_NAMES)
+    )
+    dr_steps: int = 8000
+
+    @classmethod
+    def full(cls) -> Settings:
+        """The bundled meshes, 8000 relaxation steps."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> Settings:
+        """Coarse meshes, 4000 relaxation steps."""
+        coarse = {
+            "cantilever": (20, 2, 2),
+            "stretch-fiber": (3, 3, 3),
+            "stretch-cross": (3, 3, 3),
+            "sag": (8, 4, 2),
+        }
+        return cls(divisions=coarse, dr_steps=4000)
 
 
 # ------------------------------------------------------------------------------ scene
@@ -143,7 +171,7 @@ def spring_case(case: dict[str, Any]) -> dict[str, Any]:
     ``kernel_rate`` (elements per second), ``method``, ``iterations`` and, for LMS, the
     median stiffness ratio ``k_ratio_median`` and the share at the upper clamp.
     """
-    from springfem.mechanics.solvers import explicit_static, static
+    from springfem.mechanics import explicit_static, static
     from springmodel.model import SpringModel
 
     scene = ablation_scene(case["scene"], case["divisions"])
@@ -235,19 +263,34 @@ def cheapest_adequate(
 # -------------------------------------------------------------------------------- run
 
 
-def run(ctx: StudyContext) -> StudyOutput:
+@study("ablation", Settings)
+def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
+    """Run the ablation study (see the module docstring).
+
+    Parameters
+    ----------
+    ctx
+        Output folder, cache and preset.
+    settings
+        Meshes and step budget.
+
+    Returns
+    -------
+    StudyOutput
+        Findings, the ablation and winners tables, the error-vs-cost figure, headline.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    q = ctx.quick
-    dr_steps = 4000 if q else 8000
+    dr_steps = settings.dr_steps
     out = StudyOutput(name=ctx.name, title="Ablation: model no more than a scene needs")
     rows = []
     fem_times = {}
     for name in SCENE_NAMES:
-        div = list(COARSE[name]) if q else None
+        d = settings.divisions[name]
+        div = list(d) if d is not None else None
         fem = ctx.cache.run(
             [{"scene": name, "divisions": div, "model": "fem-p1"}], fem_case, ctx.progress, name
         )[0]

@@ -22,7 +22,7 @@ against the rotated compliance.
 from __future__ import annotations
 
 import re
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -33,7 +33,7 @@ from springfem.scene import Material, Scene, parse_scene
 from springmodel.options import SpringOptions
 
 from .cli import SCENES
-from .runner import Figure, StudyContext, StudyOutput, Table
+from .registry import Figure, StudyContext, StudyOutput, Table, study
 from .tables import save_figure, write_table
 
 #: Models compared: label -> (kind, setting).
@@ -161,15 +161,55 @@ def modulus_case(case: dict[str, Any]) -> dict[str, Any]:
 # -------------------------------------------------------------------------------- run
 
 
-def run(ctx: StudyContext) -> StudyOutput:
+@dataclass(frozen=True)
+class Settings:
+    """Fiber angles and mesh of the anisotropy study.
+
+    Parameters
+    ----------
+    angles
+        Fiber angles θ (degrees); 0 and 90 give the anisotropy ratio.
+    n
+        Divisions per side of the cube.
+    """
+
+    angles: tuple[float, ...] = tuple(float(a) for a in np.arange(0.0, 90.1, 7.5))
+    n: int = 6
+
+    @classmethod
+    def full(cls) -> Settings:
+        """Every 7.5° on a 6³ cube."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> Settings:
+        """0, 30, 60, 90° on a 3³ cube."""
+        return cls(angles=(0.0, 30.0, 60.0, 90.0), n=3)
+
+
+@study("anisotropy", Settings)
+def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
+    """Run the anisotropy study (see the module docstring).
+
+    Parameters
+    ----------
+    ctx
+        Output folder, cache and preset.
+    settings
+        Angles and mesh.
+
+    Returns
+    -------
+    StudyOutput
+        Findings, modulus and ratio tables, the modulus figure, headline errors.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    q = ctx.quick
-    angles = [0.0, 30.0, 60.0, 90.0] if q else [float(a) for a in np.arange(0.0, 90.1, 7.5)]
-    n = 3 if q else 6
+    angles = list(settings.angles)
+    n = settings.n
     out = StudyOutput(name=ctx.name, title="Anisotropy: effective modulus against fiber angle")
     scene0 = fiber_scene(0.0, n)
     mat = scene0.material

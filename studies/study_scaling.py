@@ -19,7 +19,7 @@ on an idle one for these serial codes; wall times are in the tables. The log-log
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -27,26 +27,40 @@ import pandas as pd
 from springmodel.options import SpringOptions
 
 from .metrics import fitted_rate
-from .runner import Figure, StudyContext, StudyOutput, Table
+from .registry import Figure, StudyContext, StudyOutput, Table, study
 from .tables import save_figure, write_table
 
 TORSION = "energy"
 REPEATS = 5
 
 
-def plan(quick: bool) -> dict:
-    """Target tet counts of the explicit-step and static-solve series."""
-    if quick:
-        return {
-            "step": [1_000, 10_000, 100_000],
-            "static": [1_000, 3_000, 10_000],
-            "neo_max": 10_000,
-        }
-    return {
-        "step": [1_000, 3_000, 10_000, 30_000, 100_000, 200_000],
-        "static": [1_000, 3_000, 10_000, 30_000, 100_000],
-        "neo_max": 30_000,  # the neo-Hookean Newton solve at 1e5 tets alone costs ~20 s
-    }
+@dataclass(frozen=True)
+class Settings:
+    """Target tet counts of the explicit-step and static-solve series.
+
+    Parameters
+    ----------
+    step
+        Tet counts of the explicit-step series.
+    static
+        Tet counts of the static-solve series.
+    neo_max
+        Largest tet count of the neo-Hookean Newton solve.
+    """
+
+    step: tuple[int, ...] = (1_000, 3_000, 10_000, 30_000, 100_000, 200_000)
+    static: tuple[int, ...] = (1_000, 3_000, 10_000, 30_000, 100_000)
+    neo_max: int = 30_000  # the neo-Hookean Newton solve at 1e5 tets alone costs ~20 s
+
+    @classmethod
+    def full(cls) -> Settings:
+        """Up to 200,000 tets."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> Settings:
+        """Up to 100,000 tets (explicit) and 10,000 (static)."""
+        return cls(step=(1_000, 10_000, 100_000), static=(1_000, 3_000, 10_000), neo_max=10_000)
 
 
 def _scene(n_tets: int):
@@ -155,7 +169,7 @@ def _tet_axis(ax) -> None:
 
 
 def _amg_threshold() -> int:
-    from springfem.mechanics.solvers import AMG_THRESHOLD
+    from springfem.mechanics import DIRECT_MAX_DOFS as AMG_THRESHOLD
 
     return int(AMG_THRESHOLD)
 
@@ -167,10 +181,24 @@ STATIC_METHODS = {
 }
 
 
-def run(ctx: StudyContext) -> StudyOutput:
+@study("scaling", Settings)
+def run(ctx: StudyContext, p: Settings) -> StudyOutput:
+    """Run the scaling study (see the module docstring).
+
+    Parameters
+    ----------
+    ctx
+        Output folder, cache and preset.
+    p
+        Tet counts.
+
+    Returns
+    -------
+    StudyOutput
+        Findings, step/solve/slope tables, the scaling figure, headline slopes.
+    """
     import matplotlib.pyplot as plt
 
-    p = plan(ctx.quick)
     out = StudyOutput(name=ctx.name, title="Cost against mesh size")
 
     step_cases = [
@@ -181,7 +209,7 @@ def run(ctx: StudyContext) -> StudyOutput:
             "torsion": TORSION,
             "scene": "bench_scene",
         }
-        for n in p["step"]
+        for n in p.step
     ]
     steps = ctx.cache.run(step_cases, step_case, ctx.progress, "explicit steps")
     sdf = pd.DataFrame(
@@ -203,9 +231,9 @@ def run(ctx: StudyContext) -> StudyOutput:
 
     static_cases = [
         {"kind": "static", "n_tets": n, "method": m, "torsion": TORSION, "scene": "bench_scene"}
-        for n in p["static"]
+        for n in p.static
         for m in STATIC_METHODS
-        if not (m.startswith("fem-neo") and n > p["neo_max"])
+        if not (m.startswith("fem-neo") and n > p.neo_max)
     ]
     static = ctx.cache.run(static_cases, static_case, ctx.progress, "static solves")
     tdf = pd.DataFrame(

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import re
 import time
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -35,7 +35,7 @@ from springmodel.options import SpringOptions
 
 from .cli import SCENES
 from .metrics import timoshenko_tip_deflection
-from .runner import Figure, StudyContext, StudyOutput, Table
+from .registry import Figure, StudyContext, StudyOutput, Table, study
 from .tables import save_figure, write_table
 
 #: The spring model's torsion law here: the energy-consistent one (conservative, so static
@@ -75,21 +75,43 @@ STYLE = {  # marker, colour
 }
 
 
-def plan(quick: bool) -> dict:
-    """Meshes, reference mesh and solver settings of a run."""
-    if quick:
-        return {
-            "meshes": [(10, 1), (20, 2)],
-            "reference": (40, 4),
-            "explicit": [(1e-6, 0.5)],
-            "implicit": {100.0: (10, 1), 1e4: (20, 2)},  # dt factor -> largest mesh
-        }
-    return {
-        "meshes": [(10, 1), (20, 2), (40, 4)],
-        "reference": (60, 6),
-        "explicit": [(1e-3, 0.3), (1e-6, 0.3), (1e-6, 0.5)],
-        "implicit": {100.0: (20, 2), 1e4: (40, 4)},
-    }
+@dataclass(frozen=True)
+class Settings:
+    """Meshes and solver settings of the speed-accuracy study.
+
+    Parameters
+    ----------
+    meshes
+        ``(nx, ny)`` cantilever meshes (``nx × ny × ny`` hexahedra) of the points.
+    reference
+        ``(nx, ny)`` of the fine P2 reference.
+    explicit
+        ``(tol, dt_safety)`` settings of the explicit runs.
+    implicit
+        Time-step factor of the implicit runs -> largest ``(nx, ny)`` it runs on.
+    """
+
+    meshes: tuple[tuple[int, int], ...] = ((10, 1), (20, 2), (40, 4))
+    reference: tuple[int, int] = (60, 6)
+    explicit: tuple[tuple[float, float], ...] = ((1e-3, 0.3), (1e-6, 0.3), (1e-6, 0.5))
+    implicit: dict[float, tuple[int, int]] = field(
+        default_factory=lambda: {100.0: (20, 2), 1e4: (40, 4)}
+    )
+
+    @classmethod
+    def full(cls) -> Settings:
+        """Three meshes up to 40 × 4 × 4, reference 60 × 6 × 6."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> Settings:
+        """Two meshes, reference 40 × 4 × 4."""
+        return cls(
+            meshes=((10, 1), (20, 2)),
+            reference=(40, 4),
+            explicit=((1e-6, 0.5),),
+            implicit={100.0: (10, 1), 1e4: (20, 2)},  # dt factor -> largest mesh
+        )
 
 
 def cantilever_text(nx: int, ny: int) -> str:
@@ -123,7 +145,7 @@ def _solve(scene: Scene, method: str, setting: dict) -> tuple[np.ndarray, dict]:
         order, law = FEM_STATIC[method]
         sol = reference_fem.solve(scene, order=order, law=law)
         return sol.u_vertices, {"iterations": sol.result.iterations}
-    from springfem.mechanics.solvers import explicit_static, implicit, stable_time_step
+    from springfem.mechanics import explicit_static, implicit, stable_time_step
 
     if method == "spring-static":
         from springmodel.model import solve_spring
@@ -245,10 +267,10 @@ def step_cost_case(case: dict) -> dict:
     return out
 
 
-def cases_for(p: dict) -> list[dict]:
+def cases_for(p: Settings) -> list[dict]:
     """All (method, mesh, setting) points of a plan."""
     out = []
-    for nx, ny in p["meshes"]:
+    for nx, ny in p.meshes:
         base = {
             "kind": "point",
             "mesh": [nx, ny],
@@ -258,7 +280,7 @@ def cases_for(p: dict) -> list[dict]:
         for method in FEM_STATIC:
             out.append({**base, "method": method, "setting": {}})
         out.append({**base, "method": "spring-static", "setting": {"tol": STATIC_TOL}})
-        for factor, (mx, _) in p["implicit"].items():
+        for factor, (mx, _) in p.implicit.items():
             if nx <= mx:
                 out.append(
                     {
@@ -267,7 +289,7 @@ def cases_for(p: dict) -> list[dict]:
                         "setting": {"dt_factor": factor, "tol": IMPLICIT_TOL},
                     }
                 )
-        for tol, safety in p["explicit"]:
+        for tol, safety in p.explicit:
             for method in ("spring-explicit", "fem-explicit-p1-neo-hookean"):
                 out.append({**base, "method": method, "setting": {"tol": tol, "dt_safety": safety}})
     return out
@@ -306,13 +328,27 @@ def _relative_error(tip, ref) -> float:
     return float(np.linalg.norm(tip - ref) / np.linalg.norm(ref))
 
 
-def run(ctx: StudyContext) -> StudyOutput:
+@study("speed_accuracy", Settings)
+def run(ctx: StudyContext, p: Settings) -> StudyOutput:
+    """Run the speed-accuracy study (see the module docstring).
+
+    Parameters
+    ----------
+    ctx
+        Output folder, cache and preset.
+    p
+        Meshes and solver settings.
+
+    Returns
+    -------
+    StudyOutput
+        Findings, points and step-cost tables, the Pareto figure, headline numbers.
+    """
     import matplotlib.pyplot as plt
 
-    p = plan(ctx.quick)
     out = StudyOutput(name=ctx.name, title="Speed against accuracy")
 
-    rx, ry = p["reference"]
+    rx, ry = p.reference
     ref = ctx.cache.run(
         [
             {
@@ -368,7 +404,7 @@ def run(ctx: StudyContext) -> StudyOutput:
                 "repeats": STEP_REPEATS,
                 "steps": step_count(6 * nx * ny * ny),
             }
-            for nx, ny in p["meshes"]
+            for nx, ny in p.meshes
         ],
         step_cost_case,
         ctx.progress,
@@ -386,7 +422,7 @@ def run(ctx: StudyContext) -> StudyOutput:
                 "fem_cpu_ms": 1e3 * s["fem_cpu"],
                 "ratio_cpu": s["ratio_cpu"],
             }
-            for (nx, ny), s in zip(p["meshes"], steps)
+            for (nx, ny), s in zip(p.meshes, steps)
         ]
     )
 
@@ -457,7 +493,7 @@ def run(ctx: StudyContext) -> StudyOutput:
     ax.legend(fontsize=7, loc="best")
 
     # ---- findings
-    finest = p["meshes"][-1]
+    finest = p.meshes[-1]
     fmesh = f"{finest[0]}x{finest[1]}x{finest[1]}"
     s_last = steps[-1]
     ratio, ratio_cpu = s_last["ratio_wall"], s_last["ratio_cpu"]

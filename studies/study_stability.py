@@ -13,7 +13,7 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -23,7 +23,7 @@ from springfem.scene import Scene, parse_scene
 from springmodel.options import SpringOptions
 
 from .metrics import timoshenko_tip_deflection
-from .runner import Figure, StudyContext, StudyOutput, Table
+from .registry import Figure, StudyContext, StudyOutput, Table, study
 from .tables import save_figure, write_table
 
 BAR = """
@@ -90,7 +90,7 @@ def _inverted(scene: Scene, u: np.ndarray) -> int:
 
 def critical_step_case(case: dict) -> dict:
     """Predicted and measured critical explicit step of one method on one mesh."""
-    from springfem.mechanics.solvers import explicit, stable_time_step
+    from springfem.mechanics import explicit, stable_time_step
 
     scene = bar_scene(case["nx"], case["ny"], traction=0.0)
     system = _system(scene, case["method"])
@@ -192,7 +192,7 @@ def locking_case(case: dict) -> dict:
 
 def failure_map_case(case: dict) -> dict:
     """Damped explicit dynamics at (load factor, dt factor): ok, blew up or inverted."""
-    from springfem.mechanics.solvers import explicit, stable_time_step
+    from springfem.mechanics import explicit, stable_time_step
 
     scene = bar_scene(case["nx"], case["ny"], traction=-0.1 * case["factor"])
     system = _system(scene, case["method"])
@@ -217,23 +217,87 @@ def failure_map_case(case: dict) -> dict:
 # ------------------------------------------------------------------------------ run
 
 
-def run(ctx: StudyContext) -> StudyOutput:
+@dataclass(frozen=True)
+class Settings:
+    """Grids of the stability study (bars of ``nx × ny × ny`` hexahedra).
+
+    Parameters
+    ----------
+    dt_meshes, dt_steps, dt_bisections
+        Meshes, run length and bisection count of the critical-time-step search.
+    load_factors, load_mesh
+        Load multiples and mesh of the largest-load series.
+    nus, lock_mesh
+        Poisson ratios and mesh of the locking series.
+    map_loads, map_dt_factors, map_steps
+        Load multiples, time-step factors and run length of the failure map (10 × 1 × 1).
+    """
+
+    dt_meshes: tuple[tuple[int, int], ...] = ((10, 1), (20, 2))
+    dt_steps: int = 2000
+    dt_bisections: int = 6
+    load_factors: tuple[float, ...] = (1, 10, 100, 300, 1000, 3000, 10000, 30000)
+    load_mesh: tuple[int, int] = (20, 2)
+    nus: tuple[float, ...] = (0.3, 0.4, 0.45, 0.49, 0.495, 0.499)
+    lock_mesh: tuple[int, int] = (40, 4)
+    map_loads: tuple[float, ...] = (1, 100, 1000, 3000, 10000, 30000)
+    map_dt_factors: tuple[float, ...] = (0.3, 0.6, 0.9, 1.0, 1.1, 1.5)
+    map_steps: int = 3000
+
+    @classmethod
+    def full(cls) -> Settings:
+        """The report's grids."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> Settings:
+        """Coarse grids: one mesh per series, fewer loads, factors and steps."""
+        return cls(
+            dt_meshes=((10, 1),),
+            dt_steps=400,
+            dt_bisections=4,
+            load_factors=(1, 100, 1000, 3000, 10000),
+            load_mesh=(10, 1),
+            nus=(0.3, 0.45, 0.49, 0.499),
+            lock_mesh=(20, 2),
+            map_loads=(1, 1000, 10000),
+            map_dt_factors=(0.5, 0.9, 1.1),
+            map_steps=800,
+        )
+
+
+@study("stability", Settings)
+def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
+    """Run the stability study (see the module docstring).
+
+    Parameters
+    ----------
+    ctx
+        Output folder, cache and preset.
+    settings
+        Grids of the four series.
+
+    Returns
+    -------
+    StudyOutput
+        Findings, four tables, figures and headline numbers.
+    """
     import matplotlib.pyplot as plt
 
-    q = ctx.quick
+    q = settings
     out = StudyOutput(name=ctx.name, title="Stability: where each method fails")
     methods_dyn = ["spring-energy", "spring-cosine", "fem-neo-hookean", "fem-linear"]
 
     # 1. critical time step
-    meshes = [(10, 1)] if q else [(10, 1), (20, 2)]
+    meshes = list(q.dt_meshes)
     cases = [
         {
             "kind": "dt",
             "method": m,
             "nx": nx,
             "ny": ny,
-            "steps": 400 if q else 2000,
-            "bisections": 4 if q else 6,
+            "steps": q.dt_steps,
+            "bisections": q.dt_bisections,
         }
         for m in methods_dyn
         for nx, ny in meshes
@@ -263,8 +327,8 @@ def run(ctx: StudyContext) -> StudyOutput:
     )
 
     # 2. largest load survived
-    factors = [1, 100, 1000, 3000, 10000] if q else [1, 10, 100, 300, 1000, 3000, 10000, 30000]
-    nx, ny = (10, 1) if q else (20, 2)
+    factors = list(q.load_factors)
+    nx, ny = q.load_mesh
     lmethods = ["spring-energy", "spring-cosine", "fem-linear", "fem-neo-hookean"]
     cases = [
         {"kind": "load", "method": m, "factor": f, "nx": nx, "ny": ny}
@@ -298,8 +362,8 @@ def run(ctx: StudyContext) -> StudyOutput:
     )
 
     # 3. locking
-    nus = [0.3, 0.45, 0.49, 0.499] if q else [0.3, 0.4, 0.45, 0.49, 0.495, 0.499]
-    nx, ny = (20, 2) if q else (40, 4)
+    nus = list(q.nus)
+    nx, ny = q.lock_mesh
     cases = [
         {"kind": "lock", "method": m, "nu": nu, "nx": nx, "ny": ny}
         for m in ("fem-p1", "fem-p2", "spring")
@@ -348,8 +412,8 @@ def run(ctx: StudyContext) -> StudyOutput:
     )
 
     # 4. failure map
-    lf = [1, 1000, 10000] if q else [1, 100, 1000, 3000, 10000, 30000]
-    df_ = [0.5, 0.9, 1.1] if q else [0.3, 0.6, 0.9, 1.0, 1.1, 1.5]
+    lf = list(q.map_loads)
+    df_ = list(q.map_dt_factors)
     nx, ny = (10, 1)
     mmethods = ["spring-energy", "spring-cosine", "fem-neo-hookean"]
     cases = [
@@ -360,7 +424,7 @@ def run(ctx: StudyContext) -> StudyOutput:
             "dt_factor": d,
             "nx": nx,
             "ny": ny,
-            "steps": 800 if q else 3000,
+            "steps": q.map_steps,
         }
         for m in mmethods
         for f in lf

@@ -30,7 +30,7 @@ quantity a volume spring actually restores.
 from __future__ import annotations
 
 import re
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -41,7 +41,7 @@ from springfem.scene import Scene, parse_scene
 from springmodel.options import LMSOptions, SpringOptions
 
 from .cli import SCENES
-from .runner import Figure, StudyContext, StudyOutput, Table
+from .registry import Figure, StudyContext, StudyOutput, Table, study
 from .tables import save_figure, write_table
 
 #: A cube in uniaxial stress along z: the base slides (u_z = 0), the origin is pinned in x, y
@@ -172,7 +172,7 @@ def drift_measures(scene: Scene, x: np.ndarray) -> dict[str, float]:
 
 def common_time_step(scene: Scene) -> float:
     """``0.5 dt_crit / sqrt(k_max)`` of the scene's ``volume on`` model (all variants)."""
-    from springfem.mechanics.solvers import stable_time_step
+    from springfem.mechanics import stable_time_step
     from springmodel.model import SpringModel
 
     model = SpringModel(scene, spring_options(scene, "volume on"), parallel=False)
@@ -198,7 +198,7 @@ def dynamic_case(case: dict[str, Any]) -> dict[str, Any]:
     (element drift above :data:`DIVERGED`: the run is stopped there) or ``blew up`` (the
     solver's numerical blow-up test); ``message`` says where and when.
     """
-    from springfem.mechanics.solvers import explicit
+    from springfem.mechanics import explicit
     from springmodel.model import SpringModel
 
     scene = case_scene(case)
@@ -294,7 +294,7 @@ def static_case(case: dict[str, Any]) -> dict[str, Any]:
     scene = cube_scene(case["n"], case["nu"], case["stress"] * case["load"])
     try:
         if case["model"] == "spring":
-            from springfem.mechanics.solvers import static
+            from springfem.mechanics import static
             from springmodel.model import SpringModel
 
             model = SpringModel(scene, spring_options(scene, case["variant"]), parallel=False)
@@ -329,43 +329,75 @@ def analytic_drift(nu: float, stress: float, E: float = CUBE_E) -> float:
 # -------------------------------------------------------------------------------- run
 
 
-def _settings(quick: bool) -> dict[str, Any]:
-    if quick:
-        return {
-            "n": 2,
-            "sag": None,
-            "periods": 4.0,
-            "ramp_periods": 5.0,
-            "records": 60,
-            "loads": [0.5, 1.0],
-        }
-    return {
-        "n": 4,
-        "sag": [12, 6, 3],
-        "periods": 5.0,
-        "ramp_periods": 6.0,
-        "records": 120,
-        "loads": [0.25, 0.5, 0.75, 1.0],
-    }
+@dataclass(frozen=True)
+class Settings:
+    """Meshes, run lengths and loads of the volume-drift study.
+
+    Parameters
+    ----------
+    n
+        Divisions per side of the cube.
+    sag
+        Divisions of the sag scene (``None``: no sag runs).
+    periods
+        Length of the step-load runs in first periods.
+    ramp_periods
+        Ramp length of the slow-ramp runs in first periods.
+    records
+        Samples recorded per run.
+    loads
+        Fractions of the full stress of the static series.
+    """
+
+    n: int = 4
+    sag: tuple[int, int, int] | None = (12, 6, 3)
+    periods: float = 5.0
+    ramp_periods: float = 6.0
+    records: int = 120
+    loads: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0)
+
+    @classmethod
+    def full(cls) -> Settings:
+        """4³ cube and the sag scene."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> Settings:
+        """2³ cube, no sag, shorter runs."""
+        return cls(n=2, sag=None, periods=4.0, ramp_periods=5.0, records=60, loads=(0.5, 1.0))
 
 
-def run(ctx: StudyContext) -> StudyOutput:
+@study("volume_drift", Settings)
+def run(ctx: StudyContext, s: Settings) -> StudyOutput:
+    """Run the volume-drift study (see the module docstring).
+
+    Parameters
+    ----------
+    ctx
+        Output folder, cache and preset.
+    s
+        Meshes, run lengths and loads.
+
+    Returns
+    -------
+    StudyOutput
+        Findings, drift tables, the drift figures, headline drifts.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    s = _settings(ctx.quick)
     nu = 0.49
     out = StudyOutput(name=ctx.name, title="Volume drift: volume springs, LMS rules and FEM")
-    cube = {"scene": "cube", "n": s["n"], "nu": nu}
+    cube = {"scene": "cube", "n": s.n, "nu": nu}
 
     # 1. dynamic runs: sudden load (against time) and slow ramp (against load factor)
     runs = []
     for sign, label in ((-1.0, "compressed"), (1.0, "pulled")):
         for kind, ramp, periods, damping in (
-            ("step", 0.0, s["periods"], 0.3),
-            ("ramp", s["ramp_periods"], s["ramp_periods"] + 1.0, 0.5),
+            ("step", 0.0, s.periods, 0.3),
+            ("ramp", s.ramp_periods, s.ramp_periods + 1.0, 0.5),
         ):
             for v in VARIANTS:
                 runs.append(
@@ -377,24 +409,24 @@ def run(ctx: StudyContext) -> StudyOutput:
                             "ramp": ramp,
                             "periods": periods,
                             "damping": damping,
-                            "records": s["records"],
+                            "records": s.records,
                         },
                         label,
                         kind,
                     )
                 )
-    if s["sag"]:
+    if s.sag:
         for v in VARIANTS:
             runs.append(
                 (
                     {
                         "scene": "sag",
-                        "divisions": s["sag"],
+                        "divisions": list(s.sag),
                         "variant": v,
                         "ramp": 0.0,
                         "periods": 2.0,
                         "damping": 0.4,
-                        "records": s["records"],
+                        "records": s.records,
                     },
                     "sag",
                     "step",
@@ -406,7 +438,7 @@ def run(ctx: StudyContext) -> StudyOutput:
     # 2. statics: spring (no LMS) and FEM against load factor, cube
     stat_cases = []
     for sign in (-1.0, 1.0):
-        for f in s["loads"]:
+        for f in s.loads:
             base = {**cube, "stress": sign * CUBE_STRESS, "load": f}
             for law in ("linear", "neo-hookean"):
                 stat_cases.append({**base, "model": "fem", "law": law, "order": 1})
@@ -426,9 +458,9 @@ def run(ctx: StudyContext) -> StudyOutput:
         ]
     )
     sag_ref = None
-    if s["sag"]:
+    if s.sag:
         sag_ref = ctx.cache.run(
-            [{"scene": "sag", "divisions": s["sag"], "model": "fem-neo-hookean"}],
+            [{"scene": "sag", "divisions": list(s.sag), "model": "fem-neo-hookean"}],
             sag_fem_case,
             ctx.progress,
             "sag FEM",
@@ -491,8 +523,8 @@ def run(ctx: StudyContext) -> StudyOutput:
             }
         )
     final = pd.concat([final, pd.DataFrame(ref_rows)], ignore_index=True)
-    mesh_note = f"cube {s['n']}³×6 tets, ν = {nu}" + (
-        f"; sag {s['sag'][0]}×{s['sag'][1]}×{s['sag'][2]}×6 tets, ν = 0.45" if s["sag"] else ""
+    mesh_note = f"cube {s.n}³×6 tets, ν = {nu}" + (
+        f"; sag {s.sag[0]}×{s.sag[1]}×{s.sag[2]}×6 tets, ν = 0.45" if s.sag else ""
     )
     out.tables.append(
         Table(
@@ -514,7 +546,7 @@ def run(ctx: StudyContext) -> StudyOutput:
     )
 
     # ---- figure 1: drift against time
-    panels = [("compressed", "step"), ("pulled", "step")] + ([("sag", "step")] if s["sag"] else [])
+    panels = [("compressed", "step"), ("pulled", "step")] + ([("sag", "step")] if s.sag else [])
     fig, axes = plt.subplots(3, len(panels), figsize=(4.6 * len(panels), 9.5), squeeze=False)
     for j, (label, kind) in enumerate(panels):
         for c, lab, knd, r in dyn:
@@ -714,7 +746,7 @@ def run(ctx: StudyContext) -> StudyOutput:
         )
         + f" (second-order terms of det F); neo-Hookean gives {fem_c:.2g} / {fem_p:.2g}."
     )
-    if s["sag"]:
+    if s.sag:
         sag = {c["variant"]: r for c, lab, knd, r in dyn if lab == "sag"}
         ref = sag_ref.get("element_drift", np.nan) if sag_ref else np.nan
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from springfem.result import atomic_write_text
+from springfem.files import atomic_write_text
 
 
 def write_table(df: pd.DataFrame, path_stem: str | os.PathLike, floatfmt: str = ".4g") -> Path:

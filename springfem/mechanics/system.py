@@ -1,12 +1,20 @@
 """The mechanical system the solvers drive, and small helpers on it.
 
-The solvers of :mod:`springfem.mechanics.solvers` never look at springs: they see nodal masses,
+The solvers of :mod:`springfem.mechanics` never look at springs: they see nodal masses,
 constrained DOFs, a force function, optionally an energy and an analytic tangent, and the
 element connectivity (the sparsity pattern of the tangent). Anything with these members is
 a :class:`MechanicalSystem` (structural typing: no base class to inherit).
 
 DOF numbering: node ``i``, component ``c`` is DOF ``3 i + c`` (row-major flattening of an
 ``(n, 3)`` position array).
+
+Examples
+--------
+>>> import numpy as np
+>>> x = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+>>> B = rigid_body_modes(x)
+>>> B.shape, int(np.linalg.matrix_rank(B))
+((12, 6), 6)
 """
 
 from __future__ import annotations
@@ -68,12 +76,34 @@ class MechanicalSystem(Protocol):
 
 
 def n_dofs(system: MechanicalSystem) -> int:
-    """Number of DOFs ``3 n``."""
+    """Number of DOFs ``3 n``.
+
+    Parameters
+    ----------
+    system
+        The system.
+
+    Returns
+    -------
+    int
+        ``3 n``.
+    """
     return 3 * int(np.asarray(system.x0).shape[0])
 
 
 def free_dofs(system: MechanicalSystem) -> np.ndarray:
-    """Sorted unconstrained DOFs."""
+    """Sorted unconstrained DOFs.
+
+    Parameters
+    ----------
+    system
+        The system.
+
+    Returns
+    -------
+    numpy.ndarray
+        Free DOF indices (``3 node + component``).
+    """
     mask = np.ones(n_dofs(system), dtype=bool)
     mask[np.asarray(system.fixed_dofs, dtype=np.int64)] = False
     return np.flatnonzero(mask)
@@ -83,7 +113,22 @@ def constrained_positions(
     system: MechanicalSystem, scale: float = 1.0, x: np.ndarray | None = None
 ) -> np.ndarray:
     """A copy of ``x`` (default: the rest positions) with the fixed DOFs set to
-    ``prescribed(scale)``."""
+    ``prescribed(scale)``.
+
+    Parameters
+    ----------
+    system
+        The system.
+    scale
+        Load factor.
+    x
+        Positions ``(n, 3)`` (default: the rest positions).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, 3)`` positions.
+    """
     out = np.array(system.x0 if x is None else x, dtype=float, copy=True).reshape(-1, 3)
     fixed = np.asarray(system.fixed_dofs, dtype=np.int64)
     if fixed.size:
@@ -96,7 +141,17 @@ def rigid_body_modes(x: np.ndarray) -> np.ndarray:
 
     Columns 0-2 are translations, 3-5 rotations about the centroid (``w x (x - c)``).
     Used to check that the constraints stop rigid motion and as the near-nullspace of
-    smoothed-aggregation AMG.
+    smoothed-aggregation AMG. The one definition both models use.
+
+    Parameters
+    ----------
+    x
+        Node positions ``(n, 3)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(3 n, 6)``, interleaved DOFs (``3 node + component``).
     """
     x = np.asarray(x, dtype=float).reshape(-1, 3)
     r = x - x.mean(axis=0)
@@ -112,7 +167,20 @@ def rigid_body_modes(x: np.ndarray) -> np.ndarray:
 
 
 def node_adjacency(tets: np.ndarray, n_nodes: int) -> sp.csr_matrix:
-    """Boolean node adjacency (``i ~ j`` when they share an element), diagonal included."""
+    """Boolean node adjacency (``i ~ j`` when they share an element), diagonal included.
+
+    Parameters
+    ----------
+    tets
+        Element connectivity ``(m, k)``.
+    n_nodes
+        Number of nodes.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+        ``(n_nodes, n_nodes)`` int8 pattern.
+    """
     tets = np.asarray(tets, dtype=np.int64)
     k = tets.shape[1]
     rows = np.repeat(tets, k, axis=1).ravel()
@@ -138,6 +206,22 @@ def check_constrained(system: MechanicalSystem, x: np.ndarray | None = None) -> 
     5 for collinear nodes, 3 for a lone node). A part with a single fixed node, or one
     fixed along one axis only, can still rotate or slide. Mechanisms of the spring network
     itself are caught later, by the linear solver.
+
+    Parameters
+    ----------
+    system
+        The system.
+    x
+        Positions to test at (default: the rest positions).
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    SolverError
+        Naming the part and the number of free rigid-body modes.
     """
     x = np.asarray(system.x0 if x is None else x, dtype=float).reshape(-1, 3)
     n = x.shape[0]
@@ -168,6 +252,18 @@ def reference_force(system: MechanicalSystem, scale: float = 1.0) -> float:
 
     This is the load the body must balance: external forces times ``scale`` plus the
     internal reaction to the prescribed displacements. Static tolerances are relative to it.
+
+    Parameters
+    ----------
+    system
+        The system.
+    scale
+        Load factor.
+
+    Returns
+    -------
+    float
+        The norm.
     """
     x = constrained_positions(system, scale)
     f = np.asarray(system.forces(x, None, scale), dtype=float).reshape(-1)

@@ -24,15 +24,14 @@ from reference_fem import element_stiffness_p1, solve
 from reference_fem.assembly import assemble_vector, hyperelastic_element_arrays
 from reference_fem.explicit import ExplicitFem
 from reference_fem.hyperelastic import NeoHookean
-from reference_fem.scenes import make_scene
 from reference_fem.space import Space, p1_gradients
 from springfem.errors import InputError, SolverError
 from springfem.materials import isotropic_matrix
-from springfem.mechanics.coloring import fd_jacobian
-from springfem.mechanics.solvers import explicit, explicit_static, stable_time_step
+from springfem.mechanics import explicit, explicit_static, stable_time_step
+from springfem.mechanics.fd_jacobian import fd_jacobian
 from springfem.mechanics.system import MechanicalSystem
 from springfem.mesh import box_mesh, element_colouring
-from springfem.scene import Material, parse_scene
+from springfem.scene import Material, scene_from_dict
 
 E, NU = 1.0e3, 0.3
 
@@ -49,11 +48,13 @@ def scene():
     inner = np.all((mesh.points > 1e-9) & (mesh.points < np.array([1.0, 0.8, 0.6]) - 1e-9), 1)
     points = mesh.points + 0.05 * rng.standard_normal(mesh.points.shape) * inner[:, None]
     mesh = replace(mesh, points=points)
-    return make_scene(
-        mesh,
-        Material("neo-hookean", E=E, nu=NU),
-        boundaries=[("x_min", "xyz")],
-        loads=[("traction", [0.0, 0.0, -5.0], "x_max")],
+    return scene_from_dict(
+        {
+            "mesh": mesh,
+            "material": {"law": "neo-hookean", "E": E, "nu": NU},
+            "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+            "load": [{"type": "traction", "value": [0.0, 0.0, -5.0], "region": "x_max"}],
+        }
     )
 
 
@@ -211,7 +212,13 @@ def test_inverted_during_explicit_run_names_step(scene):
 
 def test_bad_law_and_material():
     mesh = box_mesh((1.0, 1.0, 1.0), (1, 1, 1))
-    sc = make_scene(mesh, Material("linear", E=E, nu=NU), boundaries=[("x_min", "xyz")])
+    sc = scene_from_dict(
+        {
+            "mesh": mesh,
+            "material": {"law": "linear", "E": E, "nu": NU},
+            "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+        }
+    )
     with pytest.raises(InputError, match="not one of"):
         ExplicitFem(sc, law="mooney")
     unc = replace(sc, material=Material("neo-hookean", E=E, nu=NU, formulation="uncoupled"))
@@ -219,35 +226,18 @@ def test_bad_law_and_material():
         ExplicitFem(unc)
 
 
-STRETCH = """
-name = "stretch-neo"
-[mesh]
-generator = "box"
-size = [1.0, 1.0, 1.0]
-divisions = [2, 2, 2]
-split = "six"
-[material]
-law = "neo-hookean"
-E = 1000.0
-nu = 0.3
-density = 1000.0
-[[boundary]]
-region = "x_min"
-fix = ["x"]
-[[boundary]]
-region = { point = [0.0, 0.0, 0.0] }
-fix = ["y", "z"]
-[[boundary]]
-region = { point = [0.0, 1.0, 0.0] }
-fix = ["z"]
-[[load]]
-type = "traction"
-region = "x_max"
-value = [250.0, 0.0, 0.0]
-[[probe]]
-name = "corner"
-point = [1.0, 1.0, 1.0]
-"""
+STRETCH = {
+    "name": "stretch-neo",
+    "mesh": {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [2, 2, 2], "split": "six"},
+    "material": {"law": "neo-hookean", "E": 1000.0, "nu": 0.3, "density": 1000.0},
+    "boundary": [
+        {"region": "x_min", "fix": ["x"]},
+        {"region": {"point": [0.0, 0.0, 0.0]}, "fix": ["y", "z"]},
+        {"region": {"point": [0.0, 1.0, 0.0]}, "fix": ["z"]},
+    ],
+    "load": [{"type": "traction", "region": "x_max", "value": [250.0, 0.0, 0.0]}],
+    "probe": [{"name": "corner", "point": [1.0, 1.0, 1.0]}],
+}
 
 
 def test_dynamic_relaxation_reaches_newton_solution():
@@ -257,7 +247,7 @@ def test_dynamic_relaxation_reaches_newton_solution():
     1e-10; the displacement then differs from Newton's (tol 1e-10) by ~1e-10 relative, so
     1e-7 leaves room while still failing for any different energy or load.
     """
-    scene = parse_scene(STRETCH)
+    scene = scene_from_dict(STRETCH)
     fem = ExplicitFem(scene)
     info = explicit_static(fem, tol=1e-10, max_steps=50_000)
     assert info.converged

@@ -10,14 +10,20 @@ from skfem.models.elasticity import lame_parameters, linear_elasticity
 
 from reference_fem import FemProblem, element_stiffness_p1, material_matrix
 from reference_fem.assembly import BlockPattern, linear_element_blocks
-from reference_fem.constraints import rigid_body_modes
 from reference_fem.loads import ExternalLoads
-from reference_fem.scenes import make_scene
 from reference_fem.space import Space
 from springfem.loads import external_forces
 from springfem.materials import isotropic_matrix, voigt_to_tensor
+from springfem.mechanics import rigid_body_modes
 from springfem.mesh import box_mesh
-from springfem.scene import Material
+from springfem.scene import Material, scene_from_dict
+
+CLAMP = [{"region": "x_min", "fix": ["x", "y", "z"]}]
+
+
+def load(kind, value, region=None):
+    """A ``[[load]]`` table."""
+    return {"type": kind, "value": value} | ({} if region is None else {"region": region})
 
 
 def distorted_box(divisions=(3, 2, 2), amount=0.08, seed=0):
@@ -68,11 +74,15 @@ def test_transverse_stiffness_equals_scikit_fem_form(order):
     """Per-element rotated material (random frames) against a scikit-fem BilinearForm."""
     mesh = distorted_box()
     frames = random_frames(mesh.n_tets)
+    mesh.cell_data.update(fiber=frames[:, 0], sheet=frames[:, 1])
     space = Space(mesh, order)
-    problem_K = FemProblem(
-        make_scene(mesh, TRANSVERSE, [("x_min", "xyz")], frames=frames), order
-    ).stiffness
-    C = voigt_to_tensor(material_matrix(TRANSVERSE, frames))  # (m, 3, 3, 3, 3)
+    scene = scene_from_dict(
+        {"mesh": mesh, "material": TRANSVERSE, "axes": {"type": "cells"}, "boundary": CLAMP}
+    )
+    # the frames the scene holds: the random ones re-orthonormalised (round-off apart)
+    assert np.abs(scene.frames - frames).max() < 1e-14
+    problem_K = FemProblem(scene, order).stiffness
+    C = voigt_to_tensor(material_matrix(TRANSVERSE, scene.frames))  # (m, 3, 3, 3, 3)
 
     @skfem.BilinearForm
     def form(u, v, w):
@@ -111,17 +121,19 @@ def test_element_stiffness_p1_properties():
 def test_p1_load_vectors_equal_spring_model_nodal_forces():
     """Consistent P1 loads equal springfem.loads (area/3, rho V/4, force by area)."""
     mesh = distorted_box()
-    scene = make_scene(
-        mesh,
-        Material("linear", 1.0e3, 0.3, density=1100.0),
-        [("x_min", "xyz")],
-        loads=[
-            ("traction", [1.0, -2.0, 0.5], "x_max"),
-            ("gravity", [0.0, 0.0, -9.81]),
-            ("force", [0.3, 0.0, -0.7], "y_max"),
-            ("pressure", 2.5, "z_max"),
-            ("force", [0.0, 1.0, 0.0], {"point": [0.5, 0.4, 0.3]}),
-        ],
+    scene = scene_from_dict(
+        {
+            "mesh": mesh,
+            "material": {"law": "linear", "E": 1.0e3, "nu": 0.3, "density": 1100.0},
+            "boundary": CLAMP,
+            "load": [
+                load("traction", [1.0, -2.0, 0.5], "x_max"),
+                load("gravity", [0.0, 0.0, -9.81]),
+                load("force", [0.3, 0.0, -0.7], "y_max"),
+                load("pressure", 2.5, "z_max"),
+                load("force", [0.0, 1.0, 0.0], {"point": [0.5, 0.4, 0.3]}),
+            ],
+        }
     )
     loads = ExternalLoads.from_scene(scene, Space(mesh, 1), follower=False)
     f = loads.vector(None)
@@ -132,15 +144,17 @@ def test_p2_load_vectors_total_force():
     """P2 consistent loads: totals equal traction x area, rho g V, the given force."""
     mesh = distorted_box()
     vol = mesh.volumes().sum()
-    scene = make_scene(
-        mesh,
-        Material("linear", 1.0e3, 0.3, density=1100.0),
-        [("x_min", "xyz")],
-        loads=[
-            ("traction", [1.0, -2.0, 0.5], "x_max"),
-            ("gravity", [0.0, 0.0, -9.81]),
-            ("force", [0.3, 0.0, -0.7], "y_max"),
-        ],
+    scene = scene_from_dict(
+        {
+            "mesh": mesh,
+            "material": {"law": "linear", "E": 1.0e3, "nu": 0.3, "density": 1100.0},
+            "boundary": CLAMP,
+            "load": [
+                load("traction", [1.0, -2.0, 0.5], "x_max"),
+                load("gravity", [0.0, 0.0, -9.81]),
+                load("force", [0.3, 0.0, -0.7], "y_max"),
+            ],
+        }
     )
     f = ExternalLoads.from_scene(scene, Space(mesh, 2), follower=False).vector(None)
     total = f.reshape(-1, 3).sum(axis=0)
@@ -161,7 +175,9 @@ def test_p2_load_vectors_total_force():
 )
 def test_tangent_at_zero_equals_linear_stiffness(order, law):
     mesh = distorted_box()
-    scene = make_scene(mesh, Material("neo-hookean", 5.0e3, 0.45), [("x_min", "xyz")])
+    scene = scene_from_dict(
+        {"mesh": mesh, "material": Material("neo-hookean", 5.0e3, 0.45), "boundary": CLAMP}
+    )
     nonlinear = FemProblem(scene, order, law)
     linear = FemProblem(scene, order, "linear")
     R, K, symmetric, _ = nonlinear.residual_tangent(np.zeros(nonlinear.n_dofs))
@@ -174,11 +190,15 @@ def test_tangent_at_zero_equals_linear_stiffness(order, law):
 def test_tangent_with_follower_pressure_matches_finite_differences(order):
     """dR/du (internal + pressure load stiffness) against central differences of R."""
     mesh = distorted_box((2, 2, 2))
-    scene = make_scene(
-        mesh,
-        Material("neo-hookean", 1.0e3, 0.35, formulation="uncoupled", volumetric="log"),
-        [("x_min", "xyz")],
-        loads=[("pressure", 150.0, "x_max"), ("pressure", -80.0, "y_max")],
+    scene = scene_from_dict(
+        {
+            "mesh": mesh,
+            "material": Material(
+                "neo-hookean", 1.0e3, 0.35, formulation="uncoupled", volumetric="log"
+            ),
+            "boundary": CLAMP,
+            "load": [load("pressure", 150.0, "x_max"), load("pressure", -80.0, "y_max")],
+        }
     )
     problem = FemProblem(scene, order)
     rng = np.random.default_rng(5)
@@ -197,11 +217,13 @@ def test_tangent_with_follower_pressure_matches_finite_differences(order):
 
 def test_follower_pressure_is_dead_load_at_rest_and_rotates_with_body():
     mesh = distorted_box((2, 2, 2))
-    scene = make_scene(
-        mesh,
-        Material("neo-hookean", 1.0e3, 0.3),
-        [("x_min", "xyz")],
-        loads=[("pressure", 10.0, "x_max")],
+    scene = scene_from_dict(
+        {
+            "mesh": mesh,
+            "material": Material("neo-hookean", 1.0e3, 0.3),
+            "boundary": CLAMP,
+            "load": [load("pressure", 10.0, "x_max")],
+        }
     )
     space = Space(mesh, 2)
     loads = ExternalLoads.from_scene(scene, space, follower=True)

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from reference_fem.assembly import stiffness_matrix
-from reference_fem.linsolve import LinearSolver
 from reference_fem.loads import body_force_vector
 from reference_fem.materials import material_matrix
 from reference_fem.space import Space
 from springfem.axes import uniform_frames
 from springfem.materials import isotropic_matrix, voigt_to_tensor
+from springfem.mechanics import LinearSolver
 from springfem.mesh import box_mesh
 from springfem.scene import Material
 

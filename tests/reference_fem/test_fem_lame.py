@@ -15,9 +15,9 @@ from scipy.optimize import brentq
 from reference_fem import solve
 from reference_fem.hyperelastic import NeoHookean
 from reference_fem.options import FemOptions
-from reference_fem.scenes import make_scene, thick_cylinder_scene
+from reference_fem.scenes import thick_cylinder_scene
 from springfem.mesh import box_mesh
-from springfem.scene import Material
+from springfem.scene import Material, scene_from_dict
 
 A, B, E, NU = 1.0, 2.0, 1000.0, 0.3
 
@@ -95,12 +95,14 @@ def test_follower_pressure_hydrostatic_large_strain(formulation, volumetric, p_o
     material = Material("neo-hookean", E_, nu, formulation=formulation, volumetric=volumetric)
     mesh = box_mesh((1.0, 1.0, 1.0), (2, 2, 2))
     p = p_over_E * E_
-    scene = make_scene(
-        mesh,
-        material,
-        boundaries=[("x_min", "x"), ("y_min", "y"), ("z_min", "z")],
-        loads=[("pressure", p, face) for face in ("x_max", "y_max", "z_max")],
-        probes={"corner": [1.0, 1.0, 1.0]},
+    scene = scene_from_dict(
+        {
+            "mesh": mesh,
+            "material": material,
+            "boundary": [{"region": f"{c}_min", "fix": [c]} for c in "xyz"],
+            "load": [{"type": "pressure", "value": p, "region": f"{c}_max"} for c in "xyz"],
+            "probe": [{"name": "corner", "point": [1.0, 1.0, 1.0]}],
+        }
     )
     sol = solve(scene, order=1)
     lam = hydrostatic_stretch(NeoHookean.from_material(material), p)

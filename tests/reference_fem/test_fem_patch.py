@@ -7,9 +7,8 @@ import numpy as np
 import pytest
 
 from reference_fem import FemProblem, solve
-from reference_fem.scenes import make_scene
 from springfem.mesh import box_mesh
-from springfem.scene import Material
+from springfem.scene import Material, scene_from_dict
 
 ISOTROPIC = Material("linear", 2.0e3, 0.3)
 TRANSVERSE = Material(
@@ -50,7 +49,9 @@ def oblique_frames(n, seed=1):
 @pytest.mark.parametrize("material", [ISOTROPIC, TRANSVERSE], ids=["isotropic", "transverse"])
 def test_linear_boundary_field_is_reproduced_inside(order, material):
     mesh = distorted_mesh()
-    scene = make_scene(mesh, material, frames=oblique_frames(mesh.n_tets))
+    frames = oblique_frames(mesh.n_tets)
+    mesh.cell_data.update(fiber=frames[:, 0], sheet=frames[:, 1])
+    scene = scene_from_dict({"mesh": mesh, "material": material, "axes": {"type": "cells"}})
     problem = FemProblem(scene, order)
     space = problem.space
     boundary = space.region_nodes(np.unique(mesh.boundary_facets()))
@@ -74,16 +75,18 @@ def test_uniform_traction_gives_uniform_stress(order):
     """Constant-stress patch through the public API: uniaxial stress from a traction."""
     mesh = distorted_mesh()
     E, nu, t = 2.0e3, 0.3, 5.0
-    scene = make_scene(
-        mesh,
-        Material("linear", E, nu),
-        boundaries=[
-            ("x_min", "x"),
-            ({"point": [0.0, 0.0, 0.0]}, "yz"),
-            ({"point": [0.0, 0.7, 0.0]}, "z"),
-        ],
-        loads=[("traction", [t, 0.0, 0.0], "x_max")],
-        probes={"far": [1.0, 0.7, 0.5]},
+    scene = scene_from_dict(
+        {
+            "mesh": mesh,
+            "material": {"law": "linear", "E": E, "nu": nu},
+            "boundary": [
+                {"region": "x_min", "fix": ["x"]},
+                {"region": {"point": [0.0, 0.0, 0.0]}, "fix": ["y", "z"]},
+                {"region": {"point": [0.0, 0.7, 0.0]}, "fix": ["z"]},
+            ],
+            "load": [{"type": "traction", "value": [t, 0.0, 0.0], "region": "x_max"}],
+            "probe": [{"name": "far", "point": [1.0, 0.7, 0.5]}],
+        }
     )
     sol = solve(scene, order=order)
     # u = (t/E) (x, -nu y, -nu z) from the pinned corner

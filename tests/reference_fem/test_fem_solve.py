@@ -14,14 +14,13 @@ from skfem.helpers import det, grad, identity
 import reference_fem
 from reference_fem import FemSolution, bench, solve
 from reference_fem.constraints import dirichlet
-from reference_fem.linsolve import LinearSolver
 from reference_fem.options import FemOptions
-from reference_fem.scenes import make_scene
 from reference_fem.space import Space
 from springfem.errors import InputError, SolverError
+from springfem.mechanics import LinearSolver
 from springfem.mesh import box_mesh
 from springfem.result import write_result
-from springfem.scene import Material, load_scene
+from springfem.scene import Material, load_scene, scene_from_dict
 
 SCENES = Path(__file__).resolve().parents[2] / "studies" / "scenes"
 MODULES = [
@@ -29,7 +28,6 @@ MODULES = [
     "bench",
     "constraints",
     "hyperelastic",
-    "linsolve",
     "loads",
     "materials",
     "newton",
@@ -48,13 +46,21 @@ def test_docstring_examples(name):
 
 def small_block(law="linear", **material):
     mesh = box_mesh((0.04, 0.01, 0.01), (4, 1, 1))
-    return make_scene(
-        mesh,
-        Material(law, 1.0e4, 0.3, density=10.0, **material),
-        boundaries=[("x_min", "xyz")],
-        loads=[("traction", [0.0, 0.0, -1.0], "x_max"), ("gravity", [0.0, 0.0, -9.81])],
-        probes={"tip": [0.04, 0.005, 0.005], "inside": [0.013, 0.0031, 0.0077]},
-        name="block",
+    return scene_from_dict(
+        {
+            "name": "block",
+            "mesh": mesh,
+            "material": Material(law, 1.0e4, 0.3, density=10.0, **material),
+            "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+            "load": [
+                {"type": "traction", "value": [0.0, 0.0, -1.0], "region": "x_max"},
+                {"type": "gravity", "value": [0.0, 0.0, -9.81]},
+            ],
+            "probe": [
+                {"name": "tip", "point": [0.04, 0.005, 0.005]},
+                {"name": "inside", "point": [0.013, 0.0031, 0.0077]},
+            ],
+        }
     )
 
 
@@ -147,12 +153,14 @@ def test_singular_system_is_reported():
         solve(scene)
     scene = small_block()
     scene.boundaries = scene.boundaries[:0]
-    scene2 = make_scene(scene.mesh, scene.material, boundaries=[("x_min", "x")])
+    held = {"mesh": scene.mesh, "material": scene.material}
+    scene2 = scene_from_dict({**held, "boundary": [{"region": "x_min", "fix": ["x"]}]})
     with pytest.raises(SolverError, match="translation y") as info:
         solve(scene2)
     assert info.value.exit_code == 3
     # all three translations held at one node: the three rotations stay free
-    scene3 = make_scene(scene.mesh, scene.material, boundaries=[({"point": [0, 0, 0]}, "xyz")])
+    corner = {"region": {"point": [0, 0, 0]}, "fix": ["x", "y", "z"]}
+    scene3 = scene_from_dict({**held, "boundary": [corner]})
     with pytest.raises(SolverError, match="rotation"):
         solve(scene3)
 

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import pytest
 
-from springfem.result import atomic_write_text, remove_stale_temp_files
+from springfem.files import atomic_write_text, remove_stale_temp_files
 
 ROOT = Path(__file__).resolve().parents[2]
 N_CASES = 40

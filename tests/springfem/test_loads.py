@@ -4,47 +4,44 @@ import numpy as np
 import pytest
 
 from springfem.loads import external_forces, lumped_masses, reactions
-from springfem.scene import parse_scene
+from springfem.scene import scene_from_dict
 
-SCENE = """
-[mesh]
-generator = "box"
-size = [0.2, 0.1, 0.05]
-divisions = [4, 3, 2]
-split = "five"
-[material]
-law = "linear"
-E = 1.0e3
-nu = 0.3
-density = 800.0
-[[boundary]]
-region = "x_min"
-fix = ["x", "y", "z"]
-"""
+
+def scene(*loads, fixed="x_min"):
+    """A 0.2 x 0.1 x 0.05 five-tet block, clamped on ``fixed``, with the given loads."""
+    return scene_from_dict(
+        {
+            "mesh": {
+                "generator": "box",
+                "size": [0.2, 0.1, 0.05],
+                "divisions": [4, 3, 2],
+                "split": "five",
+            },
+            "material": {"law": "linear", "E": 1.0e3, "nu": 0.3, "density": 800.0},
+            "boundary": [{"region": fixed, "fix": ["x", "y", "z"]}],
+            "load": list(loads),
+        }
+    )
 
 
 def test_gravity_total_is_weight():
-    s = parse_scene(SCENE + '[[load]]\ntype = "gravity"\nvalue = [0.0, 0.0, -9.81]\n')
+    s = scene({"type": "gravity", "value": [0.0, 0.0, -9.81]})
     f = external_forces(s)
     assert lumped_masses(s).sum() == pytest.approx(800 * 0.2 * 0.1 * 0.05)
     np.testing.assert_allclose(f.sum(0), [0, 0, -9.81 * 800 * 0.001], rtol=1e-12)
 
 
 def test_traction_total_is_value_times_area_and_force_is_total():
-    s = parse_scene(
-        SCENE + '[[load]]\ntype = "traction"\nregion = "x_max"\n'
-        'value = [1.0, 2.0, 3.0]\n[[load]]\ntype = "force"\nregion = "y_max"\n'
-        "value = [0.0, 0.0, 5.0]\n"
+    s = scene(
+        {"type": "traction", "region": "x_max", "value": [1.0, 2.0, 3.0]},
+        {"type": "force", "region": "y_max", "value": [0.0, 0.0, 5.0]},
     )
     f = external_forces(s)
     np.testing.assert_allclose(f.sum(0), [0.005, 0.010, 0.015 + 5.0], rtol=1e-12)
 
 
 def test_pressure_on_closed_surface_cancels_and_follows():
-    s = parse_scene(
-        SCENE.replace('region = "x_min"', 'region = "x_max"')
-        + '[[load]]\ntype = "pressure"\nregion = "y_max"\nvalue = 10.0\n'
-    )
+    s = scene({"type": "pressure", "region": "y_max", "value": 10.0}, fixed="x_max")
     f = external_forces(s)
     # pressure pushes into the body: -p n with n = +y on y_max
     np.testing.assert_allclose(f.sum(0), [0, -10.0 * 0.2 * 0.05, 0], atol=1e-15)
@@ -55,7 +52,7 @@ def test_pressure_on_closed_surface_cancels_and_follows():
 
 
 def test_reactions_balance_the_load():
-    s = parse_scene(SCENE)
+    s = scene()
     r = np.zeros((s.mesh.n_points, 3))
     left = s.boundaries[0].region.nodes
     r[left] = [1.0, -2.0, 0.5]

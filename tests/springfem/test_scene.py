@@ -10,7 +10,7 @@ import reference_fem  # noqa: F401  (registers the [fem] section, validated on l
 import springmodel  # noqa: F401  (registers the [spring] section)
 from springfem.errors import SceneError
 from springfem.mesh import box_mesh
-from springfem.scene import load_scene, parse_scene
+from springfem.scene import load_scene, parse_scene, scene_from_dict
 
 SCENES = Path(__file__).resolve().parents[2] / "studies" / "scenes"
 
@@ -50,72 +50,99 @@ def test_bundled_scenes_load(path):
     assert s.mesh.n_tets > 0 and len(s.boundaries) > 0
 
 
+def base() -> dict:
+    """:data:`BASE` as a dict, for :func:`scene_from_dict` (a fresh copy each call)."""
+    return {
+        "name": "t",
+        "mesh": {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [2, 2, 2]},
+        "material": {"law": "linear", "E": 1.0e3, "nu": 0.3},
+        "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+    }
+
+
+def put(path: str, value):
+    """An edit setting ``value`` at the dotted ``path`` (list indices as numbers)."""
+
+    def edit(d):
+        *keys, last = path.split(".")
+        for k in keys:
+            d = d[int(k)] if isinstance(d, list) else d.setdefault(k, {})
+        d[int(last) if isinstance(d, list) else last] = value
+
+    return edit
+
+
+def add(section: str, table: dict):
+    """An edit appending ``table`` to the array of tables ``section``."""
+    return lambda d: d.setdefault(section, []).append(table)
+
+
+def rename(old: str, new: str):
+    """An edit renaming the top-level ``old`` to ``new``."""
+    return lambda d: d.update({new: d.pop(old)})
+
+
+TRACTION = {"type": "traction", "value": [1.0, 0.0, 0.0]}
+
+
 @pytest.mark.parametrize(
     "edit, message",
     [
-        (lambda t: t.replace("E = 1.0e3", 'E = "soft"'), "material.E: must be a number"),
-        (lambda t: t.replace("E = 1.0e3", "E = -1.0"), "material.E: must be positive"),
-        (lambda t: t.replace("nu = 0.3", "nu = 0.5"), "material.nu: must lie in"),
-        (lambda t: t.replace("nu = 0.3", "nu = nan"), "material.nu: must be finite"),
+        (put("material.E", "soft"), "material.E: must be a number"),
+        (put("material.E", -1.0), "material.E: must be positive"),
+        (put("material.nu", 0.5), "material.nu: must lie in"),
+        (put("material.nu", float("nan")), "material.nu: must be finite"),
+        (put("material.law", "rubber"), "material.law: 'rubber' is not one of"),
+        (put("spring.torsion", "twisty"), "spring.torsion: 'twisty'"),
+        (put("spring.bogus", 1), "spring.bogus: unknown key"),
+        (put("material.colour", 1), "material.colour: unknown key"),
+        (put("mesh.size", [1.0, 1.0]), "mesh.size: must be a list of 3 numbers"),
+        (put("mesh.divisions", [2, 0, 2]), "mesh.divisions: entries must be positive"),
+        (put("boundary.0.region", "left"), "boundary\\[0\\].region: unknown region 'left'"),
+        (put("boundary.0.fix", ["w"]), "boundary\\[0\\].fix: must be a non-empty list"),
         (
-            lambda t: t.replace('law = "linear"', 'law = "rubber"'),
-            "material.law: 'rubber' is not one of",
-        ),
-        (lambda t: t + '\n[spring]\ntorsion = "twisty"\n', "spring.torsion: 'twisty'"),
-        (lambda t: t + "\n[spring]\nbogus = 1\n", "spring.bogus: unknown key"),
-        (
-            lambda t: t.replace("[material]", "[material]\ncolour = 1"),
-            "material.colour: unknown key",
-        ),
-        (
-            lambda t: t.replace("size = [1.0, 1.0, 1.0]", "size = [1.0, 1.0]"),
-            "mesh.size: must be a list of 3 numbers",
-        ),
-        (
-            lambda t: t.replace("divisions = [2, 2, 2]", "divisions = [2, 0, 2]"),
-            "mesh.divisions: entries must be positive",
-        ),
-        (
-            lambda t: t.replace('region = "x_min"', 'region = "left"'),
-            "boundary\\[0\\].region: unknown region 'left'",
-        ),
-        (
-            lambda t: t.replace('fix = ["x", "y", "z"]', 'fix = ["w"]'),
-            "boundary\\[0\\].fix: must be a non-empty list",
-        ),
-        (
-            lambda t: t + '\n[[probe]]\nname = "p"\npoint = [5.0, 0.0, 0.0]\n',
+            add("probe", {"name": "p", "point": [5.0, 0.0, 0.0]}),
             "probe\\[0\\].point: probe 'p' at \\[5.0, 0.0, 0.0\\] is outside the mesh",
         ),
         (
-            lambda t: (
-                t + '\n[[load]]\ntype = "traction"\nregion = { point = [1.0, 1.0, 1.0] }'
-                "\nvalue = [1.0, 0.0, 0.0]\n"
-            ),
+            add("load", {**TRACTION, "region": {"point": [1.0, 1.0, 1.0]}}),
             "contains no boundary facets",
         ),
         (
-            lambda t: (
-                t + '\n[[load]]\ntype = "traction"\nregion = { box = [[2.0, 2.0, 2.0],'
-                " [3.0, 3.0, 3.0]] }\nvalue = [1.0, 0.0, 0.0]\n"
-            ),
+            add("load", {**TRACTION, "region": {"box": [[2.0, 2.0, 2.0], [3.0, 3.0, 3.0]]}}),
             "selects no nodes",
         ),
-        (lambda t: t.replace("[material]", "[materials]"), "\\[material\\]: missing section"),
         (
-            lambda t: t.replace("divisions = [2, 2, 2]", "divisions = [10000, 10000, 10000]"),
-            "would need about",
+            rename("material", "materials"),
+            "\\[materials\\]: unknown section; did you mean \\[material\\]\\?",
         ),
-        (lambda t: t + "\n[axes]\nfiber = [1.0, 0.0, 0.0]\nsheet = [2.0, 0.0, 0.0]\n", "axes"),
-        (lambda t: t + "\nunknown = 3\n", "unknown: unknown key"),
-        (lambda t: t + "\n[[load]\n", "not valid TOML"),
+        (put("mesh.divisions", [10000, 10000, 10000]), "would need about"),
+        (put("axes", {"fiber": [1.0, 0.0, 0.0], "sheet": [2.0, 0.0, 0.0]}), "axes"),
+        (put("unknown", 3), "unknown: unknown key"),
     ],
 )
 def test_malformed_scenes_name_the_key(edit, message):
+    data = base()
+    edit(data)
     with pytest.raises(SceneError, match=message) as info:
-        parse_scene(edit(BASE), path="bad.toml")
+        scene_from_dict(data, path="bad.toml")
     assert "\n" not in str(info.value)
     assert str(info.value).startswith("bad.toml: ")
+
+
+def test_malformed_toml_is_one_line_naming_the_file():
+    with pytest.raises(SceneError, match="not valid TOML") as info:
+        parse_scene(BASE + "\n[[load]\n", path="bad.toml")
+    assert "\n" not in str(info.value)
+    assert str(info.value).startswith("bad.toml: ")
+
+
+def test_the_file_and_the_dict_give_the_same_scene():
+    a, b = parse_scene(BASE), scene_from_dict(base())
+    assert a.name == b.name and a.material == b.material
+    np.testing.assert_array_equal(a.mesh.points, b.mesh.points)
+    np.testing.assert_array_equal(a.frames, b.frames)
+    np.testing.assert_array_equal(a.dirichlet()[0], b.dirichlet()[0])
 
 
 def test_mesh_file_relative_to_scene_with_cell_fibers(tmp_path):
@@ -141,11 +168,11 @@ def test_mesh_file_relative_to_scene_with_cell_fibers(tmp_path):
 
 
 def test_mu_kappa_and_prescribed_displacement():
-    text = BASE.replace("E = 1.0e3\nnu = 0.3", "mu = 100.0\nkappa = 1000.0").replace(
-        'law = "linear"', 'law = "neo-hookean"\nformulation = "uncoupled"'
-    )
-    text += '\n[[boundary]]\nregion = "x_max"\ndisplacement = [0.1, 0.0, 0.0]\nfix = ["x"]\n'
-    s = parse_scene(text)
+    data = base()
+    data["material"] = {"law": "neo-hookean", "formulation": "uncoupled"}
+    data["material"].update(mu=100.0, kappa=1000.0)
+    data["boundary"].append({"region": "x_max", "displacement": [0.1, 0.0, 0.0], "fix": ["x"]})
+    s = scene_from_dict(data)
     assert s.material.mu == pytest.approx(100.0)
     assert s.material.kappa == pytest.approx(1000.0)
     dofs, vals = s.dirichlet()
@@ -160,3 +187,64 @@ def test_scene_never_executes_code(tmp_path):
     text = BASE.replace('name = "t"', f"name = \"__import__('os').mkdir('{marker}')\"")
     s = parse_scene(text)
     assert not marker.exists() and s.name.startswith("__import__")
+
+
+def drop(section: str, key: str, new: str):
+    """An edit renaming ``key`` to ``new`` inside the table ``section``."""
+    return lambda d: d[section].update({new: d[section].pop(key)})
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (
+            add("load", {"type": "gravity", "valeu": [0.0, 0.0, -9.81]}),
+            "load[0].valeu: unknown key; did you mean 'value'?",
+        ),
+        (put("material.densty", 900.0), "material.densty: unknown key; did you mean 'density'?"),
+        (
+            put("boundary.0", {"regoin": "x_min", "fix": ["x"]}),
+            "boundary[0].regoin: unknown key; did you mean 'region'?",
+        ),
+        (
+            drop("mesh", "generator", "generater"),
+            "mesh.generater: unknown key; did you mean 'generator'?",
+        ),
+        (put("material.colour", 1), "material.colour: unknown key"),
+        (rename("material", "materail"), "[materail]: unknown section; did you mean [material]?"),
+        (rename("boundary", "boundry"), "[boundry]: unknown section; did you mean [boundary]?"),
+        (put("sprng", {"torsion": "energy"}), "[sprng]: unknown section; did you mean [spring]?"),
+        (rename("material", "stuff"), "[stuff]: unknown section"),
+        (put("nmae", "x"), "nmae: unknown key; did you mean 'name'?"),
+    ],
+)
+def test_misspelt_keys_and_sections_are_named_with_a_suggestion(edit, message):
+    """Issue 12: the misspelt word is named (not the key it hides) with the closest valid one."""
+    data = base()
+    edit(data)
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(data, path="bad.toml")
+    assert str(info.value) == "bad.toml: " + message
+
+
+def test_a_misspelt_section_in_a_file_is_named():
+    with pytest.raises(SceneError) as info:
+        parse_scene(BASE.replace("[material]", "[materail]"), path="bad.toml")
+    assert str(info.value) == "bad.toml: [materail]: unknown section; did you mean [material]?"
+
+
+def test_the_mesh_description_shows_plain_numbers(capsys, tmp_path):
+    """Issue 12: ``inspect`` printed ``box [np.float64(0.1), ...]`` (numpy 2 scalar repr)."""
+    from studies.cli import main
+
+    data = base()
+    data["mesh"]["size"] = [0.1, 0.01, 0.01]
+    assert (
+        scene_from_dict(data).mesh.source == "box [0.1, 0.01, 0.01] divisions [2, 2, 2] split six"
+    )
+    path = tmp_path / "s.toml"
+    path.write_text(BASE.replace("size = [1.0, 1.0, 1.0]", "size = [0.1, 0.01, 0.01]"))
+    assert main(["inspect", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "box [0.1, 0.01, 0.01] divisions [2, 2, 2] split six" in out
+    assert "np." not in out

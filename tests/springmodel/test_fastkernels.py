@@ -39,6 +39,8 @@ def mesh_state():
     el.k_axial = el.k_axial * rng.uniform(0.5, 2, el.k_axial.shape)
     el.k_torsion = el.k_torsion * rng.uniform(0.5, 2, el.k_torsion.shape)
     el.k_volume = el.k_volume * rng.uniform(0.5, 2, el.k_volume.shape)
+    el.k_axis_volume = rng.uniform(100.0, 300.0, el.n_elements)  # not calibrated: random
+    el.k_coupling = rng.uniform(-20.0, 50.0, (el.n_elements, 3))
     x = points + 0.15 * rng.standard_normal(points.shape)
     v = rng.standard_normal(points.shape)
     assert el.n_elements % BLOCK != 0  # the padded last block is exercised
@@ -76,6 +78,10 @@ def all_variants():
     for form, damping in itertools.product(("gradient", "spec"), (0.0, 0.5)):
         yield SpringOptions(torsion="energy", volume_form=form, volume_damping=damping)
     yield SpringOptions(torsion="cosine", volume=False)
+    for vol, coupling in itertools.product(("quadratic", "log", "simo-taylor"), (False, True)):
+        yield SpringOptions(
+            torsion="energy", volume="axes", volumetric=vol, coupling=coupling, volume_damping=0.3
+        )
 
 
 FAST = [
@@ -95,11 +101,19 @@ FAST = [
         torsion_cubic=1.3,
         volume=False,
     ),
+    SpringOptions(
+        torsion="energy",
+        volume="axes",
+        volumetric="simo-taylor",
+        coupling=True,
+        volume_damping=0.3,
+    ),
 ]
 
 
 def label(o):
-    return f"{o.axial}-{o.torsion}-{o.volume and o.volume_form}-{o.volume_damping}"
+    vol = o.volume_form if o.volume is True else ("axes-" + o.volumetric if o.volume else "off")
+    return f"{o.axial}-{o.torsion}-{vol}-{o.coupling}-{o.volume_damping}"
 
 
 def check(el, x, v, options, parallel=False, tol=1e-12):

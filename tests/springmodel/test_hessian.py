@@ -275,38 +275,22 @@ def test_refuses_non_conservative_options(change):
         SpringHessian(el, options)
 
 
-SCENE = """
-name = "small"
-[mesh]
-generator = "box"
-size = [0.1, 0.02, 0.02]
-divisions = [4, 2, 2]
-[material]
-law = "linear"
-E = 1.0e4
-nu = 0.3
-[axes]
-fiber = [1.0, 0.2, 0.0]
-sheet = [0.0, 1.0, 0.3]
-[[boundary]]
-region = "x_min"
-fix = ["x", "y", "z"]
-[[load]]
-type = "traction"
-region = "x_max"
-value = [0.0, 0.0, -0.1]
-[spring]
-torsion = "energy"
-axial = "cubic"
-axial_coefficients = [0.5, 0.3]
-"""
+SCENE = {
+    "name": "small",
+    "mesh": {"generator": "box", "size": [0.1, 0.02, 0.02], "divisions": [4, 2, 2]},
+    "material": {"law": "linear", "E": 1.0e4, "nu": 0.3},
+    "axes": {"fiber": [1.0, 0.2, 0.0], "sheet": [0.0, 1.0, 0.3]},
+    "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+    "load": [{"type": "traction", "region": "x_max", "value": [0.0, 0.0, -0.1]}],
+    "spring": {"torsion": "energy", "axial": "cubic", "axial_coefficients": [0.5, 0.3]},
+}
 
 
 def test_spring_model_stiffness_is_the_tangent_of_its_fused_kernel():
-    from springfem.scene import parse_scene
+    from springfem.scene import scene_from_dict
     from springmodel.model import SpringModel
 
-    model = SpringModel(parse_scene(SCENE), parallel=False)
+    model = SpringModel(scene_from_dict(SCENE), parallel=False)
     rng = np.random.default_rng(9)
     x = deformed(model.x0 / 0.1, seed=9) * 0.1
     K = model.stiffness(x)

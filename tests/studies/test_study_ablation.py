@@ -5,8 +5,8 @@ import pandas as pd
 import pytest
 
 from studies.study_ablation import (
-    COARSE,
     TOLERANCE,
+    Settings,
     cheapest_adequate,
     fem_case,
     model_error,
@@ -15,7 +15,7 @@ from studies.study_ablation import (
 
 
 def _run(scene: str, variants: tuple[str, ...], divisions=None) -> tuple[dict, dict]:
-    div = list(divisions or COARSE[scene])
+    div = list(divisions or Settings.quick().divisions[scene])
     fem = fem_case({"scene": scene, "divisions": div})
     assert fem["status"] == "ok"
     out = {}

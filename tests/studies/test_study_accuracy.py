@@ -1,7 +1,7 @@
 """Study ``accuracy`` on tiny variants of the bundled scenes: properties with stated
 tolerances.
 
-The scene divisions are monkeypatched (cantilever 10x1x1, stretches 2x2x2, sag 4x2x1) and
+The study runs with tiny settings (cantilever 10x1x1, stretches 2x2x2, sag 4x2x1) and
 only the cantilever gets a pyvista error-field figure, so the whole study runs in seconds.
 """
 
@@ -16,7 +16,7 @@ from studies import study_accuracy as sa
 from studies.cache import CaseCache
 from studies.compare import bundled_scene_text
 from studies.metrics import timoshenko_tip_deflection
-from studies.runner import StudyContext
+from studies.registry import StudyContext
 
 TINY = {
     "cantilever": (10, 1, 1),
@@ -29,14 +29,8 @@ TINY = {
 @pytest.fixture(scope="module")
 def output(tmp_path_factory):
     root = tmp_path_factory.mktemp("acc")
-    mp = pytest.MonkeyPatch()
-    mp.setattr(sa, "QUICK_DIVISIONS", TINY)
-    mp.setattr(sa, "FIGURE_SCENES", ("cantilever",))
-    try:
-        ctx = StudyContext("accuracy", root / "accuracy", True, CaseCache(root, "a"), False)
-        out = sa.run(ctx)
-    finally:
-        mp.undo()
+    ctx = StudyContext("accuracy", root / "accuracy", True, CaseCache(root, "a"), False)
+    out = sa.run(ctx, sa.Settings(divisions=TINY, figure_scenes=("cantilever",)))
     errors = pd.read_csv(ctx.out / "accuracy_errors.csv").set_index("scene")
     probes = pd.read_csv(ctx.out / "accuracy_probes.csv").set_index("scene")
     return out, errors, probes

@@ -74,6 +74,8 @@ def test_volume_springs_reduce_drift_near_incompressibility():
     fem = static_case({**base, "model": "fem", "law": "neo-hookean", "order": 1})
     assert off["status"] == on["status"] == fem["status"] == "ok"
     assert abs(on["dV"]) < 0.5 * abs(off["dV"])
+    # small-strain analytic (1 - 2 nu) sigma / E; at sigma = 0.1 E the neo-Hookean answer
+    # differs by terms of relative order eps = 0.1 (measured 0.5 %): rel 0.1
     assert abs(fem["dV"]) == pytest.approx(abs(analytic_drift(NU, CUBE_STRESS)), rel=0.1)
     assert abs(on["dV"]) > 5 * abs(fem["dV"])
 

@@ -74,7 +74,20 @@ def distance2_coloring(tets: np.ndarray, n_nodes: int) -> np.ndarray:
 
 
 def characteristic_length(x: np.ndarray, tets: np.ndarray) -> float:
-    """Median edge length of the elements at positions ``x`` (1.0 for an empty mesh)."""
+    """Median edge length of the elements at positions ``x`` (1.0 for an empty mesh).
+
+    Parameters
+    ----------
+    x
+        Positions ``(n, 3)``.
+    tets
+        Element connectivity ``(m, 4)``.
+
+    Returns
+    -------
+    float
+        The median non-zero edge length.
+    """
     tets = np.asarray(tets, dtype=np.int64)
     if tets.size == 0:
         return 1.0
@@ -95,6 +108,18 @@ def default_step(x: np.ndarray, tets: np.ndarray, scheme: Scheme = "central") ->
     from the origin). A forward difference balances ``h / L`` against ``u / h`` at
     ``h = sqrt(u) L`` (``~ 1e-8`` relative); it is half the cost and exact for forces
     linear in the perturbed variable (damping in ``v``).
+
+    Parameters
+    ----------
+    x, tets
+        Positions and connectivity, as in :func:`characteristic_length`.
+    scheme
+        ``central`` or ``forward``.
+
+    Returns
+    -------
+    float
+        The absolute step.
     """
     u = np.finfo(float).eps
     power = 1.0 / 3.0 if scheme == "central" else 0.5
@@ -234,6 +259,11 @@ def fd_jacobian(
         median edge length (see :func:`default_step`).
     scheme
         ``central`` (default, ``~1e-10`` relative for smooth forces) or ``forward``.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+        ``K``, ``3n x 3n``.
     """
     x = np.asarray(x, dtype=float).reshape(-1, 3)
     return ColoredJacobian(tets, x.shape[0])(force_fn, x, eps=eps, scheme=scheme)

@@ -1,0 +1,56 @@
+"""Solver machinery both models use: the :class:`MechanicalSystem` protocol, one linear
+solver, Newton with line search and adaptive load stepping, explicit integrators, dynamic
+relaxation, implicit Euler, the stable time step and a coloured finite-difference Jacobian.
+
+Modules: :mod:`.system` (protocol, rigid-body modes), :mod:`.results` (``Trajectory``,
+``SolveInfo``), :mod:`.context` (per-solve view, failure location), :mod:`.linsolve`,
+:mod:`.timestep`, :mod:`.blowup`, :mod:`.explicit`, :mod:`.relaxation`, :mod:`.implicit`,
+:mod:`.newton`, :mod:`.static`, :mod:`.fd_jacobian`.
+
+Examples
+--------
+>>> from springfem import mechanics
+>>> callable(mechanics.static) and callable(mechanics.explicit)
+True
+"""
+
+from .explicit import Integrator, explicit
+from .fd_jacobian import ColoredJacobian, distance2_coloring, fd_jacobian
+from .implicit import implicit
+from .linsolve import DIRECT_MAX_DOFS, LinearSolver, LinearSolverKind, solve_linear
+from .relaxation import explicit_static
+from .results import SolveInfo, Trajectory
+from .static import static
+from .system import (
+    MechanicalSystem,
+    check_constrained,
+    constrained_positions,
+    free_dofs,
+    reference_force,
+    rigid_body_modes,
+)
+from .timestep import stable_time_step
+
+__all__ = [
+    "DIRECT_MAX_DOFS",
+    "ColoredJacobian",
+    "Integrator",
+    "LinearSolver",
+    "LinearSolverKind",
+    "MechanicalSystem",
+    "SolveInfo",
+    "Trajectory",
+    "check_constrained",
+    "constrained_positions",
+    "distance2_coloring",
+    "explicit",
+    "explicit_static",
+    "fd_jacobian",
+    "free_dofs",
+    "implicit",
+    "reference_force",
+    "rigid_body_modes",
+    "solve_linear",
+    "stable_time_step",
+    "static",
+]

@@ -1,0 +1,234 @@
+"""Static equilibrium of a :class:`~springfem.mechanics.system.MechanicalSystem`: Newton
+with line search and adaptive load stepping, a tangent predictor for moving prescribed
+displacements, and dynamic relaxation as the fallback.
+
+Examples
+--------
+
+>>> import numpy as np, scipy.sparse as sp
+>>> class Oscillator:  # one tet, only node 3 moves (along x): mass 1, spring 4, load 1
+...     x0 = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+...     masses = np.ones(4)
+...     fixed_dofs = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 11])
+...     def prescribed(self, s): return self.x0.reshape(-1)[self.fixed_dofs]
+...     def forces(self, x, v, s=1.0):
+...         f = np.zeros((4, 3)); f[3, 0] = -4.0 * x[3, 0] + s; return f
+...     def energy(self, x, s=1.0): return 2.0 * x[3, 0] ** 2 - s * x[3, 0]
+...     def stiffness(self, x, s=1.0):
+...         return sp.csr_matrix(([4.0], ([9], [9])), shape=(12, 12))
+...     def element_nodes(self): return np.array([[0, 1, 2, 3]])
+...     def post_step(self, x, dt): pass
+>>> info = static(Oscillator(), tol=1e-12)
+>>> info.converged, info.iterations, round(float(info.x[3, 0]), 12)
+(True, 1, 0.25)
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+import scipy.sparse as sp
+
+from springfem.errors import SolverError
+
+from .context import JacobianKind, SolveContext, note_solver, reference_norm
+from .linsolve import LinearSolverKind, solve_linear
+from .newton import LoadStepping, newton
+from .relaxation import explicit_static
+from .results import SolveInfo
+from .system import SINGULAR_MESSAGE, MechanicalSystem, check_constrained, rigid_body_modes
+
+#: Explicit steps the dynamic-relaxation fallback may take after Newton gives up.
+FALLBACK_MAX_STEPS = 200_000
+
+
+def static(
+    system: MechanicalSystem,
+    tol: float = 1e-8,
+    max_iter: int = 200,
+    load_steps: int = 1,
+    scale: float = 1.0,
+    *,
+    x_init: np.ndarray | None = None,
+    jacobian: JacobianKind = "auto",
+    linear_solver: LinearSolverKind = "auto",
+    max_cutbacks: int = 8,
+    fallback: bool = True,
+    raise_on_failure: bool = True,
+    callback: Callable[[int, float, np.ndarray, float], None] | None = None,
+) -> SolveInfo:
+    """Static equilibrium ``f_free(x) = 0`` by Newton's method with load stepping.
+
+    Each load step solves ``K dx = f`` on the free DOFs (``K`` analytic if the system has it,
+    else coloured finite differences, non-symmetric for non-gradient forces) with
+    :func:`solve_linear` and a backtracking line search: Armijo on the energy when the
+    system has one and the step descends it, else on the residual norm. A step that does
+    not converge in ``max_iter`` iterations is cut in half and retried (up to
+    ``max_cutbacks`` times in a row); the increment grows back after easy steps (the rule
+    of :class:`~springfem.mechanics.newton.LoadStepping`). When
+    prescribed displacements change between load steps, a tangent predictor moves the free
+    DOFs with them (``K_ff dx_f = -K_fc dx_c``). If Newton gives up and ``fallback`` is on,
+    dynamic relaxation (:func:`explicit_static`, kinetic damping) finishes from the last
+    converged state.
+
+    Convergence: ``|f_free| <= tol * reference_force`` (the free-DOF force at the rest
+    positions with the fixed DOFs prescribed at the full ``scale``: external loads plus the
+    reaction to prescribed displacements).
+
+    Parameters
+    ----------
+    system
+        The system.
+    tol
+        Relative residual tolerance.
+    max_iter
+        Newton iterations per load step.
+    load_steps
+        Initial number of equal load increments up to ``scale``.
+    scale
+        Final load factor.
+    x_init
+        Starting positions (default: the rest positions).
+    jacobian, linear_solver
+        See :func:`stable_time_step` and :func:`solve_linear`.
+    max_cutbacks
+        Give up after this many halvings of the load increment in a row.
+    fallback
+        Finish with dynamic relaxation (at most :data:`FALLBACK_MAX_STEPS` steps) when
+        Newton gives up.
+    raise_on_failure
+        Raise :class:`SolverError` when the solve does not converge (else return it with
+        ``converged`` false and a ``message``).
+    callback
+        ``callback(iteration, load_factor, x, relative_residual)`` after every iteration.
+
+    Returns
+    -------
+    SolveInfo
+        Equilibrium positions, iterations, residual history, load steps and cut-backs.
+
+    Raises
+    ------
+    SolverError
+        Rigid-body modes not stopped by the constraints ("singular stiffness: ..."), a
+        singular tangent at rest, or no convergence (``raise_on_failure``); ``state`` holds
+        the last converged positions.
+    """
+    t_start = time.perf_counter()
+    ctx = SolveContext(system)
+    check_constrained(system)
+    target = float(scale)
+    f_ref = reference_norm(ctx, target)
+    B = rigid_body_modes(ctx.x0)[ctx.free]
+    x_conv = np.array(ctx.x0 if x_init is None else x_init, dtype=float).reshape(ctx.n, 3)
+    hist: list[float] = []
+    total_its = 0
+    state = {"x": x_conv, "K": None}  # last converged positions and tangent
+    method = "newton"
+    notes: list[str] = []
+    first_attempt = [True]
+    path_steps: list[float] = []  # converged load factors
+
+    def try_step(lam_conv: float, lam_new: float) -> tuple[bool, int, str]:
+        nonlocal total_its
+        s_new = lam_new * target
+        x = state["x"].copy()
+        xf = x.reshape(-1)
+        if ctx.fixed.size:
+            dp = system.prescribed(s_new) - xf[ctx.fixed]
+            xf[ctx.fixed] += dp
+            if np.any(dp != 0):
+                # tangent predictor: move the free DOFs with the prescribed ones
+                try:
+                    K = sp.csr_matrix(
+                        state["K"]
+                        if state["K"] is not None
+                        else ctx.stiffness(state["x"], lam_conv * target, jacobian)
+                    )
+                    rhs = -(K[ctx.free][:, ctx.fixed] @ dp)
+                    dxf, name = solve_linear(ctx.ff(K), rhs, linear_solver, B)
+                    note_solver(ctx, name)
+                    xf[ctx.free] += dxf
+                except SolverError:
+                    if not path_steps:
+                        raise SolverError(
+                            f"{SINGULAR_MESSAGE} or the springs leave a mechanism: the "
+                            "tangent stiffness at rest is singular",
+                            state=state["x"],
+                        ) from None
+        ok, x, its, h, reason, K_last = newton(
+            ctx, x, s_new, f_ref, tol, max_iter, jacobian, linear_solver, B,
+            callback, total_its,
+        )  # fmt: skip
+        total_its += its
+        hist.extend(h)
+        first, first_attempt[0] = first_attempt[0], False
+        if ok:
+            if reason:
+                notes.append(f"load factor {s_new:.4g}: {reason}")
+            state["x"], state["K"] = x, K_last
+            path_steps.append(s_new)
+            return True, its, ""
+        if reason.startswith("singular tangent at iteration 1 ") and first:
+            raise SolverError(
+                f"{SINGULAR_MESSAGE} or the springs leave a mechanism: {reason}",
+                state=state["x"],
+            )
+        return False, its, reason
+
+    path = LoadStepping(load_steps, max_cutbacks).run(try_step)
+    x_conv, steps_done, cutbacks = state["x"], path_steps, path.cutbacks
+    lam_conv, last_reason = path.load, path.reason
+    converged = path.converged
+    s_conv = lam_conv * target
+    x_final = x_conv
+    steps = 0
+    dt = None
+    message = "; ".join(notes)
+    if not converged:
+        message = (
+            f"{message + '; ' if message else ''}Newton failed at load factor "
+            f"{path.failed_at * target:.4g} after {cutbacks} cut-backs "
+            f"({last_reason}); last converged load factor {s_conv:.4g}"
+        )
+        if fallback:
+            try:
+                dr = explicit_static(
+                    system, tol=tol, max_steps=FALLBACK_MAX_STEPS, scale=target, x_init=x_conv,
+                    raise_on_failure=False,
+                )  # fmt: skip
+            except SolverError as err:
+                dr = None
+                message += f"; dynamic relaxation blew up: {err}"
+            if dr is not None:
+                ctx.n_evals += dr.force_evaluations
+                hist.extend(dr.residual_history)
+                steps, dt = dr.steps, dr.dt
+                method = "newton+dynamic-relaxation"
+                if dr.converged:
+                    converged, x_final = True, dr.x
+                    steps_done.append(target)
+                    message += f"; dynamic relaxation converged in {dr.steps} steps"
+                else:
+                    message += f"; {dr.message}"
+        if not converged and raise_on_failure:
+            raise SolverError(f"static solve did not converge: {message}", state=x_conv)
+    return SolveInfo(
+        x=x_final,
+        converged=converged,
+        iterations=total_its,
+        residual_history=hist,
+        load_steps=steps_done,
+        method=method,
+        jacobian=ctx.jacobian_kind,
+        linear_solver=",".join(ctx.solvers_used) or "none",
+        wall_time=time.perf_counter() - t_start,
+        reference_force=f_ref,
+        cutbacks=cutbacks,
+        steps=steps,
+        dt=dt,
+        force_evaluations=ctx.n_evals,
+        message=message,
+    )

@@ -1,0 +1,262 @@
+"""The scene's data: a mesh, a material, anisotropy frames, boundaries, loads and probes.
+
+Examples
+--------
+>>> from springfem.mesh import box_mesh
+>>> m = Material("linear", E=1.0e3, nu=0.25)
+>>> m.mu, m.lam
+(400.0, 400.0)
+>>> s = Scene("s", box_mesh((1, 1, 1), (1, 1, 1)), m, np.tile(np.eye(3), (6, 1, 1)), [], [], [])
+>>> s.dirichlet()[0].size, s.probe_displacements(np.zeros((8, 3)))
+(0, {})
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from ..mesh import TetMesh
+from ..regions import Region
+from .reader import TableReader
+
+Law = Literal["linear", "transverse-linear", "neo-hookean"]
+LAWS = ("linear", "transverse-linear", "neo-hookean")
+FORMULATIONS = ("coupled", "uncoupled")
+VOLUMETRIC = ("log", "quadratic", "simo-taylor")
+LOAD_TYPES = ("traction", "pressure", "gravity", "force")
+AXES_TYPES = ("uniform", "helix", "cells")
+COMPONENTS = ("x", "y", "z")
+
+
+@dataclass(frozen=True)
+class Material:
+    """Material parameters (SI units). Isotropic constants are derived where possible.
+
+    For ``transverse-linear`` the fiber is axis 0 of each element's frame; ``E`` and ``nu``
+    then hold an isotropic equivalent (``E_cross``, ``nu_cross``) used only for estimates
+    such as the stable time step.
+
+    Parameters
+    ----------
+    law
+        One of :data:`LAWS`.
+    E, nu
+        Young's modulus (Pa) and Poisson's ratio.
+    density
+        kg/m³.
+    E_fiber, E_cross, nu_fiber_cross, nu_cross, G_fiber
+        Transversely isotropic constants (``transverse-linear`` only).
+    formulation, volumetric
+        Neo-Hookean energy: ``coupled`` or ``uncoupled`` (isochoric/volumetric split) and
+        the volumetric function ``U(J)`` of the uncoupled form.
+    """
+
+    law: Law
+    E: float
+    nu: float
+    density: float = 1000.0
+    E_fiber: float | None = None
+    E_cross: float | None = None
+    nu_fiber_cross: float | None = None
+    nu_cross: float | None = None
+    G_fiber: float | None = None
+    formulation: Literal["coupled", "uncoupled"] = "coupled"
+    volumetric: Literal["log", "quadratic", "simo-taylor"] = "log"
+
+    @property
+    def mu(self) -> float:
+        """Shear modulus ``E / (2 (1 + nu))``."""
+        return self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def lam(self) -> float:
+        """Lamé's first parameter ``E nu / ((1 + nu)(1 - 2 nu))``."""
+        return self.E * self.nu / ((1.0 + self.nu) * (1.0 - 2.0 * self.nu))
+
+    @property
+    def kappa(self) -> float:
+        """Bulk modulus ``E / (3 (1 - 2 nu))``."""
+        return self.E / (3.0 * (1.0 - 2.0 * self.nu))
+
+
+@dataclass(frozen=True)
+class Boundary:
+    """Prescribed displacement: ``components`` of ``value`` on the region's nodes.
+
+    Parameters
+    ----------
+    region
+        Where.
+    components
+        Constrained components (0, 1, 2 for x, y, z).
+    value
+        ``(3,)`` prescribed displacement (zeros for ``fix``); only ``components`` count.
+    """
+
+    region: Region
+    components: tuple[int, ...]
+    value: np.ndarray  # (3,) prescribed displacement (zeros for `fix`)
+
+
+@dataclass(frozen=True)
+class Load:
+    """An external load: traction (Pa, vector), pressure (Pa, scalar: t = -p n on the
+    deformed surface), gravity (m/s², vector) or force (N, total vector on a region).
+
+    Parameters
+    ----------
+    type
+        One of :data:`LOAD_TYPES`.
+    value
+        ``(3,)`` vector, or ``(1,)`` for a pressure.
+    region
+        Where (``None`` for gravity).
+    """
+
+    type: Literal["traction", "pressure", "gravity", "force"]
+    value: np.ndarray
+    region: Region | None = None
+
+
+@dataclass(frozen=True)
+class Probe:
+    """A named point where displacements are reported, with its containing tet.
+
+    Parameters
+    ----------
+    name
+        Key in the result's ``probes``.
+    point
+        ``(3,)`` position at rest.
+    tet
+        Index of the tet containing it.
+    bary
+        ``(4,)`` barycentric coordinates of the point in that tet.
+    """
+
+    name: str
+    point: np.ndarray
+    tet: int
+    bary: np.ndarray
+
+
+@dataclass
+class Scene:
+    """Everything both models need to solve the same problem on the same mesh.
+
+    Build one with :func:`~springfem.scene.scene_from_dict` (or read a file with
+    :func:`~springfem.scene.load_scene`).
+
+    Parameters
+    ----------
+    name
+        Safe as a file name (:func:`~springfem.files.safe_filename`).
+    mesh
+        The mesh.
+    material
+        The material.
+    frames
+        ``(m, 3, 3)``: ``frames[k, l]`` is axis ``l`` (fiber, sheet, normal) of tet ``k``.
+    boundaries, loads, probes
+        In the order of the scene.
+    options
+        Parsed model sections by name (see :meth:`section`).
+    path
+        The scene file, if any.
+    raw
+        The scene's table as given.
+    """
+
+    name: str
+    mesh: TetMesh
+    material: Material
+    frames: np.ndarray  # (m, 3, 3): frames[k, l] = axis l of tet k
+    boundaries: list[Boundary]
+    loads: list[Load]
+    probes: list[Probe]
+    options: dict[str, Any] = field(default_factory=dict)
+    path: Path | None = None
+    raw: dict = field(default_factory=dict, repr=False)
+
+    def section(self, name: str, parse: Callable[[TableReader], Any]) -> Any:
+        """The parsed options of the model section ``[name]`` (parsed once, then cached).
+
+        Parameters
+        ----------
+        name
+            A name in :data:`MODEL_SECTIONS`.
+        parse
+            The model's parser: takes a :class:`TableReader` over the section's table.
+
+        Returns
+        -------
+        object
+            Whatever ``parse`` returns (the model's options dataclass).
+        """
+        if name not in self.options:
+            file = str(self.path) if self.path is not None else "<scene>"
+            self.options[name] = parse(TableReader(self.raw.get(name, {}), name, file))
+        return self.options[name]
+
+    def with_options(self, **sections: Any) -> Scene:
+        """A copy of this scene with the given model sections replaced.
+
+        Parameters
+        ----------
+        **sections
+            Section name -> parsed options (e.g. ``spring=SpringOptions(...)``).
+
+        Returns
+        -------
+        Scene
+            A shallow copy (mesh, material and the rest shared); this scene is unchanged.
+
+        Examples
+        --------
+        >>> from springfem.mesh import box_mesh
+        >>> s = Scene("s", box_mesh((1, 1, 1), (1, 1, 1)), Material("linear", 1.0, 0.3),
+        ...           np.tile(np.eye(3), (6, 1, 1)), [], [], [])
+        >>> s.with_options(fem="x").options["fem"], s.options
+        ('x', {})
+        """
+        return replace(self, options={**self.options, **sections})
+
+    def dirichlet(self) -> tuple[np.ndarray, np.ndarray]:
+        """Constrained DOFs (node * 3 + component) and their prescribed displacements.
+
+        Later boundaries override earlier ones on shared DOFs.
+
+        Returns
+        -------
+        dofs : numpy.ndarray
+            Sorted constrained DOF indices.
+        values : numpy.ndarray
+            Prescribed displacement of each.
+        """
+        values = np.full(3 * self.mesh.n_points, np.nan)
+        for b in self.boundaries:
+            for c in b.components:
+                values[b.region.nodes * 3 + c] = b.value[c]
+        dofs = np.flatnonzero(~np.isnan(values))
+        return dofs, values[dofs]
+
+    def probe_displacements(self, u: np.ndarray) -> dict[str, list[float]]:
+        """Displacement at each probe, interpolated linearly in its tet from nodal ``u``.
+
+        Parameters
+        ----------
+        u
+            Nodal displacement ``(n, 3)`` or flat ``(3 n,)``.
+
+        Returns
+        -------
+        dict
+            Probe name -> ``[ux, uy, uz]``.
+        """
+        u = np.asarray(u).reshape(-1, 3)
+        return {p.name: (p.bary @ u[self.mesh.tets[p.tet]]).tolist() for p in self.probes}

@@ -1,0 +1,124 @@
+"""Study ``accuracy``: how wrong is the spring model on the bundled scenes, and why.
+
+Per scene (bending = ``cantilever``, stretch along fibers = ``stretch-fiber``, across =
+``stretch-cross``, sag under gravity = ``sag``) the comparison of :mod:`studies.compare`
+is run and three errors are separated (DESIGN §4):
+
+- *model error*: spring vs P1 FEM on the same mesh with the reference's law (what the spring
+  element itself gets wrong);
+- *total error*: spring vs the reference (P2, neo-Hookean P2 for large strains);
+- *discretisation error*: P1 vs the reference (what the mesh alone costs a P1 element).
+
+Probe displacements are also checked against analytic values where they exist
+(Timoshenko for the cantilever, ``sigma L / E`` for the uniaxial stretches).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from springfem.scene import parse_scene
+
+from ..compare import (
+    MODELS,
+)
+from ..compare_output import error_figure, figure_fields
+from ..registry import Figure, StudyContext, StudyOutput, Table, study
+from ..tables import write_table
+from .cases import (
+    DISCRETISATION_HEADLINE,
+    ERROR_KINDS,
+    SCENES,
+    Settings,
+    analytic_probe,
+    nan_float,
+    scene_case,
+    work,
+)
+from .figures import bar_figure, field_conclusion
+from .findings import report_findings
+from .tables import error_table, probe_table
+
+__all__ = ["DISCRETISATION_HEADLINE", "SCENES", "Settings", "analytic_probe", "run", "work"]
+
+
+@study("accuracy", Settings)
+def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
+    """Run the accuracy study (see the module docstring).
+
+    Parameters
+    ----------
+    ctx
+        Output folder, cache and preset.
+    settings
+        Meshes.
+
+    Returns
+    -------
+    StudyOutput
+        Findings, two tables, the bar chart and the error-field figures, headline errors.
+    """
+    cases = [scene_case(n, settings) for n in SCENES]
+    results = ctx.cache.run(cases, work, progress=ctx.progress, desc="accuracy")
+    scenes = {c["scene"]: parse_scene(c["text"]) for c in cases}
+    res = dict(zip(SCENES, results, strict=True))
+
+    errors = error_table(res)
+    t_err = Table(
+        write_table(errors, ctx.path("accuracy_errors")),
+        "Relative errors over the mesh vertices per scene: model error = spring vs P1 on the "
+        "same mesh (same law as the reference), total = spring vs the reference, "
+        "discretisation = P1 vs the reference; L2 = ‖u − u_ref‖/‖u_ref‖, max = largest nodal "
+        "error / largest reference displacement.",
+    )
+
+    probes = probe_table(res, scenes)
+    t_probe = Table(
+        write_table(probes, ctx.path("accuracy_probes")),
+        "Main probe displacement component per scene: analytic value (Timoshenko beam, "
+        "uniaxial stress σL/E), spring model, same-mesh P1 and the reference; 'lateral' is the "
+        "transverse (Poisson) displacement at the stretch probes (u_y for stretch-fiber, "
+        "u_z for stretch-cross).",
+    )
+
+    # -- figures -------------------------------------------------------------------------
+    figures = [bar_figure(ctx, errors, probes)]
+    for name in settings.figure_scenes:
+        r = res[name]
+        if "u" not in r:
+            continue
+        fields = {n: np.asarray(r["u"][n], float) for n in MODELS if n in r["u"]}
+        fields, note = figure_fields(fields, r["reference"])
+        path = error_figure(
+            scenes[name],
+            fields,
+            r["reference"],
+            ctx.path(f"error_field_{name}.png"),
+            laws=r["laws"],
+            note=note,
+        )
+        e = r["errors"]
+        figures.append(
+            Figure(
+                path,
+                f"{name}: deformed meshes coloured by the displacement error against "
+                f"{r['reference']} (one colour scale). " + field_conclusion(scenes[name], r, e),
+            )
+        )
+
+    findings = report_findings(res, errors, probes, ctx.quick)
+    headline = {}
+    for name in SCENES:
+        key = name.replace("-", "_")
+        for kind in ERROR_KINDS:
+            if kind == "discretisation" and name not in DISCRETISATION_HEADLINE:
+                continue  # P1 is exact there: round-off, not a stable number
+            headline[f"{kind}_l2_{key}"] = nan_float(res[name]["errors"][kind].get("rel_l2"))
+    return StudyOutput(
+        name=ctx.name,
+        title="Accuracy: spring model vs FEM per scene (model, total, discretisation error)",
+        findings=findings,
+        tables=[t_err, t_probe],
+        figures=figures,
+        headline=headline,
+    )

@@ -1,0 +1,95 @@
+"""Findings of the accuracy study: the sentences of the report."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .cases import nan_float
+
+
+def report_findings(
+    res: dict, errors: pd.DataFrame, probes: pd.DataFrame, quick: bool
+) -> list[str]:
+    """The report's sentences on the accuracy study.
+
+    Parameters
+    ----------
+    res
+        Scene name -> case result (see :func:`~studies.study_accuracy.cases.work`).
+    errors, probes
+        The error and probe tables.
+    quick
+        Whether the run used the quick preset (said in the first sentence).
+
+    Returns
+    -------
+    list of str
+        One finding per sentence.
+    """
+    f = []
+    e = errors.set_index("scene")
+    p = probes.set_index("scene")
+    lo, hi = e["model err L2"].idxmin(), e["model err L2"].idxmax()
+    f.append(
+        f"The spring element's model error (spring vs P1 on the same mesh, relative L2 over "
+        f"vertices) ranges from {e.at[lo, 'model err L2']:.1%} ({lo}) to "
+        f"{e.at[hi, 'model err L2']:.1%} ({hi}); its total error against the reference ranges "
+        f"from {e['total err L2'].min():.1%} to {e['total err L2'].max():.1%}"
+        + (" (quick: coarse meshes)." if quick else ".")
+    )
+    if "cantilever" in e.index:
+        c, pc = e.loc["cantilever"], p.loc["cantilever"]
+        soft = "softer" if pc["spring (m)"] / pc["P1 (m)"] > 1 else "stiffer"
+        f.append(
+            f"Bending (cantilever, {int(c['tets'])} tets): the spring tip deflection is "
+            f"{abs(pc['spring (m)'] / pc['P1 (m)'] - 1):.1%} {soft} than P1 on the same mesh and "
+            f"{pc['spring / ref − 1']:+.1%} from P2 (P1: {pc['P1 / ref − 1']:+.1%}, P2 vs "
+            f"Timoshenko {pc['ref / analytic − 1']:+.1%}); "
+            + (
+                "the spring model's extra softness partly cancels P1's bending stiffness on "
+                f"this coarse mesh, so its total error ({c['total err L2']:.1%}) is below P1's "
+                f"discretisation error ({c['discretisation err L2']:.1%}) — an accident of "
+                "the mesh, not accuracy."
+                if c["total err L2"] < c["discretisation err L2"]
+                else f"its total error is {c['total err L2']:.1%} (P1 "
+                f"{c['discretisation err L2']:.1%})."
+            )
+        )
+    for name, fiber in (("stretch-fiber", "along"), ("stretch-cross", "across")):
+        if name not in e.index:
+            continue
+        c, pc = e.loc[name], p.loc[name]
+        lateral = pc["lateral spring / ref − 1"]
+        f.append(
+            f"Uniaxial stretch {fiber} the fibers ({name}): P1 and P2 reproduce σL/E exactly "
+            f"(P1 error {c['discretisation err L2']:.0e}); the spring model's stretch "
+            f"displacement is off by {pc['spring / analytic − 1']:+.1%} and its lateral "
+            f"(Poisson) contraction by {lateral:+.0%}, which gives a {c['model err L2']:.1%} "
+            "L2 error"
+            + (
+                ": the calibrated springs cannot reproduce the transversely isotropic Poisson "
+                "ratios on this mesh."
+                if abs(lateral) > 0.1
+                else "."
+            )
+        )
+    if "sag" in e.index:
+        c, r = e.loc["sag"], res["sag"]
+        small = nan_float(r["errors"].get("small_strain_p2", {}).get("rel_l2"))
+        text = (
+            f"Sag under gravity (neo-Hookean, ν = 0.45, {int(c['tets'])} tets, reference "
+            f"strain up to {c['max strain (ref)']:.0%}): spring total error "
+            f"{c['total err L2']:.1%} against {r['reference']} ({r['p1']} on the same mesh: "
+            f"{c['discretisation err L2']:.1%}, spring model error {c['model err L2']:.1%}); "
+            f"the spring model changes the volume by {c['spring volume change']:+.2%} where "
+            f"the reference changes it by {c['ref volume change']:+.2%}."
+        )
+        if np.isfinite(small):
+            text += f" A small-strain P2 analysis would be {small:.1%} off" + (
+                ", more than the geometrically nonlinear spring model."
+                if small > c["total err L2"]
+                else ", less than the spring model's own error."
+            )
+        f.append(text)
+    return f

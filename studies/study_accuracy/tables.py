@@ -1,0 +1,99 @@
+"""Tables of the accuracy study: errors per scene and the main probe displacements."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from springfem.scene import Scene
+
+from ..compare import COMPONENTS
+from .cases import ERROR_KINDS, SCENES, analytic_probe, nan_float
+
+
+def error_table(res: dict[str, dict]) -> pd.DataFrame:
+    """Model, total and discretisation errors (L2, max) and volume changes per scene.
+
+    Parameters
+    ----------
+    res
+        Scene name -> case result (see :func:`~studies.study_accuracy.cases.work`).
+
+    Returns
+    -------
+    DataFrame
+        One row per scene of :data:`~studies.study_accuracy.cases.SCENES`.
+    """
+    rows = []
+    for name in SCENES:
+        r = res[name]
+        row: dict[str, Any] = {
+            "scene": name,
+            "tets": r["tets"],
+            "reference": r["reference"],
+            "same-mesh P1": r["p1"],
+            "max strain (ref)": nan_float(r["strain_ref"]),
+        }
+        for kind in ERROR_KINDS:
+            e = r["errors"][kind]
+            row[f"{kind} err L2"] = nan_float(e.get("rel_l2"))
+            row[f"{kind} err max"] = nan_float(e.get("rel_max"))
+        row["spring volume change"] = nan_float(r["volume"].get("spring"))
+        row["ref volume change"] = nan_float(r["volume"].get(r["reference"]))
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def probe_table(res: dict[str, dict], scenes: dict[str, Scene]) -> pd.DataFrame:
+    """The main probe component per scene: analytic value, spring, P1, reference, ratios.
+
+    Parameters
+    ----------
+    res
+        Scene name -> case result.
+    scenes
+        Scene name -> the solved scene (for the analytic probe values).
+
+    Returns
+    -------
+    DataFrame
+        One row per scene.
+    """
+    prow = []
+    for name in SCENES:
+        r, scene = res[name], scenes[name]
+        ref = r["reference"]
+        an = analytic_probe(name, scene)
+        probe = an[0] if an else next(iter(r["probes"][ref]))
+        comp = an[1] if an else int(np.argmax(np.abs(r["probes"][ref][probe])))
+
+        def value(m: str, r=r, probe=probe, comp=comp) -> float:
+            return nan_float(r["probes"].get(m, {}).get(probe, [None] * 3)[comp])
+
+        row = {
+            "scene": name,
+            "probe": f"{probe} u{COMPONENTS[comp]}",
+            "analytic (m)": an[2] if an else float("nan"),
+            "analytic source": an[3] if an else "",
+            "spring (m)": value("spring"),
+            "P1 (m)": value(r["p1"]),
+            "reference (m)": value(ref),
+        }
+        row["spring / ref − 1"] = row["spring (m)"] / row["reference (m)"] - 1
+        row["P1 / ref − 1"] = row["P1 (m)"] / row["reference (m)"] - 1
+        row["ref / analytic − 1"] = (
+            row["reference (m)"] / row["analytic (m)"] - 1 if an else float("nan")
+        )
+        row["spring / analytic − 1"] = row["spring (m)"] / row["analytic (m)"] - 1 if an else np.nan
+        # lateral (Poisson) response at the same probe, for the stretches
+        lat = 1 if name == "stretch-fiber" else 2 if name == "stretch-cross" else None
+        if lat is not None:
+            ls = nan_float(r["probes"]["spring"][probe][lat])
+            lr = nan_float(r["probes"][ref][probe][lat])
+            row["lateral spring / ref − 1"] = ls / lr - 1
+        else:
+            row["lateral spring / ref − 1"] = float("nan")
+        prow.append(row)
+    return pd.DataFrame(prow)

@@ -1,0 +1,85 @@
+"""The exact spring variants on whole scenes: spring vs P1 on the same mesh at small load.
+
+With ``volume = "axes"``, ``torsion = "energy"``, ``calibration = "exact"`` (and
+``coupling = true`` for the transversely isotropic scenes) the small-strain spring model *is*
+the P1 model (DESIGN §4b); at 1e-3 of the scene's load only geometric nonlinearity is left
+(relative size ~ 1e-3 x deflection / length, measured 2e-6 on the cantilever and 3e-5 on the
+sag, whose P1 neo-Hookean solution is 10x closer), so the relative L2 difference must be
+below the issue's 1e-4. (At 1e-4 of the load the static solver cannot reach its relative
+tolerance 1e-8: the forces are at round-off.) The seed model is 8-35% off on the same
+scenes, so the bound fails on any calibration error. The reference is the FEM package's P1
+(linear or transverse-linear law), an independent code path (scikit-fem assembly).
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+from scipy.spatial import Delaunay
+
+import reference_fem
+from springfem.scene import scene_from_dict
+from springmodel.model import solve_spring
+
+SCENES = Path(__file__).resolve().parents[2] / "studies" / "scenes"
+LOAD = 1e-3
+
+
+def scaled(d: dict, s: float) -> dict:
+    d = copy.deepcopy(d)
+    for load in d.get("load", []):
+        load["value"] = [s * v for v in load["value"]]
+    return d
+
+
+def jittered_delaunay_box(size, div, seed: int = 0, jitter: float = 0.3):
+    """Delaunay tets of a jittered grid; boundary nodes move only within their faces."""
+    rng = np.random.default_rng(seed)
+    axes = [np.linspace(0.0, s, d + 1) for s, d in zip(size, div, strict=True)]
+    P = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    J = jitter * (np.array(size) / np.array(div)) * rng.uniform(-1, 1, P.shape)
+    J[np.isclose(P, 0.0) | np.isclose(P, np.array(size))] = 0.0
+    P = P + J
+    T = Delaunay(P).simplices
+    V = np.linalg.det(P[T][:, 1:] - P[T][:, :1]) / 6
+    keep = np.abs(V) > 1e-6 * np.abs(V).mean()  # flat hull tets of coplanar face nodes
+    T, V = T[keep], V[keep]
+    T[V < 0] = T[V < 0][:, [0, 2, 1, 3]]
+    return P, T
+
+
+def exact_scene(d: dict) -> dict:
+    d = copy.deepcopy(d)
+    transverse = d["material"]["law"] == "transverse-linear"
+    spring = {k: v for k, v in d.get("spring", {}).items() if k not in ("volume", "torsion")}
+    spring.update(volume="axes", torsion="energy", calibration="exact", coupling=transverse)
+    d["spring"] = spring
+    return d
+
+
+def model_error(d: dict) -> float:
+    scene = scene_from_dict(scaled(exact_scene(d), LOAD))
+    law = "transverse-linear" if scene.material.law == "transverse-linear" else "linear"
+    u_p1 = reference_fem.solve(scene, order=1, law=law).u_vertices
+    u = solve_spring(scene).u
+    return float(np.linalg.norm(u - u_p1) / np.linalg.norm(u_p1))
+
+
+@pytest.mark.parametrize("name", sorted(p.stem for p in SCENES.glob("*.toml")))
+def test_bundled_scene_small_load_equals_p1(name):
+    d = tomllib.loads((SCENES / f"{name}.toml").read_text())
+    assert model_error(d) < 1e-4
+
+
+def test_unstructured_mesh_small_load_equals_p1(tmp_path):
+    d = tomllib.loads((SCENES / "cantilever.toml").read_text())
+    P, T = jittered_delaunay_box((0.1, 0.01, 0.01), (20, 3, 3), seed=4)
+    path = tmp_path / "delaunay.vtu"
+    meshio.write(path, meshio.Mesh(P, [("tetra", T)]))
+    d["mesh"] = {"file": str(path)}
+    assert model_error(d) < 1e-4

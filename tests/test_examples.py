@@ -1,0 +1,35 @@
+"""The README's Python API example runs, and the README shows it verbatim."""
+
+from __future__ import annotations
+
+import os
+import runpy
+from pathlib import Path
+
+import meshio
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "python_api.py"
+
+
+def test_readme_shows_the_example_verbatim():
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert "```python\n" + EXAMPLE.read_text(encoding="utf-8") + "```" in readme
+
+
+def test_python_api_example_runs(capsys):
+    cwd = os.getcwd()
+    os.chdir(ROOT)
+    try:
+        ns = runpy.run_path(str(EXAMPLE), run_name="__main__")
+    finally:
+        os.chdir(cwd)
+    assert "model error" in capsys.readouterr().out
+    # VTU round trip: the file holds the displacement that was solved (meshio reads it back)
+    back = meshio.read(ns["vtu_path"])
+    np.testing.assert_allclose(back.point_data["displacement"], ns["spring_energy"].u, rtol=1e-12)
+    # the seed spring model's documented model error on this mesh (DESIGN §4: +7.7% softer
+    # than P1 at the tip); 10% is the accuracy goal the spring model was built to (issue 4)
+    tip_fem, tip_spring = ns["fem"].result.probes["tip"][2], ns["spring"].result.probes["tip"][2]
+    assert 0.0 < tip_spring / tip_fem - 1.0 < 0.10
