@@ -80,7 +80,7 @@ def chunks(n_blocks: int, n_threads: int | None = None) -> np.ndarray:
     return np.linspace(0, n_blocks, n + 1).round().astype(np.int64)
 
 
-@njit(cache=True, **_FLAGS)
+@njit(cache=True, inline="always", **_FLAGS)
 def _grad_F(X, K, j):
     """``F`` (row-major 9-tuple) and ``grad N_1..3`` of lane ``j``."""
     B = BLOCK
@@ -104,13 +104,13 @@ def _grad_F(X, K, j):
     return F, g1, g2, g3
 
 
-@njit(cache=True, **_FLAGS)
+@njit(cache=True, inline="always", **_FLAGS)
 def _cof0(F):
     """First row of the cofactor matrix of ``F``."""
     return (F[4] * F[8] - F[5] * F[7], F[5] * F[6] - F[3] * F[8], F[3] * F[7] - F[4] * F[6])
 
 
-@njit(cache=True, **_FLAGS)
+@njit(cache=True, inline="always", **_FLAGS)
 def _put(Fo, V, P, g1, g2, g3, j):
     """``f_a = -V P grad N_a`` (a = 1..3) and ``f_0 = -(f_1 + f_2 + f_3)`` into lane ``j``."""
     B = BLOCK

@@ -105,3 +105,14 @@ def test_bad_arguments():
         fem_kernel("mooney", "float64")
     with pytest.raises(ValueError, match="precision"):
         fem_kernel("linear", "float16")
+
+
+def test_precision_scene_key():
+    from reference_fem.options import FemOptions, parse_fem_options
+    from springfem.errors import SceneError
+    from springfem.scene import TableReader
+
+    o = parse_fem_options(TableReader({"precision": "float32"}, "fem", "s.toml"))
+    assert o.precision == "float32" and FemOptions().precision == "float64"
+    with pytest.raises(SceneError, match="precision"):
+        parse_fem_options(TableReader({"precision": "half"}, "fem", "s.toml"))

@@ -215,3 +215,14 @@ def test_bad_options(mesh_state):
     _, el, _, _ = mesh_state
     with pytest.raises(ValueError, match="precision"):
         SpringKernel(el, SpringOptions(), precision="float16")
+
+
+def test_precision_scene_key():
+    from springfem.errors import SceneError
+    from springfem.scene import TableReader
+    from springmodel.options import parse_spring_options
+
+    o = parse_spring_options(TableReader({"precision": "mixed"}, "spring", "s.toml"))
+    assert o.precision == "mixed" and SpringOptions().precision == "float64"
+    with pytest.raises(SceneError, match="precision"):
+        parse_spring_options(TableReader({"precision": "half"}, "spring", "s.toml"))
