@@ -80,55 +80,12 @@ def chunks(n_blocks: int, n_threads: int | None = None) -> np.ndarray:
     return np.linspace(0, n_blocks, n + 1).round().astype(np.int64)
 
 
-@njit(cache=True, inline="always", **_FLAGS)
-def _grad_F(X, K, j):
-    """``F`` (row-major 9-tuple) and ``grad N_1..3`` of lane ``j``."""
-    B = BLOCK
-    ax, ay, az = X[j], X[B + j], X[2 * B + j]
-    bx, by, bz = X[3 * B + j], X[4 * B + j], X[5 * B + j]
-    cx, cy, cz = X[6 * B + j], X[7 * B + j], X[8 * B + j]
-    g1 = (K[j], K[B + j], K[2 * B + j])
-    g2 = (K[3 * B + j], K[4 * B + j], K[5 * B + j])
-    g3 = (K[6 * B + j], K[7 * B + j], K[8 * B + j])
-    F = (
-        ax * g1[0] + bx * g2[0] + cx * g3[0],
-        ax * g1[1] + bx * g2[1] + cx * g3[1],
-        ax * g1[2] + bx * g2[2] + cx * g3[2],
-        ay * g1[0] + by * g2[0] + cy * g3[0],
-        ay * g1[1] + by * g2[1] + cy * g3[1],
-        ay * g1[2] + by * g2[2] + cy * g3[2],
-        az * g1[0] + bz * g2[0] + cz * g3[0],
-        az * g1[1] + bz * g2[1] + cz * g3[1],
-        az * g1[2] + bz * g2[2] + cz * g3[2],
-    )
-    return F, g1, g2, g3
-
-
-@njit(cache=True, inline="always", **_FLAGS)
-def _cof0(F):
-    """First row of the cofactor matrix of ``F``."""
-    return (F[4] * F[8] - F[5] * F[7], F[5] * F[6] - F[3] * F[8], F[3] * F[7] - F[4] * F[6])
-
-
-@njit(cache=True, inline="always", **_FLAGS)
-def _put(Fo, V, P, g1, g2, g3, j):
-    """``f_a = -V P grad N_a`` (a = 1..3) and ``f_0 = -(f_1 + f_2 + f_3)`` into lane ``j``."""
-    B = BLOCK
-    for r in range(3):
-        f1 = -V * (P[3 * r] * g1[0] + P[3 * r + 1] * g1[1] + P[3 * r + 2] * g1[2])
-        f2 = -V * (P[3 * r] * g2[0] + P[3 * r + 1] * g2[1] + P[3 * r + 2] * g2[2])
-        f3 = -V * (P[3 * r] * g3[0] + P[3 * r + 1] * g3[1] + P[3 * r + 2] * g3[2])
-        Fo[(3 + r) * B + j] = f1
-        Fo[(6 + r) * B + j] = f2
-        Fo[(9 + r) * B + j] = f3
-        Fo[r * B + j] = -(f1 + f2 + f3)
-
-
 def _block_run(law: str, at):
     """The law's block loop ``run(lo, hi, x, T, K, m, mu, lam, out) -> n_inverted``.
 
     It captures only numbers (numba compiles them as constants: the law branch folds away),
-    which keeps it disk-cacheable.
+    which keeps it disk-cacheable; it calls no helpers (written out: with helpers the loop
+    was not vectorised, and numba's IR inlining of cached helpers gave a wrong build once).
     """
     B = BLOCK
     one, zero, two = at(1.0), at(0.0), at(2.0)
@@ -153,16 +110,50 @@ def _block_run(law: str, at):
                         X[(3 * k + d) * B + j] = at(x[i, d] - x[i0, d])
             if neo:
                 for j in range(B):  # J, vectorised
-                    F, _, _, _ = _grad_F(X, Kb, j)
-                    c = _cof0(F)
+                    ax, ay, az = X[j], X[B + j], X[2 * B + j]
+                    bx, by, bz = X[3 * B + j], X[4 * B + j], X[5 * B + j]
+                    cx, cy, cz = X[6 * B + j], X[7 * B + j], X[8 * B + j]
+                    g1 = (at(Kb[j]), at(Kb[B + j]), at(Kb[2 * B + j]))
+                    g2 = (at(Kb[3 * B + j]), at(Kb[4 * B + j]), at(Kb[5 * B + j]))
+                    g3 = (at(Kb[6 * B + j]), at(Kb[7 * B + j]), at(Kb[8 * B + j]))
+                    F = (  # F = sum_a (x_a - x_0) (x) grad N_a, row-major
+                        ax * g1[0] + bx * g2[0] + cx * g3[0],
+                        ax * g1[1] + bx * g2[1] + cx * g3[1],
+                        ax * g1[2] + bx * g2[2] + cx * g3[2],
+                        ay * g1[0] + by * g2[0] + cy * g3[0],
+                        ay * g1[1] + by * g2[1] + cy * g3[1],
+                        ay * g1[2] + by * g2[2] + cy * g3[2],
+                        az * g1[0] + bz * g2[0] + cz * g3[0],
+                        az * g1[1] + bz * g2[1] + cz * g3[1],
+                        az * g1[2] + bz * g2[2] + cz * g3[2],
+                    )
+                    c0 = F[4] * F[8] - F[5] * F[7]  # first row of cof(F)
+                    c = (c0, F[5] * F[6] - F[3] * F[8], F[3] * F[7] - F[4] * F[6])
                     S[j] = F[0] * c[0] + F[1] * c[1] + F[2] * c[2]
                 for j in range(B):  # scalar: log
                     J = S[j]
                     S[j] = (lam * math.log(J) - mu) / J if J > zero else zero
             for j in range(B):  # stress and forces, vectorised
-                F, g1, g2, g3 = _grad_F(X, Kb, j)
+                ax, ay, az = X[j], X[B + j], X[2 * B + j]
+                bx, by, bz = X[3 * B + j], X[4 * B + j], X[5 * B + j]
+                cx, cy, cz = X[6 * B + j], X[7 * B + j], X[8 * B + j]
+                g1 = (at(Kb[j]), at(Kb[B + j]), at(Kb[2 * B + j]))
+                g2 = (at(Kb[3 * B + j]), at(Kb[4 * B + j]), at(Kb[5 * B + j]))
+                g3 = (at(Kb[6 * B + j]), at(Kb[7 * B + j]), at(Kb[8 * B + j]))
+                F = (  # F = sum_a (x_a - x_0) (x) grad N_a, row-major
+                    ax * g1[0] + bx * g2[0] + cx * g3[0],
+                    ax * g1[1] + bx * g2[1] + cx * g3[1],
+                    ax * g1[2] + bx * g2[2] + cx * g3[2],
+                    ay * g1[0] + by * g2[0] + cy * g3[0],
+                    ay * g1[1] + by * g2[1] + cy * g3[1],
+                    ay * g1[2] + by * g2[2] + cy * g3[2],
+                    az * g1[0] + bz * g2[0] + cz * g3[0],
+                    az * g1[1] + bz * g2[1] + cz * g3[1],
+                    az * g1[2] + bz * g2[2] + cz * g3[2],
+                )
+                c0 = F[4] * F[8] - F[5] * F[7]  # first row of cof(F)
+                c = (c0, F[5] * F[6] - F[3] * F[8], F[3] * F[7] - F[4] * F[6])
                 V = at(Kb[9 * B + j])
-                c = _cof0(F)
                 J = F[0] * c[0] + F[1] * c[1] + F[2] * c[2]
                 Jb[j] = J
                 if neo:
@@ -193,7 +184,14 @@ def _block_run(law: str, at):
                         s12,
                         two * mu * (F[8] - one) + tr,
                     )
-                _put(Fo, V, P, g1, g2, g3, j)
+                for r in range(3):  # f_a = -V P grad N_a (a = 1..3), f_0 = -(f_1 + f_2 + f_3)
+                    f1 = -V * (P[3 * r] * g1[0] + P[3 * r + 1] * g1[1] + P[3 * r + 2] * g1[2])
+                    f2 = -V * (P[3 * r] * g2[0] + P[3 * r + 1] * g2[1] + P[3 * r + 2] * g2[2])
+                    f3 = -V * (P[3 * r] * g3[0] + P[3 * r + 1] * g3[1] + P[3 * r + 2] * g3[2])
+                    Fo[(3 + r) * B + j] = f1
+                    Fo[(6 + r) * B + j] = f2
+                    Fo[(9 + r) * B + j] = f3
+                    Fo[r * B + j] = -(f1 + f2 + f3)
             nv = min(B, m - blk * B)
             for j in range(nv):
                 bad += 1 if Jb[j] <= zero else 0
