@@ -14,6 +14,7 @@ from springfem.scene import Scene, TableReader, register_section
 
 LinearSolver = Literal["auto", "direct", "amg"]
 Solver = Literal["static", "explicit", "implicit"]
+Precision = Literal["float64", "mixed", "float32"]
 
 
 @dataclass(frozen=True)
@@ -41,6 +42,9 @@ class FemOptions:
     t_end, steps, dt, mass_damping
         End time (s) or number of steps, time step (default half the critical step) and
         mass-proportional damping (1/s) of a dynamic solve.
+    precision
+        Explicit force kernel: ``float64``, ``mixed`` (float32 constants, float64
+        arithmetic) or ``float32``.
     """
 
     order: int = 1
@@ -53,11 +57,12 @@ class FemOptions:
     steps: int | None = None
     dt: float | None = None
     mass_damping: float = 0.0
+    precision: Precision = "float64"
 
     @classmethod
     def choices(cls, name: str) -> tuple[str, ...]:
         """Valid string values of the option ``name`` (empty for non-string options)."""
-        kinds = {"linear_solver": LinearSolver, "solver": Solver}
+        kinds = {"linear_solver": LinearSolver, "solver": Solver, "precision": Precision}
         return get_args(kinds[name]) if name in kinds else ()
 
     @classmethod
@@ -89,6 +94,8 @@ def parse_fem_options(r: TableReader) -> FemOptions:
         )
     if r.has("solver"):
         kw["solver"] = r.get("solver", "str", choices=FemOptions.choices("solver"))
+    if r.has("precision"):
+        kw["precision"] = r.get("precision", "str", choices=FemOptions.choices("precision"))
     for key in ("tol", "t_end", "dt"):
         if r.has(key):
             kw[key] = r.get(key, "float", positive=True)

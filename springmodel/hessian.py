@@ -56,9 +56,11 @@ from .hessian_numpy import (
     volume_hessian,
 )
 from .hessian_pattern import csr_pattern
-from .kernels import AXIS_VOLUME_CODES
 from .options import SpringOptions
 from .springs import is_conservative
+
+#: Axis-volume codes of :mod:`springmodel.hessian_numba` by volumetric energy.
+AXIS_VOLUME_CODES = {"quadratic": 3, "log": 4, "simo-taylor": 5}
 
 __all__ = [
     "SpringHessian",

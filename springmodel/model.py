@@ -31,8 +31,8 @@ from springfem.scene import Scene
 
 from .advice import scene_warnings
 from .elements import SpringElements, build_spring_elements
-from .kernels import ForceKernel
 from .options import SpringOptions
+from .spring_kernel import SpringKernel
 from .springs import is_conservative, lms_update, volume_measures
 from .tangent import MISMATCH_NORM
 
@@ -48,7 +48,7 @@ class SpringModel:
         Overrides ``SpringOptions.of(scene)`` (studies switch parts on and off this way).
     parallel
         Use the parallel fused kernel (both cores). ``None`` (default): the kernel's own
-        choice, parallel from ``ForceKernel.PARALLEL_MIN_ELEMENTS`` elements up; below that
+        choice, parallel from ``spring_kernel.PARALLEL_MIN_ELEMENTS`` elements up; below that
         thread synchronisation costs more than a serial pass.
     """
 
@@ -61,7 +61,9 @@ class SpringModel:
         self.elements: SpringElements = build_spring_elements(
             mesh.points, mesh.tets, scene.frames, self.options, scene.material
         )
-        self.kernel = ForceKernel(self.elements, self.options, parallel=parallel)
+        self.kernel = SpringKernel(
+            self.elements, self.options, parallel=parallel, precision=self.options.precision
+        )
         self.x0 = mesh.points.copy()
         self.masses = lumped_masses(scene)
         self.fixed_dofs, self._fixed_values = scene.dirichlet()

@@ -21,6 +21,7 @@ Calibration = Literal["analytic", "analytic-lsq", "nnls", "exact"]
 SolverKind = Literal["static", "explicit", "implicit"]
 Integrator = Literal["symplectic-euler", "verlet"]
 VolumeForm = Literal["gradient", "spec"]
+Precision = Literal["float64", "mixed", "float32"]
 #: ``True``: the seed's barycentric volume springs; ``"axes"``: the axis-volume spring.
 VolumeKind = bool | Literal["axes"]
 
@@ -97,6 +98,9 @@ class SpringOptions:
         Solver settings. ``dt = None`` means ``dt_safety * 2 / omega_max``.
         ``mass_damping`` (1/s) is a Rayleigh mass-proportional damping used to bring an
         explicit run to equilibrium.
+    precision
+        Force kernel precision: ``float64``, ``mixed`` (float32 constants, float64
+        arithmetic) or ``float32``.
     """
 
     axial: AxialLaw = "linear"
@@ -123,6 +127,7 @@ class SpringOptions:
     mass_damping: float = 0.0
     tol: float = 1e-8
     max_iter: int = 200
+    precision: Precision = "float64"
 
     def __post_init__(self):
         if self.volume not in (True, False, "axes"):
@@ -152,6 +157,7 @@ class SpringOptions:
             "solver": SolverKind,
             "integrator": Integrator,
             "volume_form": VolumeForm,
+            "precision": Precision,
             "volumetric": Volumetric,
         }
         return get_args(hints[name]) if name in hints else ()
@@ -181,7 +187,7 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
     """
     kw: dict[str, Any] = {}
     S = SpringOptions
-    for key in ("axial", "torsion", "calibration", "solver", "integrator"):
+    for key in ("axial", "torsion", "calibration", "solver", "integrator", "precision"):
         if r.has(key):
             kw[key] = r.get(key, "str", choices=S.choices(key))
     if r.has("volume_form"):

@@ -3,7 +3,7 @@
 Every force here is computed on the intersection points ``q_j = sum_i C_ij x_i`` (eq. 2.25)
 and distributed to the vertices with the same coefficients, ``f_i = sum_j C_ij f_j``
 (eqs. 2.28–2.29), except the volume springs, which act on the vertices directly
-(eqs. 2.76–2.77). The fused kernel (:mod:`springmodel.kernels`) must agree with this module.
+(eqs. 2.76–2.77). The kernels (:mod:`springmodel.fastkernels`) must agree with this module.
 
 Parts and laws (see :class:`~springmodel.options.SpringOptions`):
 

@@ -1,4 +1,4 @@
-"""``springfem bench`` and the speed studies (speed_accuracy, scaling).
+"""The speed studies (speed_accuracy, scaling); ``springfem bench`` is in test_bench.py.
 
 No timing assertions (DESIGN §8): the benchmarks must run and print their rows, the kernels
 they time must agree with their references, and the studies' solves must agree with each
@@ -12,47 +12,6 @@ import pytest
 
 from springfem.scene import scene_from_dict
 from studies import study_speed_accuracy as sa
-from studies.bench import bench_forces
-from studies.cli import main
-
-
-def test_bench_forces_prints_rows_and_ratios(capsys):
-    assert main(["bench", "forces", "--tets", "200", "--repeats", "1"]) == 0
-    out = capsys.readouterr().out
-    for row in (
-        "spring kernel, parallel",
-        "spring kernel, serial",
-        "spring numpy oracle",
-        "explicit P1 FEM neo-Hookean, parallel",
-        "explicit P1 FEM neo-Hookean, serial",
-        "fused / oracle speed-up",
-        "spring / explicit-FEM cost per force evaluation",
-        "load average",
-    ):
-        assert row in out, row
-
-
-def test_bench_forces_kernels_agree_with_oracle():
-    """The timed fused kernel computes what the numpy oracle computes (round-off)."""
-    res = bench_forces(200, repeats=1)
-    assert res["kernel_vs_oracle_max_rel_diff"] < 1e-10
-    assert {r["name"] for r in res["rows"]} >= {"spring numpy oracle", "spring kernel, serial"}
-    assert all(r["seconds"] > 0 for r in res["rows"])
-
-
-def test_bench_step_and_fem(capfd):
-    assert main(["bench", "step", "--tets", "200", "--repeats", "1"]) == 0
-    out = capfd.readouterr().out
-    assert "spring model, serial" in out and "explicit P1 FEM neo-Hookean, serial" in out
-    assert "cost per step" in out
-    assert main(["bench", "fem", "--tets", "200"]) == 0
-    out = capfd.readouterr().out
-    assert "FEM bench" in out and "Newton iteration" in out
-
-
-def test_bench_rejects_bad_size(capsys):
-    assert main(["bench", "forces", "--tets", "0"]) == 2
-    assert "--tets" in capsys.readouterr().err
 
 
 def test_pareto_front_matches_sweep():

@@ -1,0 +1,243 @@
+"""Explicit P1 FEM force kernels specialised per law and precision, on a blocked layout.
+
+The same layout and rules as the spring kernels (:mod:`springmodel.blocks`, written again here
+since ``reference_fem`` imports only the core, DESIGN §2), so the two models are optimised
+alike: blocks of :data:`BLOCK` elements, connectivity ``T (nb, 4 B)`` int32, constants
+``K (nb, 10 B)`` lane-major (``grad N_1..3``, 9 values, and the rest volume; ``grad N_0 =
+-(grad N_1 + grad N_2 + grad N_3)`` is not stored), the edge vectors ``x_a - x_0`` gathered
+in float64, one branch-free loop over a block's lanes (``error_model='numpy'``, FMA
+contraction allowed), a scalar scatter. Per element::
+
+    F = sum_a (x_a - x_0) (x) grad N_a,    f_a = -V P(F) grad N_a,  f_0 = -(f_1 + f_2 + f_3)
+
+    neo-Hookean (coupled): P = mu F + (lam ln J - mu) cof(F) / J
+    linear:                P = 2 mu eps + lam tr(eps) I,   eps = sym(F - I)
+
+The neo-Hookean block runs three lane loops: ``J`` (vectorised), ``(lam ln J - mu) / J``
+(scalar: no vector ``log`` without SVML), the stress and forces (vectorised). Elements with
+``J <= 0`` are counted; the neo-Hookean law gives them no force.
+
+Precision: ``float64``; ``mixed`` (constants stored in float32, float64 arithmetic);
+``float32`` (float32 constants and arithmetic, forces summed in float64).
+
+Examples
+--------
+>>> serial, _ = fem_kernel("linear", "float64")
+>>> T, K = fem_layout(np.array([[0, 1, 2, 3]]), np.eye(4)[:, 1:], "float64")
+>>> out = np.empty((4, 3))
+>>> int(serial(np.eye(4)[:, 1:] * 1.1, T, K, 1, 1.0, 1.0, out)), bool(abs(out.sum(0)).max() < 1e-15)
+(0, True)
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+
+import numba
+import numpy as np
+from numba import njit, prange
+
+#: Elements per block (as the spring kernels').
+BLOCK = 16
+PRECISIONS = ("float64", "mixed", "float32")
+_FLAGS = {"error_model": "numpy", "fastmath": {"contract"}}
+#: Bytes per element the kernel reads: 10 constants and 4 int32 node ids.
+NCOL = 10
+
+
+def fem_layout(tets: np.ndarray, points: np.ndarray, precision: str):
+    """Blocked connectivity ``(nb, 4 B)`` int32 and constants ``(nb, 10 B)`` at rest ``points``.
+
+    Parameters
+    ----------
+    tets, points
+        Mesh (``m >= 1`` tets with positive volume).
+    precision
+        Storage is float32 for ``mixed`` and ``float32``.
+
+    Returns
+    -------
+    tuple of ndarray
+    """
+    x = np.asarray(points, dtype=float)[tets]
+    E = x[:, 1:] - x[:, :1]
+    Ginv = np.linalg.inv(E)  # columns: grad N_1..3
+    V = np.linalg.det(E) / 6.0
+    cols = np.concatenate([Ginv.transpose(0, 2, 1).reshape(-1, 9), V[:, None]], axis=1).T
+    m = tets.shape[0]
+    nb = -(-m // BLOCK)
+    idx = np.minimum(np.arange(nb * BLOCK), m - 1)  # pad with the last element
+    T = np.asarray(tets)[idx].reshape(nb, BLOCK, 4).transpose(0, 2, 1).reshape(nb, 4 * BLOCK)
+    K = cols[:, idx].reshape(NCOL, nb, BLOCK).transpose(1, 0, 2).reshape(nb, NCOL * BLOCK)
+    dtype = np.float64 if precision == "float64" else np.float32
+    return np.ascontiguousarray(T, dtype=np.int32), np.ascontiguousarray(K, dtype=dtype)
+
+
+def chunks(n_blocks: int, n_threads: int | None = None) -> np.ndarray:
+    """Static contiguous block ranges ``ptr`` (one per thread)."""
+    n = max(1, min(n_threads or numba.get_num_threads(), n_blocks))
+    return np.linspace(0, n_blocks, n + 1).round().astype(np.int64)
+
+
+def _block_run(law: str, at):
+    """The law's block loop ``run(lo, hi, x, T, K, m, mu, lam, out) -> n_inverted``.
+
+    It captures only numbers (numba compiles them as constants: the law branch folds away),
+    which keeps it disk-cacheable; it calls no helpers (written out: with helpers the loop
+    was not vectorised, and numba's IR inlining of cached helpers gave a wrong build once).
+    """
+    B = BLOCK
+    one, zero, two = at(1.0), at(0.0), at(2.0)
+    neo = law == "neo-hookean"
+
+    @njit(cache=True, **_FLAGS)
+    def run(lo, hi, x, T, K, m, mu_, lam_, out):
+        X = np.empty(9 * B, at)
+        S = np.empty(B, at)
+        Jb = np.empty(B, at)
+        Fo = np.empty(12 * B, at)
+        mu, lam = at(mu_), at(lam_)
+        bad = 0
+        for blk in range(lo, hi):
+            Tb = T[blk]
+            Kb = K[blk]
+            for j in range(B):
+                i0 = Tb[j]
+                for k in range(3):
+                    i = Tb[(k + 1) * B + j]
+                    for d in range(3):
+                        X[(3 * k + d) * B + j] = at(x[i, d] - x[i0, d])
+            if neo:
+                for j in range(B):  # J, vectorised
+                    ax, ay, az = X[j], X[B + j], X[2 * B + j]
+                    bx, by, bz = X[3 * B + j], X[4 * B + j], X[5 * B + j]
+                    cx, cy, cz = X[6 * B + j], X[7 * B + j], X[8 * B + j]
+                    g1 = (at(Kb[j]), at(Kb[B + j]), at(Kb[2 * B + j]))
+                    g2 = (at(Kb[3 * B + j]), at(Kb[4 * B + j]), at(Kb[5 * B + j]))
+                    g3 = (at(Kb[6 * B + j]), at(Kb[7 * B + j]), at(Kb[8 * B + j]))
+                    F = (  # F = sum_a (x_a - x_0) (x) grad N_a, row-major
+                        ax * g1[0] + bx * g2[0] + cx * g3[0],
+                        ax * g1[1] + bx * g2[1] + cx * g3[1],
+                        ax * g1[2] + bx * g2[2] + cx * g3[2],
+                        ay * g1[0] + by * g2[0] + cy * g3[0],
+                        ay * g1[1] + by * g2[1] + cy * g3[1],
+                        ay * g1[2] + by * g2[2] + cy * g3[2],
+                        az * g1[0] + bz * g2[0] + cz * g3[0],
+                        az * g1[1] + bz * g2[1] + cz * g3[1],
+                        az * g1[2] + bz * g2[2] + cz * g3[2],
+                    )
+                    c0 = F[4] * F[8] - F[5] * F[7]  # first row of cof(F)
+                    c = (c0, F[5] * F[6] - F[3] * F[8], F[3] * F[7] - F[4] * F[6])
+                    S[j] = F[0] * c[0] + F[1] * c[1] + F[2] * c[2]
+                for j in range(B):  # scalar: log
+                    J = S[j]
+                    S[j] = (lam * math.log(J) - mu) / J if J > zero else zero
+            for j in range(B):  # stress and forces, vectorised
+                ax, ay, az = X[j], X[B + j], X[2 * B + j]
+                bx, by, bz = X[3 * B + j], X[4 * B + j], X[5 * B + j]
+                cx, cy, cz = X[6 * B + j], X[7 * B + j], X[8 * B + j]
+                g1 = (at(Kb[j]), at(Kb[B + j]), at(Kb[2 * B + j]))
+                g2 = (at(Kb[3 * B + j]), at(Kb[4 * B + j]), at(Kb[5 * B + j]))
+                g3 = (at(Kb[6 * B + j]), at(Kb[7 * B + j]), at(Kb[8 * B + j]))
+                F = (  # F = sum_a (x_a - x_0) (x) grad N_a, row-major
+                    ax * g1[0] + bx * g2[0] + cx * g3[0],
+                    ax * g1[1] + bx * g2[1] + cx * g3[1],
+                    ax * g1[2] + bx * g2[2] + cx * g3[2],
+                    ay * g1[0] + by * g2[0] + cy * g3[0],
+                    ay * g1[1] + by * g2[1] + cy * g3[1],
+                    ay * g1[2] + by * g2[2] + cy * g3[2],
+                    az * g1[0] + bz * g2[0] + cz * g3[0],
+                    az * g1[1] + bz * g2[1] + cz * g3[1],
+                    az * g1[2] + bz * g2[2] + cz * g3[2],
+                )
+                c0 = F[4] * F[8] - F[5] * F[7]  # first row of cof(F)
+                c = (c0, F[5] * F[6] - F[3] * F[8], F[3] * F[7] - F[4] * F[6])
+                V = at(Kb[9 * B + j])
+                J = F[0] * c[0] + F[1] * c[1] + F[2] * c[2]
+                Jb[j] = J
+                if neo:
+                    s = S[j]
+                    V = V if J > zero else zero
+                    P = (
+                        mu * F[0] + s * c[0],
+                        mu * F[1] + s * c[1],
+                        mu * F[2] + s * c[2],
+                        mu * F[3] + s * (F[2] * F[7] - F[1] * F[8]),
+                        mu * F[4] + s * (F[0] * F[8] - F[2] * F[6]),
+                        mu * F[5] + s * (F[1] * F[6] - F[0] * F[7]),
+                        mu * F[6] + s * (F[1] * F[5] - F[2] * F[4]),
+                        mu * F[7] + s * (F[2] * F[3] - F[0] * F[5]),
+                        mu * F[8] + s * (F[0] * F[4] - F[1] * F[3]),
+                    )
+                else:
+                    tr = lam * ((F[0] - one) + (F[4] - one) + (F[8] - one))
+                    s01, s02, s12 = mu * (F[1] + F[3]), mu * (F[2] + F[6]), mu * (F[5] + F[7])
+                    P = (
+                        two * mu * (F[0] - one) + tr,
+                        s01,
+                        s02,
+                        s01,
+                        two * mu * (F[4] - one) + tr,
+                        s12,
+                        s02,
+                        s12,
+                        two * mu * (F[8] - one) + tr,
+                    )
+                for r in range(3):  # f_a = -V P grad N_a (a = 1..3), f_0 = -(f_1 + f_2 + f_3)
+                    f1 = -V * (P[3 * r] * g1[0] + P[3 * r + 1] * g1[1] + P[3 * r + 2] * g1[2])
+                    f2 = -V * (P[3 * r] * g2[0] + P[3 * r + 1] * g2[1] + P[3 * r + 2] * g2[2])
+                    f3 = -V * (P[3 * r] * g3[0] + P[3 * r + 1] * g3[1] + P[3 * r + 2] * g3[2])
+                    Fo[(3 + r) * B + j] = f1
+                    Fo[(6 + r) * B + j] = f2
+                    Fo[(9 + r) * B + j] = f3
+                    Fo[r * B + j] = -(f1 + f2 + f3)
+            nv = min(B, m - blk * B)
+            for j in range(nv):
+                bad += 1 if Jb[j] <= zero else 0
+                for k in range(4):
+                    i = Tb[k * B + j]
+                    out[i, 0] += Fo[(3 * k) * B + j]
+                    out[i, 1] += Fo[(3 * k + 1) * B + j]
+                    out[i, 2] += Fo[(3 * k + 2) * B + j]
+        return bad
+
+    return run
+
+
+@cache
+def fem_kernel(law: str, precision: str = "float64"):
+    """``(serial, parallel)`` force drivers of ``law`` at ``precision`` (compiled on first call).
+
+    ``serial(x, T, K, m, mu, lam, out)`` and ``parallel(x, T, K, m, mu, lam, ptr, buf, out)``
+    overwrite ``out (n, 3)`` with the internal forces and return the number of elements with
+    ``J <= 0``.
+    """
+    if law not in ("neo-hookean", "linear"):
+        raise ValueError(f"law {law!r} is not one of neo-hookean, linear")
+    if precision not in PRECISIONS:
+        raise ValueError(f"precision {precision!r} is not one of {', '.join(PRECISIONS)}")
+    run = _block_run(law, np.float32 if precision == "float32" else np.float64)
+
+    def serial(x, T, K, m, mu, lam, out):
+        out[:] = 0.0
+        return run(0, T.shape[0], x, T, K, m, mu, lam, out)
+
+    @njit(parallel=True, **_FLAGS)
+    def parallel(x, T, K, m, mu, lam, ptr, buf, out):
+        nchunk = ptr.shape[0] - 1
+        bad = 0
+        for t in prange(nchunk):  # one buffer per static chunk: deterministic
+            bt = buf[t]
+            bt[:] = 0.0
+            bad += run(ptr[t], ptr[t + 1], x, T, K, m, mu, lam, bt)
+        n = out.shape[0]
+        for i in prange(n):
+            for d in range(3):
+                s = 0.0
+                for t in range(nchunk):
+                    s += buf[t, i, d]
+                out[i, d] = s
+        return bad
+
+    return serial, parallel
