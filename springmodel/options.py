@@ -18,7 +18,7 @@ AxialLaw = Literal["linear", "quadratic", "cubic", "stress-scaled"]
 TorsionLaw = Literal["off", "angle", "cosine", "cubic", "energy"]
 LMSRule = Literal["spec", "abs"]
 Calibration = Literal["analytic", "analytic-lsq", "nnls", "exact"]
-SolverKind = Literal["static", "explicit", "implicit"]
+SolverKind = Literal["static", "linear", "explicit", "implicit"]
 Integrator = Literal["symplectic-euler", "verlet"]
 VolumeForm = Literal["gradient", "spec"]
 Precision = Literal["float64", "mixed", "float32"]
@@ -95,7 +95,9 @@ class SpringOptions:
         Explicit spring constants (N/m, J, and N/m for the barycentric volume spring or Pa
         for the axis-volume spring) overriding the calibration.
     solver, integrator, dt, dt_safety, t_end, steps, mass_damping, tol, max_iter
-        Solver settings. ``dt = None`` means ``dt_safety * 2 / omega_max``.
+        Solver settings: ``solver`` is ``static`` (Newton, finite strain), ``linear`` (the
+        small-strain spring model: one tangent solve at rest), ``explicit`` or
+        ``implicit``. ``dt = None`` means ``dt_safety * 2 / omega_max``.
         ``mass_damping`` (1/s) is a Rayleigh mass-proportional damping used to bring an
         explicit run to equilibrium.
     precision

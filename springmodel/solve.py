@@ -20,6 +20,7 @@ from springfem.mechanics import (
     explicit,
     explicit_static,
     implicit,
+    linear_static,
     stable_time_step,
     static,
 )
@@ -81,7 +82,9 @@ def solve_with_options(
 
     Notes
     -----
-    ``static``: :func:`static` with ``tol`` and ``max_iter``. ``explicit``: :func:`explicit`
+    ``static``: :func:`static` with ``tol`` and ``max_iter``. ``linear``:
+    :func:`~springfem.mechanics.linear_static`, one tangent solve at rest (the small-strain
+    spring model, to compare with linear FEM at the same kinematics). ``explicit``: :func:`explicit`
     when ``steps`` or ``t_end`` is set, else :func:`explicit_static` (to equilibrium, with
     ``mass_damping`` or kinetic damping). ``implicit``: :func:`implicit` when ``steps`` or
     ``t_end`` is set, else backward-Euler pseudo-time stepping (``dt`` or, by default,
@@ -91,6 +94,8 @@ def solve_with_options(
     """
     o = options
     timed = o.steps is not None or o.t_end is not None
+    if o.solver == "linear":
+        return linear_static(system)
     if o.solver == "static":
         return static(
             system, tol=o.tol, max_iter=o.max_iter, callback=print_newton if progress else None

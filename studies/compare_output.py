@@ -30,6 +30,31 @@ from . import compare, metrics
 from .compare import Comparison
 
 
+def percent(x: float) -> str:
+    """A relative error as a percentage, with enough digits to show errors near round-off.
+
+    Parameters
+    ----------
+    x
+        The relative error.
+
+    Returns
+    -------
+    str
+        ``12.34%`` down to 0.01%, scientific below (``3.2e-10%``).
+
+    Examples
+    --------
+    >>> percent(0.1234), percent(3.2e-12), percent(0.0)
+    ('12.34%', '3.2e-10%', '0%')
+    """
+    if not np.isfinite(x):
+        return "nan"
+    if x == 0:
+        return "0%"
+    return f"{x:.2%}" if abs(x) >= 1e-4 else f"{100 * x:.2g}%"
+
+
 def summary_lines(cmp: Comparison) -> list[str]:
     """Error sentences: model error (spring vs same-mesh P1), total and discretisation.
 
@@ -50,20 +75,20 @@ def summary_lines(cmp: Comparison) -> list[str]:
     if "spring" in cmp.solutions and p1 is not None:
         e = cmp.errors("spring", p1)
         lines.append(
-            f"model error (spring vs {p1}, same mesh): rel L2 {e['rel_l2']:.2%}, "
-            f"rel max {e['rel_max']:.2%}"
+            f"model error (spring vs {p1}, same mesh): rel L2 {percent(e['rel_l2'])}, "
+            f"rel max {percent(e['rel_max'])}"
         )
     if "spring" in cmp.solutions:
         e = cmp.errors("spring")
         lines.append(
-            f"total error (spring vs {cmp.reference}): rel L2 {e['rel_l2']:.2%}, "
-            f"rel max {e['rel_max']:.2%}"
+            f"total error (spring vs {cmp.reference}): rel L2 {percent(e['rel_l2'])}, "
+            f"rel max {percent(e['rel_max'])}"
         )
     if p1 is not None and p1 != cmp.reference:
         e = cmp.errors(p1)
         lines.append(
-            f"discretisation error ({p1} vs {cmp.reference}): rel L2 {e['rel_l2']:.2%}, "
-            f"rel max {e['rel_max']:.2%}"
+            f"discretisation error ({p1} vs {cmp.reference}): rel L2 {percent(e['rel_l2'])}, "
+            f"rel max {percent(e['rel_max'])}"
         )
     return lines
 

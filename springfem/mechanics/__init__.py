@@ -17,6 +17,7 @@ True
 from .explicit import Integrator, explicit
 from .fd_jacobian import ColoredJacobian, distance2_coloring, fd_jacobian
 from .implicit import implicit
+from .linear import linear_static
 from .linsolve import DIRECT_MAX_DOFS, LinearSolver, LinearSolverKind, solve_linear
 from .relaxation import explicit_static
 from .results import SolveInfo, Trajectory
@@ -48,6 +49,7 @@ __all__ = [
     "fd_jacobian",
     "free_dofs",
     "implicit",
+    "linear_static",
     "reference_force",
     "rigid_body_modes",
     "solve_linear",
