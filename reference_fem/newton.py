@@ -30,7 +30,7 @@ from typing import Protocol
 import numpy as np
 
 from springfem.errors import SolverError
-from springfem.mechanics.context import Deadline
+from springfem.mechanics.limits import Deadline
 from springfem.mechanics.newton import (
     LoadStepping,
     NewtonOutcome,

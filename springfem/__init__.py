@@ -14,3 +14,7 @@ Examples
 ...     "material": {"law": "linear", "E": 1.0, "nu": 0.25}}).mesh.n_tets
 6
 """
+
+from ._numba_cache import use_source_keyed_numba_cache
+
+use_source_keyed_numba_cache()

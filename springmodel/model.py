@@ -25,7 +25,7 @@ import scipy.sparse as sp
 
 from springfem.errors import SolverError
 from springfem.loads import external_forces, has_follower_loads, lumped_masses, reactions
-from springfem.mechanics.context import SolveStopped
+from springfem.mechanics.limits import SolveStopped
 from springfem.result import Result, volume_summary
 from springfem.scene import Scene
 

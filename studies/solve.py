@@ -20,7 +20,7 @@ import numpy as np
 from reference_fem.options import FemOptions
 from springfem.errors import InputError, SolverError
 from springfem.files import safe_filename
-from springfem.mechanics.context import SolveStopped, solve_limits
+from springfem.mechanics.limits import SolveStopped, solve_limits
 from springfem.result import Result, volume_summary, write_result
 from springfem.scene import OutputOptions, Scene
 

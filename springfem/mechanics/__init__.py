@@ -5,7 +5,8 @@ relaxation, implicit Euler, the stable time step and a coloured finite-differenc
 Modules: :mod:`.system` (protocol, rigid-body modes), :mod:`.results` (``Trajectory``,
 ``SolveInfo``), :mod:`.context` (per-solve view, failure location), :mod:`.linsolve`,
 :mod:`.timestep`, :mod:`.blowup`, :mod:`.explicit`, :mod:`.relaxation`, :mod:`.implicit`,
-:mod:`.newton`, :mod:`.static`, :mod:`.fd_jacobian`.
+:mod:`.newton`, :mod:`.static`, :mod:`.linear` (the linearised solve), :mod:`.limits`
+(time and step caps), :mod:`.fd_jacobian`, :mod:`.toy` (the one-DOF system of the examples).
 
 Examples
 --------

@@ -5,19 +5,8 @@ element, edge strain) for the error messages.
 
 Examples
 --------
->>> import numpy as np, scipy.sparse as sp
->>> class Oscillator:  # one tet, only node 3 moves (along x): mass 1, spring 4, load 1
-...     x0 = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
-...     masses = np.ones(4)
-...     fixed_dofs = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 11])
-...     def prescribed(self, s): return self.x0.reshape(-1)[self.fixed_dofs]
-...     def forces(self, x, v, s=1.0):
-...         f = np.zeros((4, 3)); f[3, 0] = -4.0 * x[3, 0] + s; return f
-...     def energy(self, x, s=1.0): return 2.0 * x[3, 0] ** 2 - s * x[3, 0]
-...     def stiffness(self, x, s=1.0):
-...         return sp.csr_matrix(([4.0], ([9], [9])), shape=(12, 12))
-...     def element_nodes(self): return np.array([[0, 1, 2, 3]])
-...     def post_step(self, x, dt): pass
+>>> import numpy as np
+>>> from springfem.mechanics.toy import Oscillator
 >>> ctx = SolveContext(Oscillator())
 >>> ctx.free.tolist()
 [9]
@@ -27,125 +16,21 @@ Examples
 
 from __future__ import annotations
 
-import contextlib
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Literal
 
 import numpy as np
 import scipy.sparse as sp
 
-from springfem.errors import SpringFemError
-
 from .fd_jacobian import ColoredJacobian
+from .limits import LIMITS, SolveStopped
 from .system import MechanicalSystem, constrained_positions, free_dofs
 
 JacobianKind = Literal["auto", "analytic", "fd"]
 Scale = float | Callable[[float], float]
 
 _TET_EDGES = np.array([(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)])
-
-
-class SolveStopped(SpringFemError, RuntimeError):
-    """A solve ended by a cap (:func:`solve_limits`): wall time or time steps (exit code 3).
-
-    Not a :class:`~springfem.errors.SolverError`, so no solver mistakes it for a failed
-    step to retry or fall back from.
-
-    Parameters
-    ----------
-    message
-        ``stopped after N s / N steps at residual R``.
-    state
-        The positions ``(n, 3)`` at the stop.
-    """
-
-    exit_code = 3
-
-    def __init__(self, message: str, state: np.ndarray | None = None):
-        super().__init__(message)
-        self.state = state
-
-
-_LIMITS: dict[str, float | None] = {"max_time": None, "max_steps": None}
-
-
-@contextlib.contextmanager
-def solve_limits(max_time: float | None = None, max_steps: int | None = None) -> Iterator[None]:
-    """Cap every solve started inside the block: wall time and time steps.
-
-    A :class:`SolveContext` created inside takes a deadline ``max_time`` seconds after its
-    first force evaluation (which includes the one-time compilation of the force kernels,
-    seconds on a busy machine); every force evaluation past it (or past ``max_steps`` time
-    steps of an explicit, relaxation or implicit loop) raises :class:`SolveStopped`. One
-    check in the force evaluation every solver goes through caps all solver loops alike.
-
-    Parameters
-    ----------
-    max_time
-        Seconds per solve (``None``: no cap).
-    max_steps
-        Time steps per solve (``None``: no cap; Newton iterations are capped by
-        ``max_iter``).
-
-    Examples
-    --------
-    >>> with solve_limits(max_time=5.0):
-    ...     _LIMITS["max_time"]
-    5.0
-    >>> _LIMITS["max_time"] is None
-    True
-    """
-    saved = dict(_LIMITS)
-    _LIMITS.update(max_time=max_time, max_steps=max_steps)
-    try:
-        yield
-    finally:
-        _LIMITS.update(saved)
-
-
-class Deadline:
-    """The :func:`solve_limits` time cap for a solve that runs no :class:`SolveContext`.
-
-    The FEM's Newton iterates on its own DOF vector; it starts one of these with the solve
-    and checks it once per Newton iteration.
-
-    Examples
-    --------
-    >>> with solve_limits(max_time=0.0):
-    ...     d = Deadline()
-    >>> try:
-    ...     d.check("1 Newton iterations", 0.5)
-    ... except SolveStopped as exc:
-    ...     print(str(exc).split(" at ")[1])
-    relative residual 0.5 (the --max-time cap of 0 s)
-    """
-
-    def __init__(self) -> None:
-        self.max_time = _LIMITS["max_time"]
-        self.start = time.monotonic()
-
-    def check(self, what: str, residual: float, state: np.ndarray | None = None) -> None:
-        """Raise :class:`SolveStopped` once the cap has passed.
-
-        Parameters
-        ----------
-        what
-            What has been done so far (``"12 Newton iterations"``), for the message.
-        residual
-            The current relative residual.
-        state
-            The last good state, handed to the caller in the exception.
-        """
-        if self.max_time is None:
-            return
-        elapsed = time.monotonic() - self.start
-        if elapsed > self.max_time:
-            raise SolveStopped(
-                f"stopped after {elapsed:.3g} s / {what} at relative residual {residual:.3g} "
-                f"(the --max-time cap of {self.max_time:g} s)",
-                state=state,
-            )
 
 
 class SolveContext:
@@ -186,10 +71,10 @@ class SolveContext:
         self.jacobian_kind = "none"
         self.solvers_used: list[str] = []
         self.start = time.monotonic()
-        max_time = _LIMITS["max_time"]
+        max_time = LIMITS["max_time"]
         self.max_time = max_time
         self.deadline = None if max_time is None else self.start + float(max_time)
-        self.max_steps = _LIMITS["max_steps"]
+        self.max_steps = LIMITS["max_steps"]
         self.step = 0  # time steps taken (set by the time-stepping loops)
         self.f_ref: float | None = None  # set by reference_norm
 

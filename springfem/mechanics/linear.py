@@ -9,20 +9,8 @@ then model error alone, with no geometric nonlinearity mixed in.
 
 Examples
 --------
->>> import numpy as np, scipy.sparse as sp
->>> class Spring:  # one tet, only node 3 moves (along x): stiffness 4, load 1
-...     x0 = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
-...     masses = np.ones(4)
-...     fixed_dofs = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 11])
-...     def prescribed(self, s): return self.x0.reshape(-1)[self.fixed_dofs]
-...     def forces(self, x, v, s=1.0):
-...         f = np.zeros((4, 3)); f[3, 0] = -4.0 * x[3, 0] + s; return f
-...     def energy(self, x, s=1.0): return 2.0 * x[3, 0] ** 2 - s * x[3, 0]
-...     def stiffness(self, x, s=1.0):
-...         return sp.csr_matrix(([4.0], ([9], [9])), shape=(12, 12))
-...     def element_nodes(self): return np.array([[0, 1, 2, 3]])
-...     def post_step(self, x, dt): pass
->>> info = linear_static(Spring())
+>>> from springfem.mechanics.toy import Oscillator
+>>> info = linear_static(Oscillator())
 >>> info.method, info.iterations, round(float(info.x[3, 0]), 12)
 ('linear', 1, 0.25)
 """

@@ -4,19 +4,8 @@ damping until the residual is small.
 Examples
 --------
 
->>> import numpy as np, scipy.sparse as sp
->>> class Oscillator:  # one tet, only node 3 moves (along x): mass 1, spring 4, load 1
-...     x0 = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
-...     masses = np.ones(4)
-...     fixed_dofs = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 11])
-...     def prescribed(self, s): return self.x0.reshape(-1)[self.fixed_dofs]
-...     def forces(self, x, v, s=1.0):
-...         f = np.zeros((4, 3)); f[3, 0] = -4.0 * x[3, 0] + s; return f
-...     def energy(self, x, s=1.0): return 2.0 * x[3, 0] ** 2 - s * x[3, 0]
-...     def stiffness(self, x, s=1.0):
-...         return sp.csr_matrix(([4.0], ([9], [9])), shape=(12, 12))
-...     def element_nodes(self): return np.array([[0, 1, 2, 3]])
-...     def post_step(self, x, dt): pass
+>>> import numpy as np
+>>> from springfem.mechanics.toy import Oscillator
 >>> info = explicit_static(Oscillator(), tol=1e-10)
 >>> info.converged, round(float(info.x[3, 0]), 8)  # load / k
 (True, 0.25)

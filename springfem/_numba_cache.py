@@ -1,0 +1,64 @@
+"""Numba's on-disk kernel cache, keyed by the project's sources.
+
+Numba invalidates a cached kernel only when *its own* file changes; a kernel that inlines
+helpers from another module (the spring and FEM kernel factories do) is reloaded stale
+after an edit of that module, and then computes wrong forces without any error. Pointing
+numba at a cache folder named by a hash of every source file of the three packages makes
+any edit start from a clean cache, while an unchanged checkout reuses its kernels.
+
+Examples
+--------
+>>> import numba
+>>> use_source_keyed_numba_cache() == numba.config.CACHE_DIR or bool(os.environ.get(
+...     "NUMBA_CACHE_DIR"))
+True
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+PACKAGES = ("springfem", "springmodel", "reference_fem")
+
+
+def source_hash(root: Path) -> str:
+    """Hash of the Python sources of :data:`PACKAGES` below ``root``.
+
+    Parameters
+    ----------
+    root
+        The folder holding the packages.
+
+    Returns
+    -------
+    str
+        16 hex digits.
+    """
+    h = hashlib.sha256()
+    for pkg in PACKAGES:
+        for f in sorted((root / pkg).rglob("*.py")):
+            h.update(str(f.relative_to(root)).encode())
+            h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def use_source_keyed_numba_cache() -> str | None:
+    """Point numba's cache at ``<cache>/springfem/numba-<source hash>`` (once per process).
+
+    A ``NUMBA_CACHE_DIR`` set by the user is kept as it is.
+
+    Returns
+    -------
+    str or None
+        The cache folder in use, or ``None`` when the user chose one.
+    """
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return None
+    import numba
+
+    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "springfem"
+    folder = base / f"numba-{source_hash(Path(__file__).resolve().parents[1])}"
+    numba.config.CACHE_DIR = str(folder)
+    return str(folder)
