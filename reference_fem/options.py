@@ -13,6 +13,7 @@ from typing import Any, Literal, get_args
 from springfem.scene import Scene, TableReader, register_section
 
 LinearSolver = Literal["auto", "direct", "amg"]
+Formulation = Literal["displacement", "mixed"]
 
 
 @dataclass(frozen=True)
@@ -32,6 +33,9 @@ class FemOptions:
         Newton iterations per load step.
     load_steps
         Initial number of load steps (adapted: cut back on divergence, grown on easy steps).
+    formulation
+        ``displacement``, or ``mixed``: Taylor–Hood P2 displacement / P1 pressure (issue 11;
+        needed for ``incompressible = true`` materials).
     """
 
     order: int = 1
@@ -39,10 +43,13 @@ class FemOptions:
     tol: float = 1e-10
     max_iter: int = 25
     load_steps: int = 1
+    formulation: Formulation = "displacement"
 
     @classmethod
     def choices(cls, name: str) -> tuple[str, ...]:
         """Valid string values of the option ``name`` (empty for non-string options)."""
+        if name == "formulation":
+            return get_args(Formulation)
         return get_args(LinearSolver) if name == "linear_solver" else ()
 
     @classmethod
@@ -72,6 +79,8 @@ def parse_fem_options(r: TableReader) -> FemOptions:
         kw["linear_solver"] = r.get(
             "linear_solver", "str", choices=FemOptions.choices("linear_solver")
         )
+    if r.has("formulation"):
+        kw["formulation"] = r.get("formulation", "str", choices=FemOptions.choices("formulation"))
     for key in ("tol",):
         if r.has(key):
             kw[key] = r.get(key, "float", positive=True)

@@ -37,12 +37,14 @@ from typing import Any, Literal
 import numpy as np
 
 from .errors import InputError, SceneError
+from .materials.tissue import TISSUE_LAWS, tissue_tangent
 from .mesh import Split, TetMesh, box_mesh, read_mesh
 from .regions import Region, locate_points, resolve_region
 from .result import safe_filename
 
-Law = Literal["linear", "transverse-linear", "neo-hookean"]
-LAWS = ("linear", "transverse-linear", "neo-hookean")
+Law = Literal["linear", "transverse-linear", "neo-hookean", "guccione", "holzapfel-ogden"]
+# issue 11: the finite-strain tissue laws (keys in springfem.materials.tissue.TISSUE_LAWS)
+LAWS = ("linear", "transverse-linear", "neo-hookean", "guccione", "holzapfel-ogden")
 FORMULATIONS = ("coupled", "uncoupled")
 VOLUMETRIC = ("log", "quadratic", "simo-taylor")
 LOAD_TYPES = ("traction", "pressure", "gravity", "force")
@@ -70,6 +72,10 @@ class Material:
     G_fiber: float | None = None
     formulation: Literal["coupled", "uncoupled"] = "coupled"
     volumetric: Literal["log", "quadratic", "simo-taylor"] = "log"
+    # issue 11: tissue laws keep their constants (and ``kappa``) here; ``incompressible``
+    # materials need the mixed formulation
+    parameters: dict[str, float] = field(default_factory=dict)
+    incompressible: bool = False
 
     @property
     def mu(self) -> float:
@@ -544,6 +550,8 @@ def _parse_material(r: TableReader) -> Material:
                 "(need 1 - nu_cross - 2 nu_fiber_cross^2 E_cross/E_fiber > 0)",
             )
         kw["E"], kw["nu"] = Ec, nc
+    elif law in TISSUE_LAWS:  # issue 11
+        kw.update(_parse_tissue(r, law))
     else:
         if r.has("mu") or r.has("kappa"):
             if r.has("E") or r.has("nu"):
@@ -562,6 +570,40 @@ def _parse_material(r: TableReader) -> Material:
             kw["volumetric"] = r.get("volumetric", "str", default="log", choices=VOLUMETRIC)
     r.finish()
     return Material(**kw)
+
+
+def _parse_tissue(r: TableReader, law: str) -> dict[str, Any]:
+    """Issue 11: keys of a tissue law, ``kappa`` or ``incompressible``, ``volumetric``.
+
+    ``E`` and ``nu`` become an isotropic equivalent (for estimates only): the mean Voigt
+    shear modulus of the small-strain tangent and ``kappa`` (``1000 mu`` if incompressible).
+    """
+    params = {}
+    for k in TISSUE_LAWS[law]:
+        if k.startswith("a"):
+            params[k] = r.get(k, "float", nonneg=True)
+        else:
+            params[k] = r.get(k, "float", positive=True)
+    if law == "holzapfel-ogden" and params["a"] == 0:
+        raise r.fail("a", "must be positive (the isotropic term carries shear)")
+    incompressible = r.get("incompressible", "bool", default=False)
+    if incompressible:
+        if r.has("kappa"):
+            raise r.fail("kappa", "give either kappa or incompressible = true")
+        kappa = 0.0
+    else:
+        kappa = r.get("kappa", "float", positive=True)
+    volumetric = r.get("volumetric", "str", default="log", choices=VOLUMETRIC)
+    params["kappa"] = kappa
+    mu = float(np.mean(np.diag(tissue_tangent(law, params))[3:]))
+    k_eq = kappa if kappa > 0 else 1000.0 * mu
+    return {
+        "parameters": params,
+        "incompressible": incompressible,
+        "volumetric": volumetric,
+        "E": 9 * mu / (3 + mu / k_eq),
+        "nu": (3 - 2 * mu / k_eq) / (2 * (3 + mu / k_eq)),
+    }
 
 
 def _parse_axes(r: TableReader, mesh: TetMesh) -> np.ndarray:
