@@ -162,12 +162,14 @@ def displacement_gradient(space: Space, U: np.ndarray, sl: slice = slice(None)) 
 
 
 def hyperelastic_element_arrays(
-    space: Space, law, U: np.ndarray, tangent: bool = True
+    space: Space, law, U: np.ndarray, tangent: bool = True, frames: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray | None]:
     """Internal force ``(m, nloc, 3)`` and tangent blocks ``(m, nloc, nloc, 3, 3)``.
 
     ``f_ai = sum_q dx P_ij G_aj``, ``K_abik = sum_q dx G_aj A_ijkl G_bl`` with ``P, A`` from
     ``law.stress_tangent(F)``, ``F = I + grad u``. NaN entries mark inverted elements.
+    ``frames`` ``(m, 3, 3)`` (anisotropic laws) are passed as ``law.stress_tangent(F,
+    frames=...)``, one frame per element.
     """
     m, nq, nloc, _ = space.grads.shape
     U = np.asarray(U).reshape(-1, 3)
@@ -178,10 +180,11 @@ def hyperelastic_element_arrays(
         sl = slice(start, min(m, start + CHUNK))
         G, dx = space.grads[sl], space.dx[sl]
         F = eye + displacement_gradient(space, U, sl)
+        kw = {} if frames is None else {"frames": frames[sl, None]}
         if tangent:
-            P, A = law.stress_tangent(F)
+            P, A = law.stress_tangent(F, **kw)
         else:
-            P = law.stress(F)
+            P = law.stress(F, **kw)
         fe[sl] = np.einsum("eq,eqij,eqaj->eai", dx, P, G)
         if tangent:
             # A[i, j, k, l] -> rows (j, l), columns (i, k)

@@ -92,8 +92,9 @@ class NeoHookean:
             return "neo-hookean/coupled"
         return f"neo-hookean/uncoupled/{self.volumetric}"
 
-    def energy(self, F: np.ndarray) -> np.ndarray:
-        """Strain energy density ``psi(F)`` (NaN where ``J <= 0``)."""
+    def energy(self, F: np.ndarray, frames: np.ndarray | None = None) -> np.ndarray:
+        """Strain energy density ``psi(F)`` (NaN where ``J <= 0``; isotropic: ``frames``,
+        the anisotropic laws' element frames, are ignored)."""
         J = _det(F)
         I1 = np.einsum("...ij,...ij->...", F, F)
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -103,7 +104,7 @@ class NeoHookean:
             U, _, _ = _volumetric(J, self.kappa, self.volumetric)
             return 0.5 * self.mu * (J ** (-2.0 / 3.0) * I1 - 3.0) + U
 
-    def stress(self, F: np.ndarray) -> np.ndarray:
+    def stress(self, F: np.ndarray, frames: np.ndarray | None = None) -> np.ndarray:
         """First Piola stress ``P = dpsi/dF`` (NaN where ``J <= 0``)."""
         F = np.asarray(F, dtype=float)
         J = _det(F)
@@ -121,7 +122,9 @@ class NeoHookean:
                 P = c * (F - I1 / 3.0 * FiT) + (J * dU)[..., None, None] * FiT
         return np.where(bad[..., None, None], np.nan, P)
 
-    def stress_tangent(self, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def stress_tangent(
+        self, F: np.ndarray, frames: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """First Piola stress ``P = dpsi/dF`` and tangent ``A_iJkL = dP_iJ/dF_kL``.
 
         Returns NaN where ``J <= 0`` (an inverted element), which the Newton solver
@@ -168,7 +171,7 @@ class NeoHookean:
         P = np.where(bad[..., None, None], np.nan, P)
         return P, A
 
-    def cauchy(self, F: np.ndarray) -> np.ndarray:
+    def cauchy(self, F: np.ndarray, frames: np.ndarray | None = None) -> np.ndarray:
         """Cauchy stress ``sigma = P F^T / J``."""
         P, _ = self.stress_tangent(F)
         return np.einsum("...ij,...kj->...ik", P, F) / _det(F)[..., None, None]

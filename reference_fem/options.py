@@ -15,6 +15,7 @@ from springfem.scene import Scene, TableReader, register_section
 LinearSolver = Literal["auto", "direct", "amg"]
 Solver = Literal["static", "explicit", "implicit"]
 Precision = Literal["float64", "mixed", "float32"]
+Formulation = Literal["displacement", "mixed"]
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,9 @@ class FemOptions:
     precision
         Explicit force kernel: ``float64``, ``mixed`` (float32 constants, float64
         arithmetic) or ``float32``.
+    formulation
+        ``displacement``, or ``mixed``: Taylor–Hood P2 displacement / P1 pressure (issue 11;
+        needed for ``incompressible = true`` materials).
     """
 
     order: int = 1
@@ -58,11 +62,17 @@ class FemOptions:
     dt: float | None = None
     mass_damping: float = 0.0
     precision: Precision = "float64"
+    formulation: Formulation = "displacement"
 
     @classmethod
     def choices(cls, name: str) -> tuple[str, ...]:
         """Valid string values of the option ``name`` (empty for non-string options)."""
-        kinds = {"linear_solver": LinearSolver, "solver": Solver, "precision": Precision}
+        kinds = {
+            "linear_solver": LinearSolver,
+            "solver": Solver,
+            "precision": Precision,
+            "formulation": Formulation,
+        }
         return get_args(kinds[name]) if name in kinds else ()
 
     @classmethod
@@ -92,10 +102,9 @@ def parse_fem_options(r: TableReader) -> FemOptions:
         kw["linear_solver"] = r.get(
             "linear_solver", "str", choices=FemOptions.choices("linear_solver")
         )
-    if r.has("solver"):
-        kw["solver"] = r.get("solver", "str", choices=FemOptions.choices("solver"))
-    if r.has("precision"):
-        kw["precision"] = r.get("precision", "str", choices=FemOptions.choices("precision"))
+    for key in ("solver", "precision", "formulation"):
+        if r.has(key):
+            kw[key] = r.get(key, "str", choices=FemOptions.choices(key))
     for key in ("tol", "t_end", "dt"):
         if r.has(key):
             kw[key] = r.get(key, "float", positive=True)

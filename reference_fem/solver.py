@@ -56,6 +56,7 @@ from .assembly import (
 )
 from .constraints import check_rigid_motions, dirichlet
 from .hyperelastic import NeoHookean, _det
+from .laws import TISSUE_LAWS, TissueLaw, tissue_law
 from .loads import ExternalLoads
 from .materials import material_groups
 from .newton import InvertedElements, NewtonOptions, solve_nonlinear
@@ -63,12 +64,14 @@ from .options import FemOptions
 from .space import Space, default_intorder
 
 LINEAR_LAWS = ("linear", "transverse-linear")
-LAW_NAMES = ("linear", "transverse-linear", "neo-hookean", "neo-hookean/coupled") + tuple(
-    f"neo-hookean/uncoupled/{v}" for v in VOLUMETRIC
+LAW_NAMES = (
+    ("linear", "transverse-linear", "neo-hookean", "neo-hookean/coupled")
+    + tuple(f"neo-hookean/uncoupled/{v}" for v in VOLUMETRIC)
+    + tuple(TISSUE_LAWS)
 )
 
 
-def parse_law(scene: Scene, law: str | None) -> tuple[str, NeoHookean | None]:
+def parse_law(scene: Scene, law: str | None) -> tuple[str, NeoHookean | TissueLaw | None]:
     """Resolve a law name (default: the scene's) to a kind and, if nonlinear, a law object.
 
     ``neo-hookean`` takes the formulation and volumetric function of the scene's material;
@@ -78,6 +81,10 @@ def parse_law(scene: Scene, law: str | None) -> tuple[str, NeoHookean | None]:
     mat = scene.material
     name = law or mat.law
     kind, _, rest = name.partition("/")
+    if kind in TISSUE_LAWS or mat.law in TISSUE_LAWS:  # issue 11: tissue laws
+        if rest or kind != mat.law:
+            raise InputError(f"law {name!r} does not apply to {mat.law}; use law {mat.law}")
+        return kind, tissue_law(mat)
     if kind not in ("linear", "transverse-linear", "neo-hookean"):
         raise InputError(f"law {name!r} is not one of {', '.join(LAW_NAMES)}")
     if kind == "transverse-linear":
@@ -119,6 +126,8 @@ class FemProblem:
         Quadrature order (default: 1 for P1, 2 (4 points) for P2).
     """
 
+    mixed = False  # the u-p formulation is reference_fem.mixed.MixedProblem
+
     def __init__(
         self,
         scene: Scene,
@@ -130,6 +139,11 @@ class FemProblem:
         self.order = int(FemOptions.of(scene).order if order is None else order)
         self.kind, self.law = parse_law(scene, law)
         self.nonlinear = self.law is not None
+        if scene.material.incompressible and not self.mixed:
+            raise InputError('incompressible = true needs [fem] formulation = "mixed"')
+        # per-element frames for anisotropic laws (issue 11), broadcast over quadrature
+        self.frames = scene.frames if getattr(self.law, "anisotropic", False) else None
+        self.qframes = None if self.frames is None else self.frames[:, None]
         self.law_name = self.law.name if self.law is not None else self.kind
         q = default_intorder(self.order, self.nonlinear) if intorder is None else intorder
         self.space = Space(scene.mesh, self.order, q)
@@ -172,7 +186,9 @@ class FemProblem:
         """``f_int(u)`` and (optionally) its tangent matrix."""
         if not self.nonlinear:
             return self.stiffness @ u, (self.stiffness if tangent else None)
-        fe, Ke = hyperelastic_element_arrays(self.space, self.law, u.reshape(-1, 3), tangent)
+        fe, Ke = hyperelastic_element_arrays(
+            self.space, self.law, u.reshape(-1, 3), tangent, self.frames
+        )
         bad = ~np.isfinite(fe).all(axis=(1, 2))
         if bad.any():
             ids = np.flatnonzero(bad)
@@ -193,7 +209,7 @@ class FemProblem:
         if not self.nonlinear:
             return 0.5 * float(u @ (self.stiffness @ u)) - scale * float(self.loads.dead @ u)
         F = np.eye(3) + displacement_gradient(self.space, np.asarray(u).reshape(-1, 3))
-        psi = self.law.energy(F)
+        psi = self.law.energy(F, frames=self.qframes)
         return float((self.space.dx * psi).sum()) - scale * float(self.loads.dead @ u)
 
     def residual_tangent(self, u: np.ndarray, scale: float = 1.0):
@@ -230,7 +246,7 @@ class FemProblem:
         F = np.eye(3) + H
         w = self.space.dx / self.space.dx.sum(axis=1, keepdims=True)
         if self.nonlinear:
-            sigma = self.law.cauchy(F)
+            sigma = self.law.cauchy(F, frames=self.qframes)
         else:
             C = voigt_to_tensor(self.D_groups)[self.group]  # (m, 3, 3, 3, 3)
             eps = 0.5 * (H + np.swapaxes(H, -1, -2))
@@ -280,6 +296,15 @@ def solve_linear_problem(problem: FemProblem) -> np.ndarray:
     return u + problem.solve_linear(K, b, True, "linear solve: ")
 
 
+def make_problem(scene: Scene, order: int | None = None, law: str | None = None) -> FemProblem:
+    """:class:`FemProblem`, or the mixed u-p problem for ``[fem] formulation = "mixed"``."""
+    if FemOptions.of(scene).formulation == "mixed":
+        from .mixed import MixedProblem
+
+        return MixedProblem(scene, order, law)
+    return FemProblem(scene, order, law)
+
+
 def solve(
     scene: Scene, order: int | None = None, law: str | None = None, verbose: bool = False
 ) -> FemSolution:
@@ -307,7 +332,7 @@ def solve(
         failure; ``.state`` holds the last converged vertex displacements when there is one.
     """
     t0 = time.perf_counter()
-    problem = FemProblem(scene, order, law)
+    problem = make_problem(scene, order, law)
     try:
         return _solve(problem, verbose, t0)
     except SolverError as exc:

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from .tissue import TISSUE_LAWS, tissue_tangent
 from .voigt import rotate_to_global
 
 # ----------------------------------------------------------------------- parameters
@@ -233,6 +234,40 @@ def is_transverse(material: Any) -> bool:
     return _param(material, "E_fiber") is not None
 
 
+def tissue_matrix(material: Any) -> np.ndarray:
+    """Small-strain matrix of a tissue material in its element frame (fiber, sheet, normal).
+
+    The law's closed-form tangent at ``F = I`` (:func:`~springfem.materials.tissue.tissue_tangent`,
+    fibre and sheet terms on) with its volumetric penalty ``kappa``; an incompressible
+    material takes the bulk modulus of its isotropic equivalent (``E``, ``nu``: 1000 times
+    the shear modulus), the penalty a compressible model needs to stand in for it.
+
+    Parameters
+    ----------
+    material
+        A :class:`~springfem.scene.Material` (or mapping) with ``law`` in
+        :data:`~springfem.materials.tissue.TISSUE_LAWS` and ``parameters``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(6, 6)`` Voigt matrix.
+
+    Examples
+    --------
+    >>> m = {"law": "guccione", "parameters": {"C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0,
+    ...      "kappa": 100.0}}
+    >>> float(tissue_matrix(m)[0, 0]), float(tissue_matrix(m)[0, 1])
+    (116.0, 100.0)
+    """
+    params = dict(_param(material, "parameters") or {})
+    kappa = float(params.get("kappa", 0.0) or 0.0)
+    if kappa <= 0.0:
+        E, nu = _param(material, "E"), _param(material, "nu")
+        kappa = float(E) / (3.0 * (1.0 - 2.0 * float(nu))) if E is not None else 0.0
+    return tissue_tangent(str(_param(material, "law")), params, kappa=kappa)
+
+
 def material_matrix(material: Any, frames: np.ndarray | None = None) -> np.ndarray:
     """Small-strain Voigt stiffness ``C`` of a material, in the global frame.
 
@@ -241,7 +276,8 @@ def material_matrix(material: Any, frames: np.ndarray | None = None) -> np.ndarr
     material
         Any object or mapping with ``law`` and either isotropic ``E, nu`` (or ``mu, lam``)
         or transverse ``E_fiber, E_cross, nu_fiber_cross, nu_cross, G_fiber``. Neo-Hookean
-        materials give their small-strain (isotropic) matrix.
+        materials give their small-strain (isotropic) matrix, tissue laws their orthotropic
+        small-strain tangent (:func:`tissue_matrix`).
     frames
         ``(m, 3, 3)`` element frames (rows = axes, fiber first). Needed to rotate a
         transverse material; if given, the result is stacked per element.
@@ -262,6 +298,10 @@ def material_matrix(material: Any, frames: np.ndarray | None = None) -> np.ndarr
     >>> float(C[0, 1])
     0.4
     """
+    law = _param(material, "law")
+    if law in TISSUE_LAWS:
+        C = tissue_matrix(material)
+        return C if frames is None else rotate_to_global(C, frames)
     if is_transverse(material):
         vals = [_param(material, n) for n in TRANSVERSE_KEYS]
         if any(v is None for v in vals):

@@ -20,10 +20,12 @@ import numpy as np
 
 from .. import axes
 from ..errors import InputError, SceneError
+from ..materials.tissue import TISSUE_LAWS
 from ..mesh import Split, TetMesh, box_mesh, read_mesh
 from ..regions import Region, locate_points, resolve_region
 from .limits import check_mesh_size
 from .reader import MAX_MAGNITUDE, TableReader, _show
+from .tissue import TISSUE_KEYS, parse_tissue
 from .types import (
     AXES_TYPES,
     COMPONENTS,
@@ -43,6 +45,8 @@ SECTION_KEYS = {
     "material": (
         *("law", "density", "E", "nu", "mu", "kappa", "formulation", "volumetric"),
         *("E_fiber", "E_cross", "nu_fiber_cross", "nu_cross", "G_fiber"),
+        *sorted({k for keys in TISSUE_LAWS.values() for k in keys}),
+        *TISSUE_KEYS[1:],
     ),
     "axes": ("type", "fiber_data", "sheet_data", "fiber", "sheet", "axis", "range", "angles"),
     "boundary": ("region", "fix", "displacement"),
@@ -146,6 +150,8 @@ def parse_material(r: TableReader) -> Material:
                 "(need 1 - nu_cross - 2 nu_fiber_cross^2 E_cross/E_fiber > 0)",
             )
         kw["E"], kw["nu"] = Ec, nc
+    elif law in TISSUE_LAWS:
+        kw.update(parse_tissue(r, law))
     else:
         if r.has("mu") or r.has("kappa"):
             if r.has("E") or r.has("nu"):

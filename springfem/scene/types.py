@@ -24,8 +24,10 @@ from ..mesh import TetMesh
 from ..regions import Region
 from .reader import TableReader
 
-Law = Literal["linear", "transverse-linear", "neo-hookean"]
-LAWS = ("linear", "transverse-linear", "neo-hookean")
+Law = Literal["linear", "transverse-linear", "neo-hookean", "guccione", "holzapfel-ogden"]
+#: The material laws; the finite-strain tissue laws keep their constants in
+#: ``Material.parameters`` (keys in :data:`springfem.materials.tissue.TISSUE_LAWS`).
+LAWS = ("linear", "transverse-linear", "neo-hookean", "guccione", "holzapfel-ogden")
 FORMULATIONS = ("coupled", "uncoupled")
 VOLUMETRIC = ("log", "quadratic", "simo-taylor")
 LOAD_TYPES = ("traction", "pressure", "gravity", "force")
@@ -53,7 +55,14 @@ class Material:
         Transversely isotropic constants (``transverse-linear`` only).
     formulation, volumetric
         Neo-Hookean energy: ``coupled`` or ``uncoupled`` (isochoric/volumetric split) and
-        the volumetric function ``U(J)`` of the uncoupled form.
+        the volumetric function ``U(J)`` of the uncoupled form (also the penalty ``U(J)``
+        of the tissue laws).
+    parameters
+        A tissue law's constants (``guccione``: ``C, b_f, b_t, b_fs``; ``holzapfel-ogden``:
+        ``a, b, a_f, b_f, a_s, b_s, a_fs, b_fs``) and its bulk modulus ``kappa`` (0 when
+        incompressible); ``E`` and ``nu`` then hold an isotropic equivalent for estimates.
+    incompressible
+        An incompressible tissue material (solved with ``[fem] formulation = "mixed"``).
     """
 
     law: Law
@@ -67,6 +76,8 @@ class Material:
     G_fiber: float | None = None
     formulation: Literal["coupled", "uncoupled"] = "coupled"
     volumetric: Literal["log", "quadratic", "simo-taylor"] = "log"
+    parameters: dict[str, float] = field(default_factory=dict)
+    incompressible: bool = False
 
     @property
     def mu(self) -> float:

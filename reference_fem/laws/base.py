@@ -1,0 +1,84 @@
+"""The interface every tissue law shares: energy, stress and tangent in element frames.
+
+A law implements :meth:`TissueLaw.local` (energy, first Piola stress and tangent of the
+deformation gradient expressed in the element frame, without the volumetric term); this
+class adds the penalty ``U(J)`` (``kappa > 0``), rotates to the global frame and marks
+inverted elements (``J <= 0``) with NaN, like :class:`~reference_fem.hyperelastic.NeoHookean`.
+``frames`` is ``(..., 3, 3)`` broadcast against ``F`` (rows: fiber, sheet, normal);
+``None`` means the global axes.
+
+The fibre invariants are those of the full ``C``, never split isochorically (Nolan et al.
+2014); incompressibility comes from ``U(J)`` or from the mixed formulation
+(``kappa = 0``, :mod:`reference_fem.mixed`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..hyperelastic import _det
+from .kinematics import stress_from_frame, tangent_from_frame, to_frame, volumetric_terms
+
+
+@dataclass(frozen=True)
+class TissueLaw:
+    """Base of the anisotropic tissue laws.
+
+    Parameters
+    ----------
+    kappa
+        Bulk modulus of the volumetric penalty ``U(J)``; 0 for none (mixed formulation).
+    volumetric
+        ``log``, ``quadratic`` or ``simo-taylor`` (as for neo-Hookean).
+    """
+
+    kappa: float = 0.0
+    volumetric: str = "log"
+
+    #: Assembly passes each element's frame to laws with this flag.
+    anisotropic = True
+    label = "tissue"
+
+    @property
+    def name(self) -> str:
+        return self.label if self.kappa == 0 else f"{self.label}/{self.volumetric}"
+
+    def local(self, F: np.ndarray, tangent: bool):  # pragma: no cover - interface
+        """``(W, P, A)`` of ``F`` in the element frame (``A`` None without ``tangent``)."""
+        raise NotImplementedError
+
+    def _evaluate(self, F: np.ndarray, frames, tangent: bool):
+        F = np.asarray(F, dtype=float)
+        bad = ~(_det(F) > 0)
+        Fl = to_frame(F, frames)
+        with np.errstate(invalid="ignore", over="ignore"):
+            W, P, A = self.local(Fl, tangent)
+            if self.kappa > 0:
+                U, Pv, Av = volumetric_terms(Fl, self.kappa, self.volumetric)
+                W, P = W + U, P + Pv
+                A = A + Av if tangent else None
+        W = np.where(bad, np.nan, W)
+        P = np.where(bad[..., None, None], np.nan, stress_from_frame(P, frames))
+        if tangent:
+            A = tangent_from_frame(A, frames)
+        return W, P, A
+
+    def energy(self, F: np.ndarray, frames: np.ndarray | None = None) -> np.ndarray:
+        """Strain energy density ``W(F)`` (NaN where ``J <= 0``)."""
+        return self._evaluate(F, frames, False)[0]
+
+    def stress(self, F: np.ndarray, frames: np.ndarray | None = None) -> np.ndarray:
+        """First Piola stress ``P = dW/dF``."""
+        return self._evaluate(F, frames, False)[1]
+
+    def stress_tangent(self, F: np.ndarray, frames: np.ndarray | None = None):
+        """``P`` and the tangent ``A_iJkL = dP_iJ / dF_kL``."""
+        _, P, A = self._evaluate(F, frames, True)
+        return P, A
+
+    def cauchy(self, F: np.ndarray, frames: np.ndarray | None = None) -> np.ndarray:
+        """Cauchy stress ``sigma = P F^T / J`` (without the mixed pressure)."""
+        P = self.stress(F, frames)
+        return np.einsum("...ij,...kj->...ik", P, F) / _det(F)[..., None, None]

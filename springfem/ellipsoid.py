@@ -1,0 +1,151 @@
+"""The truncated-ellipsoid left ventricle of Land et al. 2015 (problems 2 and 3), by gmsh.
+
+The wall lies between two confocal-free ellipsoids of revolution about the z axis,
+``(x^2 + y^2) / r_short^2 + z^2 / r_long^2 = 1``: endocardium ``r_short = 7``,
+``r_long = 17`` mm, epicardium 10 and 20 mm, cut by the base plane ``z = 5`` mm (the apex
+points to -z). gmsh's OpenCASCADE kernel builds the solid (scaled spheres, a difference, a
+cut by the half space below the base) and meshes it with linear tets of size about
+``size``; the three boundary surfaces become the facet regions ``endo``, ``epi`` and
+``base``.
+
+Examples
+--------
+>>> m = ellipsoid_mesh(size=3.0)
+>>> sorted(m.facet_sets), bool(m.points[:, 2].max() <= 5.0 + 1e-9)
+(['base', 'endo', 'epi'], True)
+>>> bool(abs(m.volumes().sum() / wall_volume() - 1) < 0.05)  # faceted: a little less
+True
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .errors import InputError
+from .mesh import TetMesh, validate_mesh
+
+#: Land et al. 2015 geometry, mm.
+ENDO = (7.0, 17.0)
+EPI = (10.0, 20.0)
+BASE_Z = 5.0
+
+
+def _cap_volume(r_short: float, r_long: float, base_z: float) -> float:
+    """Volume of ``(x^2+y^2)/a^2 + z^2/c^2 <= 1`` below the plane ``z = base_z``."""
+    z0 = max(-r_long, min(r_long, base_z))
+    # int_{-c}^{z0} pi a^2 (1 - z^2 / c^2) dz
+    return math.pi * r_short**2 * ((z0 + r_long) - (z0**3 + r_long**3) / (3 * r_long**2))
+
+
+def wall_volume(endo=ENDO, epi=EPI, base_z: float = BASE_Z) -> float:
+    """Exact volume of the truncated ellipsoidal wall (epicardial minus endocardial cap)."""
+    return _cap_volume(*epi, base_z) - _cap_volume(*endo, base_z)
+
+
+def cavity_volume(endo=ENDO, base_z: float = BASE_Z) -> float:
+    """Exact volume enclosed by the endocardium and the base plane."""
+    return _cap_volume(*endo, base_z)
+
+
+def ellipsoid_mesh(
+    size: float = 2.0,
+    endo: tuple[float, float] = ENDO,
+    epi: tuple[float, float] = EPI,
+    base_z: float = BASE_Z,
+) -> TetMesh:
+    """Tet mesh of the truncated ellipsoidal ventricle wall.
+
+    Parameters
+    ----------
+    size
+        Target element size (gmsh ``Mesh.MeshSizeMax``), in the units of the radii.
+    endo, epi
+        ``(r_short, r_long)`` of the endocardial and epicardial ellipsoids.
+    base_z
+        Height of the base plane; it must cut both ellipsoids above their centres' apex.
+
+    Returns
+    -------
+    TetMesh
+        With facet sets ``endo``, ``epi`` and ``base``.
+
+    Raises
+    ------
+    InputError
+        Radii or base plane that give no wall, or a size that is not positive.
+    """
+    (a_in, c_in), (a_out, c_out) = endo, epi
+    if not (0 < a_in < a_out and 0 < c_in < c_out):
+        raise InputError(
+            f"ellipsoid: endo radii {tuple(endo)} must lie inside epi radii {tuple(epi)}"
+        )
+    if not -c_in < base_z < c_in:
+        raise InputError(f"ellipsoid: base_z = {base_z} must lie within (-{c_in}, {c_in})")
+    if not (size > 0 and math.isfinite(size)):
+        raise InputError(f"ellipsoid: size must be positive, got {size}")
+    if size < 1e-3 * c_out:
+        raise InputError(f"ellipsoid: size {size} would give far too many tets")
+    import gmsh
+
+    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("ventricle")
+        occ = gmsh.model.occ
+        outer = occ.addSphere(0, 0, 0, 1.0)
+        occ.dilate([(3, outer)], 0, 0, 0, a_out, a_out, c_out)
+        inner = occ.addSphere(0, 0, 0, 1.0)
+        occ.dilate([(3, inner)], 0, 0, 0, a_in, a_in, c_in)
+        wall, _ = occ.cut([(3, outer)], [(3, inner)])
+        big = 4.0 * c_out
+        box = occ.addBox(-big, -big, -big, 2 * big, 2 * big, big + base_z)
+        solid, _ = occ.intersect(wall, [(3, box)])
+        occ.synchronize()
+        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.1 * size)
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+        gmsh.model.mesh.generate(3)
+        tags, coords, _ = gmsh.model.mesh.getNodes()
+        points = coords.reshape(-1, 3)
+        index = np.zeros(int(tags.max()) + 1, dtype=np.int64)
+        index[tags.astype(np.int64)] = np.arange(len(tags))
+        tets = []
+        for dim, tag in solid:
+            _, _, nodes = gmsh.model.mesh.getElements(dim, tag)
+            tets.append(np.asarray(nodes[0], dtype=np.int64).reshape(-1, 4))
+        tets = index[np.concatenate(tets)]
+        facets: dict[str, list[np.ndarray]] = {"endo": [], "epi": [], "base": []}
+        for _, tag in gmsh.model.getEntities(2):
+            _, _, nodes = gmsh.model.mesh.getElements(2, tag)
+            tri = index[np.asarray(nodes[0], dtype=np.int64).reshape(-1, 3)]
+            c = points[tri].mean(axis=1).mean(axis=0)
+            name = _surface_name(points[np.unique(tri)], endo, epi, base_z)
+            if name is None:
+                raise InputError(f"ellipsoid: unrecognised boundary surface near {c.tolist()}")
+            facets[name].append(tri)
+    finally:
+        gmsh.finalize()
+    used = np.unique(tets)
+    renumber = np.full(len(points), -1, dtype=np.int64)
+    renumber[used] = np.arange(len(used))
+    mesh = TetMesh(
+        points=np.ascontiguousarray(points[used]),
+        tets=renumber[tets],
+        facet_sets={k: renumber[np.concatenate(v)] for k, v in facets.items() if v},
+        source=f"ellipsoid(size={size:g}, endo={tuple(endo)}, epi={tuple(epi)}, base_z={base_z})",
+    )
+    return validate_mesh(mesh, "ellipsoid")
+
+
+def _surface_name(x: np.ndarray, endo, epi, base_z: float) -> str | None:
+    """Which surface the nodes ``x`` lie on: the base plane, endo or epi ellipsoid."""
+    scale = max(epi)
+    if np.abs(x[:, 2] - base_z).max() <= 1e-6 * scale:
+        return "base"
+    for name, (a, c) in (("endo", endo), ("epi", epi)):
+        level = (x[:, 0] ** 2 + x[:, 1] ** 2) / a**2 + x[:, 2] ** 2 / c**2
+        if np.abs(level - 1.0).max() <= 1e-6:
+            return name
+    return None

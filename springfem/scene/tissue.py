@@ -1,0 +1,66 @@
+"""The ``[material]`` keys of the finite-strain tissue laws (Guccione, Holzapfel–Ogden).
+
+Examples
+--------
+>>> from springfem.scene.reader import TableReader
+>>> kw = parse_tissue(TableReader({"C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0,
+...                                "incompressible": True}, "material", "<scene>"), "guccione")
+>>> kw["incompressible"], sorted(kw["parameters"])
+(True, ['C', 'b_f', 'b_fs', 'b_t', 'kappa'])
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..materials.tissue import TISSUE_LAWS, tissue_tangent
+from .reader import TableReader
+from .types import VOLUMETRIC
+
+#: Keys a tissue material may have besides its law's constants.
+TISSUE_KEYS = ("kappa", "incompressible", "volumetric")
+
+
+def parse_tissue(r: TableReader, law: str) -> dict[str, Any]:
+    """A tissue law's constants, ``kappa`` or ``incompressible``, and ``volumetric``.
+
+    Parameters
+    ----------
+    r
+        Reader over the ``[material]`` table.
+    law
+        ``guccione`` or ``holzapfel-ogden``.
+
+    Returns
+    -------
+    dict
+        ``Material`` keywords: ``parameters`` (the constants and ``kappa``, 0 when
+        incompressible), ``incompressible``, ``volumetric``, and ``E``/``nu``: an isotropic
+        equivalent for estimates only (the mean Voigt shear modulus of the small-strain
+        tangent, and ``kappa`` or ``1000 mu`` when incompressible).
+    """
+    params = {}
+    for k in TISSUE_LAWS[law]:
+        params[k] = r.get(k, "float", nonneg=k.startswith("a"), positive=not k.startswith("a"))
+    if law == "holzapfel-ogden" and params["a"] == 0:
+        raise r.fail("a", "must be positive (the isotropic term carries shear)")
+    incompressible = r.get("incompressible", "bool", default=False)
+    if incompressible:
+        if r.has("kappa"):
+            raise r.fail("kappa", "give either kappa or incompressible = true")
+        kappa = 0.0
+    else:
+        kappa = r.get("kappa", "float", positive=True)
+    volumetric = r.get("volumetric", "str", default="log", choices=VOLUMETRIC)
+    params["kappa"] = kappa
+    mu = float(np.mean(np.diag(tissue_tangent(law, params))[3:]))
+    k_eq = kappa if kappa > 0 else 1000.0 * mu
+    return {
+        "parameters": params,
+        "incompressible": incompressible,
+        "volumetric": volumetric,
+        "E": 9 * mu / (3 + mu / k_eq),  # = 9 k mu / (3 k + mu)
+        "nu": (3 - 2 * mu / k_eq) / (2 * (3 + mu / k_eq)),
+    }
