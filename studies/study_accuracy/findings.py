@@ -92,4 +92,52 @@ def report_findings(
                 else ", less than the spring model's own error."
             )
         f.append(text)
+    f += exact_findings(e)
+    return f
+
+
+def exact_findings(e: pd.DataFrame) -> list[str]:
+    """Where the exact element changes the conclusions (one sentence per scene group).
+
+    Parameters
+    ----------
+    e
+        The error table indexed by scene.
+
+    Returns
+    -------
+    list of str
+    """
+    if "exact model err L2" not in e.columns:
+        return []
+    f = []
+    iso = [n for n in e.index if np.isfinite(e.at[n, "exact model nh err L2"])]
+    aniso = [n for n in e.index if n not in iso]
+    if iso:
+        parts = "; ".join(
+            f"{n} {e.at[n, 'model err L2']:.1%} → {e.at[n, 'exact model err L2']:.2%} vs "
+            f"linear P1, {e.at[n, 'exact model nh err L2']:.1e} vs P1 neo-Hookean"
+            for n in iso
+        )
+        f.append(
+            "With the exact element (axis-volume + energy torsion + exact calibration) the "
+            f"model error changes from the seed model's to: {parts}. Against linear P1 what "
+            "remains is the geometric nonlinearity of the finite-strain spring model; against "
+            "the finite-strain P1 (neo-Hookean, same mesh) it is the model error proper. The "
+            "unstructured and elongated meshes, which the seed model gets badly wrong, no "
+            "longer matter: the conclusion 'the spring model is only usable on cube cells' "
+            "no longer holds."
+        )
+    if aniso:
+        parts = "; ".join(
+            f"{n} {e.at[n, 'model err L2']:.1%} → {e.at[n, 'exact model err L2']:.2%}"
+            for n in aniso
+        )
+        f.append(
+            "Transversely isotropic stretches with the exact element plus Poisson-coupling "
+            f"springs, model error vs linear P1: {parts} (reference_fem has no anisotropic "
+            "finite-strain law, so the remainder — geometric nonlinearity at 1% strain — "
+            "cannot be separated here); the lateral contraction the seed model missed is "
+            "reproduced."
+        )
     return f
