@@ -30,8 +30,8 @@ from .cases import (
     SCENES,
     Settings,
     analytic_probe,
-    nan_float,
     case_scene,
+    nan_float,
     scene_case,
     work,
 )
