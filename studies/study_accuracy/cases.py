@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -18,6 +18,7 @@ from ..compare import (
     max_principal_strain,
     solve_model,
 )
+from ..registry import mesh_digest
 from ..solve import Solution
 from .variants import exact_options, jittered_box
 
@@ -72,10 +73,16 @@ class Settings:
         """The bundled scenes' meshes, the unstructured cantilever and 20 x 4 x 4 cells."""
         return cls()
 
+    def scene_label(self) -> str:
+        """The user scene's name (its ``name``, else the file's stem)."""
+        from pathlib import Path
+
+        return str(self.scene.get("name") or Path(self.scene_path or "scene").stem)
+
     def scenes(self) -> tuple[str, ...]:
         """The scene names this run compares (one: ``"scene"``, for ``--scene``)."""
         if self.scene is not None:
-            return ("scene",)
+            return (self.scene_label(),)
         return tuple(self.divisions) + tuple(self.extra)
 
     @classmethod
@@ -92,10 +99,24 @@ class Settings:
         )
 
     @classmethod
-    def for_scene(cls, table: dict, path: str | None = None) -> Settings:
-        """Settings that compare the models on one user scene (``study --scene FILE``)."""
-        return cls(divisions={}, figure_scenes=("scene",), extra={}, scene=table,
-                   scene_path=path)  # fmt: skip
+    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
+        """Settings that compare the models on one user scene (``study --scene FILE``).
+
+        Parameters
+        ----------
+        table
+            The scene table.
+        path
+            The scene file.
+        quick
+            Unused (the user's mesh is the mesh).
+
+        Returns
+        -------
+        Settings
+        """
+        made = cls(divisions={}, extra={}, scene=table, scene_path=path)
+        return replace(made, figure_scenes=(made.scene_label(),))
 
 
 def scene_case(name: str, settings: Settings) -> dict[str, Any]:
@@ -114,7 +135,8 @@ def scene_case(name: str, settings: Settings) -> dict[str, Any]:
         The JSON-able case.
     """
     jitter = None
-    if name == "scene":
+    user = settings.scene is not None
+    if user:
         data = dict(settings.scene)
     elif name in settings.extra:
         data = bundled_scene("cantilever", settings.extra[name])
@@ -132,8 +154,9 @@ def scene_case(name: str, settings: Settings) -> dict[str, Any]:
     }
     if jitter is not None:
         case["jittered"] = jitter
-    if name == "scene":
+    if user:
         case["path"] = settings.scene_path
+        case["mesh_digest"] = mesh_digest(data, settings.scene_path)
     if settings.exact:
         case["exact"] = True
     return case
