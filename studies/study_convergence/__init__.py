@@ -49,6 +49,10 @@ def run(ctx: StudyContext, cfg: Settings) -> StudyOutput:
     StudyOutput
         Findings, level and rate tables, two figures, headline rates and gaps.
     """
+    if cfg.scene is not None:
+        from .scene import run_on_scene
+
+        return run_on_scene(ctx, cfg)
     cases = [case(m, k) for m in ("spring", "P1") for k in cfg.levels]
     cases += [case("P2", k) for k in cfg.p2_levels]
     ref_case = case("P2", cfg.ref)

@@ -44,12 +44,39 @@ class Settings:
         Level of the P2 reference solution.
     cosine_check_level
         Level of the extra spring case with cosine torsion.
+    scene, scene_path
+        A user scene table and its file (``study convergence --scene``; see
+        :mod:`studies.study_convergence.scene`).
+    scene_levels
+        Refinement levels of the user scene (1: its own mesh).
     """
 
     levels: tuple[int, ...] = (1, 2, 3, 4, 6, 8)
     p2_levels: tuple[int, ...] = (1, 2, 3, 4)
     ref: int = 8
     cosine_check_level: int = 4
+    scene: dict | None = None
+    scene_path: str | None = None
+    scene_levels: tuple[int, ...] = (1, 2, 3)
+
+    @classmethod
+    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
+        """Refinement of a user scene: levels 1-3 (quick: 1-2), each halving the mesh size.
+
+        Parameters
+        ----------
+        table
+            The scene table.
+        path
+            The scene file.
+        quick
+            Two levels instead of three (each level has 8x the tets).
+
+        Returns
+        -------
+        Settings
+        """
+        return cls(scene=table, scene_path=path, scene_levels=(1, 2) if quick else (1, 2, 3))
 
     @classmethod
     def full(cls) -> Settings:
