@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from springfem.errors import SolverError
+from springfem.errors import SolverError, SpringFemError
 from springfem.scene import Scene, scene_from_dict
 from springmodel.options import LMSOptions, SpringOptions
 
@@ -27,8 +27,23 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "+LMS (abs)": {"torsion": "energy", "volume": True, "lms": "abs"},
     "+volume (nnls cal.)": {"torsion": "energy", "volume": True, "calibration": "nnls"},
 }
+#: The exact spring element of issue 10 (DESIGN §4b): axis-volume + energy torsion + the
+#: closed-form calibration, and with the Poisson-coupling springs (anisotropic materials).
+EXACT_VARIANTS: dict[str, dict[str, Any]] = {
+    "exact": {"torsion": "energy", "volume": "axes", "calibration": "exact"},
+    "exact+coupling": {
+        "torsion": "energy",
+        "volume": "axes",
+        "calibration": "exact",
+        "coupling": True,
+    },
+}
+#: Every variant, the seed model's parts first (the order breaks ties towards fewer parts).
+ALL_VARIANTS: dict[str, dict[str, Any]] = {**VARIANTS, **EXACT_VARIANTS}
 #: Bundled scenes.
 SCENE_NAMES = ("cantilever", "stretch-fiber", "stretch-cross", "sag")
+#: The cantilever on other meshes: a jittered Delaunay mesh and elongated (2:1:1) cells.
+EXTRA_SCENES = ("cantilever-unstructured", "cantilever-elongated")
 #: A variant is adequate when its model error is at most (1 + TOLERANCE) x the best one's.
 TOLERANCE = 0.10
 #: Solve times within this fraction of the fastest count as a tie (timer noise).
@@ -57,6 +72,12 @@ class Settings:
         default_factory=lambda: dict.fromkeys(SCENE_NAMES)
     )
     dr_steps: int = 8000
+    extra: dict[str, tuple[int, int, int]] = field(
+        default_factory=lambda: {
+            "cantilever-unstructured": (40, 4, 4),
+            "cantilever-elongated": (20, 4, 4),
+        }
+    )
 
     @classmethod
     def full(cls) -> Settings:
@@ -72,7 +93,12 @@ class Settings:
             "stretch-cross": (3, 3, 3),
             "sag": (8, 4, 2),
         }
-        return cls(divisions=coarse, dr_steps=4000)
+        extra = {"cantilever-unstructured": (20, 2, 2), "cantilever-elongated": (10, 2, 2)}
+        return cls(divisions=coarse, dr_steps=4000, extra=extra)
+
+    def scenes(self) -> dict[str, tuple[int, int, int] | None]:
+        """Scene name -> divisions, the bundled scenes first, then :data:`EXTRA_SCENES`."""
+        return {**self.divisions, **self.extra}
 
 
 # ------------------------------------------------------------------------------ scene
@@ -91,13 +117,23 @@ def ablation_scene(name: str, divisions: tuple[int, int, int] | None = None) -> 
     Returns
     -------
     Scene
+        ``cantilever-unstructured``: the cantilever on a jittered Delaunay mesh with the
+        grid ``divisions``; ``cantilever-elongated``: the cantilever on ``divisions``.
     """
+    if name in EXTRA_SCENES:
+        from ..study_accuracy.variants import jittered_box
+
+        data = bundled_scene("cantilever", divisions)
+        data["name"] = name
+        if name == "cantilever-unstructured":
+            data["mesh"] = jittered_box(tuple(data["mesh"]["size"]), tuple(divisions), seed=0)
+        return scene_from_dict(data)
     return scene_from_dict(bundled_scene(name, divisions))
 
 
 def variant_options(scene: Scene, variant: str) -> SpringOptions:
     """The scene's spring options with a variant's parts (see :data:`VARIANTS`)."""
-    changes = dict(VARIANTS[variant])
+    changes = dict(ALL_VARIANTS[variant])
     rule = changes.pop("lms", None)
     if rule is not None:
         changes["lms"] = LMSOptions(rule=rule)
@@ -150,7 +186,10 @@ def spring_case(case: dict[str, Any]) -> dict[str, Any]:
     scene = ablation_scene(case["scene"], case["divisions"])
     opts = variant_options(scene, case["variant"])
     t0 = time.perf_counter()
-    model = SpringModel(scene, opts, parallel=False)
+    try:
+        model = SpringModel(scene, opts, parallel=False)
+    except SpringFemError as exc:  # a calibration that refuses the material
+        return {"status": "fails", "message": str(exc)[:200], "tets": scene.mesh.n_tets}
     build = time.perf_counter() - t0
     x0 = model.x0.copy()
     rate = scene.mesh.n_tets / median_time(lambda: model.kernel.forces(x0), repeats=15)
