@@ -81,6 +81,12 @@ REFERENCES = {
         0.1 * 0.002,
         "small-strain value; finite-strain terms are of relative order eps = 0.1",
     ),
+    ("volume_drift", "cube_ramp_compressed_dV_axis_volume_exact"): (
+        lambda h: (1 - 2 * 0.49) * 0.1,
+        0.1 * 0.002,
+        "the axis-volume spring's J is the true volume ratio and its small-strain element is "
+        "P1's: the material's small-strain value; finite-strain terms of relative order 0.1",
+    ),
     ("convergence", "ref_over_timoshenko"): (
         lambda h: 1.0,
         0.02,
