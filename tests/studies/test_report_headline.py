@@ -71,6 +71,17 @@ REFERENCES = {
         ROUNDING,
         "P1 reproduces the off-axis formula exactly",
     ),
+    ("anisotropy", "ratio_spring_exact_coupling"): (
+        lambda h: 30e3 / 10e3,
+        3.0 * (0.01 + 0.03),
+        "exact element + coupling = P1 at small strain; each modulus is off by at most its "
+        "applied strain (1 % along, 3 % across the fibers) from the finite-strain kinematics",
+    ),
+    ("anisotropy", "max_rel_error_spring_exact_coupling"): (
+        lambda h: 0.0,
+        0.03,
+        "at most the largest applied strain (3 %, across the fibers): finite-strain kinematics",
+    ),
     ("volume_drift", "cube_analytic_dV"): (
         lambda h: (1 - 2 * 0.49) * 0.1,
         1e-12,
