@@ -101,15 +101,19 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
     rows, fem_times, notes = [], {}, []
     for name, d in settings.scenes().items():
         div = list(d) if d is not None else None
+        user = settings.scene_fields()
         fem = ctx.cache.run(
-            [{"scene": name, "divisions": div, "model": "fem-p1"}], fem_case, ctx.progress, name
+            [{"scene": name, "divisions": div, "model": "fem-p1", **user}],
+            fem_case,
+            ctx.progress,
+            name,
         )[0]
         if fem["status"] != "ok":
             notes.append(f"{name}: the FEM P1 reference fails ({fem['message']}).")
             continue
         fem_times[name] = fem["time"]
         cases = [
-            {"scene": name, "divisions": div, "variant": v, "dr_steps": settings.dr_steps}
+            {"scene": name, "divisions": div, "variant": v, "dr_steps": settings.dr_steps, **user}
             for v in ALL_VARIANTS
         ]
         res = ctx.cache.run(cases, spring_case, ctx.progress, name)

@@ -96,9 +96,52 @@ class Settings:
         extra = {"cantilever-unstructured": (20, 2, 2), "cantilever-elongated": (10, 2, 2)}
         return cls(divisions=coarse, dr_steps=4000, extra=extra)
 
+    scene: dict | None = None
+    scene_path: str | None = None
+
     def scenes(self) -> dict[str, tuple[int, int, int] | None]:
         """Scene name -> divisions, the bundled scenes first, then :data:`EXTRA_SCENES`."""
+        if self.scene is not None:
+            return {self.scene_label(): None}
         return {**self.divisions, **self.extra}
+
+    def scene_label(self) -> str:
+        """The user scene's name (its ``name``, else the file's stem)."""
+        from pathlib import Path
+
+        return str(self.scene.get("name") or Path(self.scene_path or "scene").stem)
+
+    def scene_fields(self) -> dict[str, Any]:
+        """What a case of the user scene carries: its table, file and mesh digest."""
+        if self.scene is None:
+            return {}
+        from ..registry import mesh_digest
+
+        return {
+            "table": self.scene,
+            "path": self.scene_path,
+            "mesh_digest": mesh_digest(self.scene, self.scene_path),
+        }
+
+    @classmethod
+    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
+        """Every variant on one user scene (``study ablation --scene FILE``).
+
+        Parameters
+        ----------
+        table
+            The scene table.
+        path
+            The scene file.
+        quick
+            4000 instead of 8000 relaxation steps for the LMS variant.
+
+        Returns
+        -------
+        Settings
+        """
+        return cls(divisions={}, extra={}, dr_steps=4000 if quick else 8000, scene=table,
+                   scene_path=path)  # fmt: skip
 
 
 # ------------------------------------------------------------------------------ scene
@@ -140,6 +183,14 @@ def variant_options(scene: Scene, variant: str) -> SpringOptions:
     return replace(SpringOptions.of(scene), **changes)
 
 
+def case_scene(case: dict[str, Any]) -> Scene:
+    """The scene of a case: a user scene's ``table`` (``study ablation --scene``), else
+    :func:`ablation_scene` of its name and divisions."""
+    if "table" in case:
+        return scene_from_dict(case["table"], path=case.get("path"))
+    return ablation_scene(case["scene"], case["divisions"])
+
+
 # ------------------------------------------------------------------------------ cases
 
 
@@ -162,7 +213,7 @@ def fem_case(case: dict[str, Any]) -> dict[str, Any]:
     """FEM P1 reference of a scene: vertex displacements and wall time."""
     import reference_fem
 
-    scene = ablation_scene(case["scene"], case["divisions"])
+    scene = case_scene(case)
     try:
         sol, wall = _timed(lambda: reference_fem.solve(scene, order=1))
     except SolverError as exc:
@@ -183,7 +234,7 @@ def spring_case(case: dict[str, Any]) -> dict[str, Any]:
     from springfem.mechanics import explicit_static, static
     from springmodel.model import SpringModel
 
-    scene = ablation_scene(case["scene"], case["divisions"])
+    scene = case_scene(case)
     opts = variant_options(scene, case["variant"])
     t0 = time.perf_counter()
     try:
@@ -238,7 +289,7 @@ def model_error(case: dict[str, Any], result: dict[str, Any], u_ref: Any) -> tup
     if "u" not in result:
         return float("nan"), float("nan")
     u, u_ref = np.asarray(result["u"]), np.asarray(u_ref)
-    scene = ablation_scene(case["scene"], case["divisions"])
+    scene = case_scene(case)
     return relative_l2_error(u, u_ref), _probe_error(scene, u, u_ref)
 
 

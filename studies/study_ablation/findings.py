@@ -163,8 +163,8 @@ def exact_findings(winners: pd.DataFrame) -> list[str]:
         "With the exact element among the candidates the cheapest adequate model (error "
         f"within {TOLERANCE:.0%} of the best) changes: " + "; ".join(parts) + ". The seed "
         "model's variants are no longer adequate anywhere: their error is the calibration's. "
-        "The reference is P1 with the scene's law, linear except for the neo-Hookean sag, so "
-        "the exact element's remaining 0.1–0.4% on the linear scenes is the geometric "
-        "nonlinearity of the finite-strain spring model (accuracy study: against P1 "
-        "neo-Hookean it is ~1e-5), while on the sag it is the model error proper."
+        "The reference is P1 with the scene's law: for a linear material (all scenes but the "
+        "sag) the exact element's remainder is the geometric nonlinearity of the "
+        "finite-strain spring model (the accuracy study measures it against P1 neo-Hookean: "
+        "~1e-5); for a neo-Hookean scene (the sag) it is the model error proper."
     ]

@@ -192,6 +192,12 @@ class Settings:
         Divisions per side of the cube.
     """
 
+    #: Why ``study NAME --scene FILE`` is refused (the registry prints it).
+    NO_SCENE = (
+        "it rotates the fiber axis of a cube in uniaxial stress and compares with the off-"
+        "axis modulus formula; a scene's own axes and loads have no such closed form"
+    )
+
     angles: tuple[float, ...] = tuple(float(a) for a in np.arange(0.0, 90.1, 7.5))
     n: int = 6
 

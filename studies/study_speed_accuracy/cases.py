@@ -75,6 +75,13 @@ class Settings:
         Time-step factor of the implicit runs -> largest ``(nx, ny)`` it runs on.
     """
 
+    #: Why ``study NAME --scene FILE`` is refused (the registry prints it).
+    NO_SCENE = (
+        "its accuracy axis is the tip error against a fine P2 reference on refined cantilever"
+        " meshes built by the study; use `springfem sweep` with mesh.divisions for a scene of"
+        " your own"
+    )
+
     meshes: tuple[tuple[int, int], ...] = ((10, 1), (20, 2), (40, 4))
     reference: tuple[int, int] = (60, 6)
     explicit: tuple[tuple[float, float], ...] = ((1e-3, 0.3), (1e-6, 0.3), (1e-6, 0.5))

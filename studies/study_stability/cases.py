@@ -249,6 +249,14 @@ class Settings:
         Load multiples, time-step factors and run length of the failure map (10 × 1 × 1).
     """
 
+    #: Why ``study NAME --scene FILE`` is refused (the registry prints it).
+    NO_SCENE = (
+        "its series bisect the critical time step, load and Poisson ratio of a generated "
+        "cantilever bar against beam theory (Timoshenko); a scene's own loads and BCs give no"
+        ' such reference — run `springfem solve` with [spring] solver = "explicit" and --set '
+        "spring.dt=... instead"
+    )
+
     dt_meshes: tuple[tuple[int, int], ...] = ((10, 1), (20, 2))
     dt_steps: int = 2000
     dt_bisections: int = 6

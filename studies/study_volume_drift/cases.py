@@ -348,6 +348,13 @@ class Settings:
         Fractions of the full stress of the static series.
     """
 
+    #: Why ``study NAME --scene FILE`` is refused (the registry prints it).
+    NO_SCENE = (
+        "its reference is the analytic volume change (1 - 2 nu) sigma / E of a block in "
+        "uniaxial stress, and its LMS runs need that block's step and ramp loads; `springfem "
+        "compare SCENE` reports each model's volume change on a scene"
+    )
+
     n: int = 4
     sag: tuple[int, int, int] | None = (12, 6, 3)
     periods: float = 5.0

@@ -110,12 +110,37 @@ def test_convergence_by_refinement_of_a_file_mesh(scene_file, tmp_path):
     assert np.isfinite(d[err]).all()
 
 
-@pytest.mark.parametrize("name", ["scaling", "stability"])
-def test_a_study_that_cannot_run_on_a_scene_says_why(scene_file, tmp_path, capsys, name):
+@pytest.mark.parametrize(
+    "name, why",
+    [
+        ("scaling", "generated box meshes"),
+        ("stability", "critical time step"),
+        ("volume-drift", "(1 - 2 nu) sigma / E"),
+        ("speed-accuracy", "fine P2 reference"),
+        ("anisotropy", "off-axis modulus"),
+    ],
+)
+def test_a_study_that_cannot_run_on_a_scene_says_why(scene_file, tmp_path, capsys, name, why):
     code = main(["study", name, "--scene", str(scene_file), "--out", str(tmp_path)])
     assert code == 2
     err = capsys.readouterr().err
     assert f"study {name} cannot run on --scene" in err
+    assert why in err
+    assert err.count("\n") == 1  # one line, no traceback
+
+
+def test_ablation_on_a_gmsh_scene(scene_file, tmp_path):
+    """Every variant on the user's mesh against its own P1: the exact element is within
+    O(tip rotation ~ 0.03) of P1 (its small-strain element is P1's, DESIGN §4b) and becomes
+    the most accurate variant; the seed-only winner columns are kept beside it."""
+    out = tmp_path / "out"
+    args = ["study", "ablation", "--quick", "--scene", str(scene_file), "--out", str(out)]
+    assert main(args) == 0
+    w = pd.read_csv(out / "ablation" / "winners.csv").set_index("scene")
+    assert list(w.index) == ["gbox"]
+    assert w.at["gbox", "best (with exact)"] in ("exact", "exact+coupling")
+    assert w.at["gbox", "best error (with exact)"] < 0.03
+    assert w.at["gbox", "best error"] > w.at["gbox", "best error (with exact)"]
 
 
 def test_set_without_scene_is_an_input_error(tmp_path, capsys):
