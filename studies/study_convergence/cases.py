@@ -18,7 +18,10 @@ BASE = (10, 1, 1)
 SIZE = (0.1, 0.01, 0.01)
 
 
-MODELS = ("spring", "P1", "P2")
+MODELS = ("spring", "spring-exact", "P1", "P2")
+
+#: The exact spring element of issue 10 (DESIGN §4b), solved at the spring levels.
+EXACT = {"torsion": "energy", "volume": "axes", "calibration": "exact"}
 
 
 SPRING_TORSION = "energy"
@@ -106,6 +109,8 @@ def case(model: str, k: int, torsion: str | None = None) -> dict[str, Any]:
     data = bundled_scene("cantilever", divisions(k))
     if model == "spring":
         data.setdefault("spring", {})["torsion"] = torsion or SPRING_TORSION
+    if model == "spring-exact":
+        data.setdefault("spring", {}).update(EXACT)
     return {"study": "convergence", "version": VERSION, "model": model, "k": k, "table": data}
 
 
@@ -114,7 +119,7 @@ def work(c: dict[str, Any]) -> dict[str, Any]:
     from scipy.spatial import cKDTree
 
     scene = scene_from_dict(c["table"])
-    sol = solve_model(scene, c["model"])
+    sol = solve_model(scene, "spring" if c["model"] == "spring-exact" else c["model"])
     dist, idx = cKDTree(scene.mesh.points).query(coarse_vertices())
     if dist.max() > 1e-9 * max(SIZE):
         raise AssertionError("coarse vertices are not vertices of the refined mesh")
