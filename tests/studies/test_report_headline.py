@@ -116,6 +116,12 @@ REFERENCES = {
         "same errors as P1 up to O(4e-3) relative on each level: the fitted slope moves by "
         "well under 0.01",
     ),
+    ("stability", "locking_tip_ratio_spring-exact"): (
+        _same("stability", "locking_tip_ratio_fem-p1"),
+        2e-3,
+        "the exact element is P1's element at small strain (DESIGN §4b), so it locks like P1; "
+        "3-decimal rounding and O(w/L) finite-strain kinematics",
+    ),
     ("convergence", "ref_over_timoshenko"): (
         lambda h: 1.0,
         0.02,
@@ -149,7 +155,7 @@ for _scene in ("stretch_fiber", "stretch_cross"):
         1e-8,
         "P1 = P2 = exact on a uniform stretch",
     )
-for _method in ("spring-energy", "spring-cosine", "fem-linear", "fem-neo-hookean"):
+for _method in ("spring-energy", "spring-cosine", "fem-linear", "fem-neo-hookean", "spring-exact"):
     REFERENCES[("stability", f"dt_ratio_{_method}")] = (
         lambda h: 1.0,
         0.1,
