@@ -172,8 +172,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("name", help="study name (listed below)")
     p.add_argument("--quick", action="store_true", help="coarser meshes, fewer points")
     p.add_argument(
-        "--out", default=None, help="report folder (default reports/, quick: reports/quick/)"
+        "--out",
+        default=None,
+        help="report folder (default reports/, quick: reports/quick/; with --scene: "
+        "out/study-<scene>/)",
     )
+    p.add_argument(
+        "--scene",
+        default=None,
+        metavar="FILE",
+        help="run the study on this scene instead of the bundled ones (where it makes sense)",
+    )
+    add_set_option(p)
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, nargs="?", const=0, default=None, metavar="N",
+                       help="run the cases on a local Dask cluster of N processes")  # fmt: skip
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="run the cases on a Dask cluster, e.g. tcp://host:8786")  # fmt: skip
     p.set_defaults(func=_subcommand("studies.runner", "cmd_study"))
 
     p = sub.add_parser("sweep", help="a scene over a grid of values (SWEEP.toml), on Dask")

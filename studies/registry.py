@@ -187,3 +187,68 @@ def get_study(name: str) -> Study:
         valid = ", ".join(s.replace("_", "-") for s in REGISTRY)
         raise InputError(f"unknown study {name!r}; valid studies: {valid}")
     return REGISTRY[key]
+
+
+def scene_settings(spec: Study, table: dict, path: str, quick: bool) -> Any:
+    """The settings that run study ``spec`` on one user scene (``study NAME --scene FILE``).
+
+    A study supports it with a classmethod ``Settings.for_scene(table, path, quick)``; one
+    that cannot run on an arbitrary scene says why in ``Settings.NO_SCENE``.
+
+    Parameters
+    ----------
+    spec
+        The study.
+    table
+        The scene table (``--set`` overrides applied).
+    path
+        The scene file (anchors relative mesh paths).
+    quick
+        The quick preset (fewer levels or points).
+
+    Returns
+    -------
+    object
+        An instance of the study's settings.
+
+    Raises
+    ------
+    InputError
+        If the study cannot run on a given scene, or not on this one (the message says why).
+    """
+    make = getattr(spec.settings, "for_scene", None)
+    if make is None:
+        why = getattr(spec.settings, "NO_SCENE", "it runs only on its own scenes")
+        raise InputError(f"study {spec.name.replace('_', '-')} cannot run on --scene: {why}")
+    return make(table, path, quick)
+
+
+def mesh_digest(table: dict, path: str | None) -> str:
+    """SHA-256 of the mesh file a scene table names ('' for a generated mesh).
+
+    Cases keyed by a scene table then change when the mesh file changes.
+
+    Parameters
+    ----------
+    table
+        The scene table.
+    path
+        The scene file (relative mesh paths are relative to its folder).
+
+    Returns
+    -------
+    str
+        The hex digest, or ``""``.
+    """
+    import hashlib
+
+    mesh = table.get("mesh", {})
+    if not isinstance(mesh, dict) or "file" not in mesh:
+        return ""
+    f = Path(mesh["file"])
+    if not f.is_absolute() and path is not None:
+        f = Path(path).parent / f
+    try:
+        return hashlib.sha256(f.read_bytes()).hexdigest()
+    except OSError:
+        return ""  # the scene validation names the missing file

@@ -13,11 +13,12 @@ import json
 import time
 from pathlib import Path
 
+from springfem.errors import InputError
 from springfem.files import atomic_write_text, remove_stale_temp_files
 from springfem.files import jsonable as _jsonable
 
 from .cache import CaseCache, source_fingerprint
-from .registry import REGISTRY, StudyContext, StudyOutput, get_study
+from .registry import REGISTRY, StudyContext, StudyOutput, get_study, scene_settings
 
 # Importing a study module registers it; the import order is the report's order.
 # isort: off
@@ -32,12 +33,85 @@ from . import study_ablation  # noqa: F401, E402
 # isort: on
 
 
+class ExecutorCache(CaseCache):
+    """A case cache whose missing cases run on a Dask cluster (:mod:`studies.executor`).
+
+    Each finished case is written as it arrives (like ``springfem sweep``), so a killed
+    worker or client loses no finished case and a rerun computes only what is missing.
+
+    Parameters
+    ----------
+    root, study, fingerprint
+        As :class:`~studies.cache.CaseCache`.
+    workers, scheduler
+        A local cluster of ``workers`` processes (0: one per core), or an existing scheduler.
+    """
+
+    def __init__(self, root, study, fingerprint="", workers=None, scheduler=None):
+        super().__init__(root, study, fingerprint)
+        self.workers, self.scheduler = workers, scheduler
+
+    def run(self, cases, work, progress=True, desc=None):
+        """Results of ``work(case)`` for each case; the missing ones computed on the cluster.
+
+        Parameters
+        ----------
+        cases
+            JSON-able cases.
+        work
+            The case function (importable by the workers).
+        progress
+            Show a progress bar.
+        desc
+            Its label.
+
+        Returns
+        -------
+        list of dict
+            One result per case, in order.
+        """
+        from .cache import case_key
+        from .executor import run_tasks
+
+        cases = list(cases)
+        results = [self.get(c) for c in cases]
+        todo = [i for i, r in enumerate(results) if r is None]
+        bar = None
+        if progress and todo:
+            from tqdm import tqdm
+
+            bar = tqdm(total=len(todo), desc=desc or self.dir.name, unit="case", leave=False)
+
+        def finished(j: int, res) -> None:
+            res = _jsonable(res)
+            self.put(cases[todo[j]], res)  # atomically, as it arrives
+            results[todo[j]] = res
+            if bar is not None:
+                bar.update(1)
+
+        try:
+            run_tasks(
+                [cases[i] for i in todo],
+                work,
+                finished,
+                workers=self.workers,
+                scheduler=self.scheduler,
+                keys=[f"{self.dir.name}-{case_key(cases[i], self.fingerprint)}" for i in todo],
+            )
+        finally:
+            if bar is not None:
+                bar.close()
+        return results
+
+
 def run_study(
     name: str,
     out: str | Path = "reports",
     quick: bool = False,
     progress: bool = True,
     settings: object | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
 ) -> StudyOutput:
     """Run one study and write its tables, figures and ``headline.json`` under ``out/<name>``.
 
@@ -53,6 +127,9 @@ def run_study(
         Show a progress bar.
     settings
         The study's settings (default: its ``quick()`` or ``full()`` preset).
+    workers, scheduler
+        Run the cases on a local Dask cluster of ``workers`` processes or on the cluster of
+        ``scheduler`` (default: in-process); see :mod:`studies.executor`.
 
     Returns
     -------
@@ -74,7 +151,10 @@ def run_study(
         Path(__file__).parent / "metrics.py",
         Path(__file__).parent / "compare.py",
     )
-    cache = CaseCache(root / ".cache", spec.name, fingerprint=code)
+    if workers is None and scheduler is None:
+        cache = CaseCache(root / ".cache", spec.name, fingerprint=code)
+    else:
+        cache = ExecutorCache(root / ".cache", spec.name, code, workers, scheduler)
     ctx = StudyContext(spec.name, root / spec.name, quick, cache, progress)
     remove_stale_temp_files(ctx.out)  # tables/figures of a run killed mid-write
     t0 = time.perf_counter()
@@ -111,19 +191,54 @@ def default_out(out: str | None, quick: bool) -> Path:
 
 
 def cmd_study(args: argparse.Namespace) -> int:
-    """``springfem study NAME [--quick] [--out DIR]``: run one study, print what it found.
+    """``springfem study NAME [--quick] [--out DIR] [--scene FILE] [--set K=V] [--workers N]``.
+
+    Runs one study (on the bundled scenes, or on ``--scene`` with ``--set`` overrides where
+    the study supports it) and prints what it found.
 
     Parameters
     ----------
     args
-        Parsed options ``name``, ``quick``, ``out``.
+        Parsed options ``name``, ``quick``, ``out``, ``scene``, ``set``, ``workers``,
+        ``scheduler``.
 
     Returns
     -------
     int
         The exit code (0).
+
+    Raises
+    ------
+    InputError
+        If the study cannot run on the given scene (the message says why), or ``--set``
+        is given without ``--scene``.
     """
-    res = run_study(args.name, default_out(args.out, args.quick), args.quick)
+    spec = get_study(args.name)
+    sets = list(getattr(args, "set", None) or [])
+    scene = getattr(args, "scene", None)
+    settings = None
+    out = default_out(args.out, args.quick)
+    if scene is not None:
+        from .cli import scene_path
+        from .overrides import (
+            apply_overrides,
+            parse_assignment,
+            read_scene_table,
+            scene_with_overrides,
+        )
+
+        path = scene_path(scene).resolve()
+        assignments = [parse_assignment(a) for a in sets]
+        scene_with_overrides(read_scene_table(path), assignments, path)  # errors now, not later
+        table = apply_overrides(read_scene_table(path), assignments)
+        settings = scene_settings(spec, table, str(path), args.quick)
+        if args.out is None:
+            out = Path("out") / f"study-{path.stem}"
+    elif sets:
+        raise InputError("--set needs --scene (the bundled studies run their own scenes)")
+    res = run_study(spec.name, out, args.quick, settings=settings,
+                    workers=getattr(args, "workers", None),
+                    scheduler=getattr(args, "scheduler", None))  # fmt: skip
     print(f"{res.title} ({res.seconds:.1f} s)")
     for line in res.findings:
         print(f"  - {line}")

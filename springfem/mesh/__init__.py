@@ -19,6 +19,7 @@ Examples
 from .colouring import element_colouring
 from .generate import Split, box_mesh
 from .io import mesh_from_meshio, read_mesh, write_vtu
+from .refine import refine_uniform
 from .tetmesh import TetMesh, boundary_facets, mean_ratio_quality, tet_volumes
 from .topology import topology_notes
 from .validate import MAX_COORDINATE, SLIVER_QUALITY, validate_mesh
@@ -34,6 +35,7 @@ __all__ = [
     "mean_ratio_quality",
     "mesh_from_meshio",
     "read_mesh",
+    "refine_uniform",
     "tet_volumes",
     "topology_notes",
     "validate_mesh",

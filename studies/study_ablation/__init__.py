@@ -46,6 +46,7 @@ import pandas as pd
 
 from ..registry import StudyContext, StudyOutput, study
 from .cases import (
+    ALL_VARIANTS,
     DR_TOL,
     MAX_ERROR,
     SCENE_NAMES,
@@ -98,19 +99,22 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
         Findings, the ablation and winners tables, the error-vs-cost figure, headline.
     """
     rows, fem_times, notes = [], {}, []
-    for name in SCENE_NAMES:
-        d = settings.divisions[name]
+    for name, d in settings.scenes().items():
         div = list(d) if d is not None else None
+        user = settings.scene_fields()
         fem = ctx.cache.run(
-            [{"scene": name, "divisions": div, "model": "fem-p1"}], fem_case, ctx.progress, name
+            [{"scene": name, "divisions": div, "model": "fem-p1", **user}],
+            fem_case,
+            ctx.progress,
+            name,
         )[0]
         if fem["status"] != "ok":
             notes.append(f"{name}: the FEM P1 reference fails ({fem['message']}).")
             continue
         fem_times[name] = fem["time"]
         cases = [
-            {"scene": name, "divisions": div, "variant": v, "dr_steps": settings.dr_steps}
-            for v in VARIANTS
+            {"scene": name, "divisions": div, "variant": v, "dr_steps": settings.dr_steps, **user}
+            for v in ALL_VARIANTS
         ]
         res = ctx.cache.run(cases, spring_case, ctx.progress, name)
         rows += result_rows(name, cases, res, fem["u"])

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from springfem.errors import SolverError
+from springfem.errors import SolverError, SpringFemError
 from springfem.scene import Scene, scene_from_dict
 from springmodel.options import LMSOptions, SpringOptions
 
@@ -27,8 +27,23 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "+LMS (abs)": {"torsion": "energy", "volume": True, "lms": "abs"},
     "+volume (nnls cal.)": {"torsion": "energy", "volume": True, "calibration": "nnls"},
 }
+#: The exact spring element of issue 10 (DESIGN §4b): axis-volume + energy torsion + the
+#: closed-form calibration, and with the Poisson-coupling springs (anisotropic materials).
+EXACT_VARIANTS: dict[str, dict[str, Any]] = {
+    "exact": {"torsion": "energy", "volume": "axes", "calibration": "exact"},
+    "exact+coupling": {
+        "torsion": "energy",
+        "volume": "axes",
+        "calibration": "exact",
+        "coupling": True,
+    },
+}
+#: Every variant, the seed model's parts first (the order breaks ties towards fewer parts).
+ALL_VARIANTS: dict[str, dict[str, Any]] = {**VARIANTS, **EXACT_VARIANTS}
 #: Bundled scenes.
 SCENE_NAMES = ("cantilever", "stretch-fiber", "stretch-cross", "sag")
+#: The cantilever on other meshes: a jittered Delaunay mesh and elongated (2:1:1) cells.
+EXTRA_SCENES = ("cantilever-unstructured", "cantilever-elongated")
 #: A variant is adequate when its model error is at most (1 + TOLERANCE) x the best one's.
 TOLERANCE = 0.10
 #: Solve times within this fraction of the fastest count as a tie (timer noise).
@@ -57,6 +72,12 @@ class Settings:
         default_factory=lambda: dict.fromkeys(SCENE_NAMES)
     )
     dr_steps: int = 8000
+    extra: dict[str, tuple[int, int, int]] = field(
+        default_factory=lambda: {
+            "cantilever-unstructured": (40, 4, 4),
+            "cantilever-elongated": (20, 4, 4),
+        }
+    )
 
     @classmethod
     def full(cls) -> Settings:
@@ -72,7 +93,55 @@ class Settings:
             "stretch-cross": (3, 3, 3),
             "sag": (8, 4, 2),
         }
-        return cls(divisions=coarse, dr_steps=4000)
+        extra = {"cantilever-unstructured": (20, 2, 2), "cantilever-elongated": (10, 2, 2)}
+        return cls(divisions=coarse, dr_steps=4000, extra=extra)
+
+    scene: dict | None = None
+    scene_path: str | None = None
+
+    def scenes(self) -> dict[str, tuple[int, int, int] | None]:
+        """Scene name -> divisions, the bundled scenes first, then :data:`EXTRA_SCENES`."""
+        if self.scene is not None:
+            return {self.scene_label(): None}
+        return {**self.divisions, **self.extra}
+
+    def scene_label(self) -> str:
+        """The user scene's name (its ``name``, else the file's stem)."""
+        from pathlib import Path
+
+        return str(self.scene.get("name") or Path(self.scene_path or "scene").stem)
+
+    def scene_fields(self) -> dict[str, Any]:
+        """What a case of the user scene carries: its table, file and mesh digest."""
+        if self.scene is None:
+            return {}
+        from ..registry import mesh_digest
+
+        return {
+            "table": self.scene,
+            "path": self.scene_path,
+            "mesh_digest": mesh_digest(self.scene, self.scene_path),
+        }
+
+    @classmethod
+    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
+        """Every variant on one user scene (``study ablation --scene FILE``).
+
+        Parameters
+        ----------
+        table
+            The scene table.
+        path
+            The scene file.
+        quick
+            4000 instead of 8000 relaxation steps for the LMS variant.
+
+        Returns
+        -------
+        Settings
+        """
+        return cls(divisions={}, extra={}, dr_steps=4000 if quick else 8000, scene=table,
+                   scene_path=path)  # fmt: skip
 
 
 # ------------------------------------------------------------------------------ scene
@@ -91,17 +160,35 @@ def ablation_scene(name: str, divisions: tuple[int, int, int] | None = None) -> 
     Returns
     -------
     Scene
+        ``cantilever-unstructured``: the cantilever on a jittered Delaunay mesh with the
+        grid ``divisions``; ``cantilever-elongated``: the cantilever on ``divisions``.
     """
+    if name in EXTRA_SCENES:
+        from ..study_accuracy.variants import jittered_box
+
+        data = bundled_scene("cantilever", divisions)
+        data["name"] = name
+        if name == "cantilever-unstructured":
+            data["mesh"] = jittered_box(tuple(data["mesh"]["size"]), tuple(divisions), seed=0)
+        return scene_from_dict(data)
     return scene_from_dict(bundled_scene(name, divisions))
 
 
 def variant_options(scene: Scene, variant: str) -> SpringOptions:
     """The scene's spring options with a variant's parts (see :data:`VARIANTS`)."""
-    changes = dict(VARIANTS[variant])
+    changes = dict(ALL_VARIANTS[variant])
     rule = changes.pop("lms", None)
     if rule is not None:
         changes["lms"] = LMSOptions(rule=rule)
     return replace(SpringOptions.of(scene), **changes)
+
+
+def case_scene(case: dict[str, Any]) -> Scene:
+    """The scene of a case: a user scene's ``table`` (``study ablation --scene``), else
+    :func:`ablation_scene` of its name and divisions."""
+    if "table" in case:
+        return scene_from_dict(case["table"], path=case.get("path"))
+    return ablation_scene(case["scene"], case["divisions"])
 
 
 # ------------------------------------------------------------------------------ cases
@@ -126,7 +213,7 @@ def fem_case(case: dict[str, Any]) -> dict[str, Any]:
     """FEM P1 reference of a scene: vertex displacements and wall time."""
     import reference_fem
 
-    scene = ablation_scene(case["scene"], case["divisions"])
+    scene = case_scene(case)
     try:
         sol, wall = _timed(lambda: reference_fem.solve(scene, order=1))
     except SolverError as exc:
@@ -147,10 +234,13 @@ def spring_case(case: dict[str, Any]) -> dict[str, Any]:
     from springfem.mechanics import explicit_static, static
     from springmodel.model import SpringModel
 
-    scene = ablation_scene(case["scene"], case["divisions"])
+    scene = case_scene(case)
     opts = variant_options(scene, case["variant"])
     t0 = time.perf_counter()
-    model = SpringModel(scene, opts, parallel=False)
+    try:
+        model = SpringModel(scene, opts, parallel=False)
+    except SpringFemError as exc:  # a calibration that refuses the material
+        return {"status": "fails", "message": str(exc)[:200], "tets": scene.mesh.n_tets}
     build = time.perf_counter() - t0
     x0 = model.x0.copy()
     rate = scene.mesh.n_tets / median_time(lambda: model.kernel.forces(x0), repeats=15)
@@ -199,7 +289,7 @@ def model_error(case: dict[str, Any], result: dict[str, Any], u_ref: Any) -> tup
     if "u" not in result:
         return float("nan"), float("nan")
     u, u_ref = np.asarray(result["u"]), np.asarray(u_ref)
-    scene = ablation_scene(case["scene"], case["divisions"])
+    scene = case_scene(case)
     return relative_l2_error(u, u_ref), _probe_error(scene, u, u_ref)
 
 

@@ -31,6 +31,15 @@ def report_findings(
     e = errors.set_index("scene")
     p = probes.set_index("scene")
     lo, hi = e["model err L2"].idxmin(), e["model err L2"].idxmax()
+    if len(e) == 1:
+        f.append(
+            f"On {lo} ({int(e.at[lo, 'tets'])} tets, reference {e.at[lo, 'reference']}) the "
+            f"spring element's model error (spring vs {e.at[lo, 'same-mesh P1']} on the same "
+            f"mesh, relative L2 over vertices) is {e.at[lo, 'model err L2']:.1%}, its total "
+            f"error {e.at[lo, 'total err L2']:.1%}, the same-mesh P1's discretisation error "
+            f"{e.at[lo, 'discretisation err L2']:.1%}."
+        )
+        return f + exact_findings(e)
     f.append(
         f"The spring element's model error (spring vs P1 on the same mesh, relative L2 over "
         f"vertices) ranges from {e.at[lo, 'model err L2']:.1%} ({lo}) to "
@@ -92,4 +101,64 @@ def report_findings(
                 else ", less than the spring model's own error."
             )
         f.append(text)
+    f += exact_findings(e)
+    return f
+
+
+def shape_sentence(e: pd.DataFrame) -> str:
+    """How the seed and the exact model errors depend on the cantilever's element shapes."""
+    meshes = [n for n in ("cantilever", "cantilever-unstructured", "cantilever-elongated")
+              if n in e.index]  # fmt: skip
+    if len(meshes) < 2:
+        return ""
+    seed = ", ".join(f"{n} {e.at[n, 'model err L2']:.1%}" for n in meshes)
+    exact = max(e.at[n, "exact model nh err L2"] for n in meshes)
+    return (
+        f" The same cantilever on other meshes: the seed model's error depends on the element "
+        f"shapes ({seed}), the exact element's does not (at most {exact:.1e} against P1 "
+        "neo-Hookean on each)."
+    )
+
+
+def exact_findings(e: pd.DataFrame) -> list[str]:
+    """Where the exact element changes the conclusions (one sentence per scene group).
+
+    Parameters
+    ----------
+    e
+        The error table indexed by scene.
+
+    Returns
+    -------
+    list of str
+    """
+    if "exact model err L2" not in e.columns:
+        return []
+    f = []
+    iso = [n for n in e.index if np.isfinite(e.at[n, "exact model nh err L2"])]
+    aniso = [n for n in e.index if n not in iso]
+    if iso:
+        parts = "; ".join(
+            f"{n} {e.at[n, 'model nh err L2']:.1%} → {e.at[n, 'exact model nh err L2']:.1e}"
+            for n in iso
+        )
+        linear = ", ".join(f"{n} {e.at[n, 'exact model err L2']:.2%}" for n in iso)
+        f.append(
+            "With the exact element (axis-volume + energy torsion + exact calibration) the "
+            "model error against the finite-strain P1 (neo-Hookean, same mesh) drops from the "
+            f"seed model's to: {parts}. Against linear P1 the exact element is {linear} off: "
+            "the geometric nonlinearity of the finite-strain spring model, not model error; "
+            "the neo-Hookean comparison is the model error proper." + shape_sentence(e)
+        )
+    if aniso:
+        parts = "; ".join(
+            f"{n} {e.at[n, 'model err L2']:.1%} → {e.at[n, 'exact model err L2']:.2%}"
+            for n in aniso
+        )
+        f.append(
+            "Transversely isotropic stretches with the exact element plus Poisson-coupling "
+            f"springs, model error vs linear P1: {parts} (reference_fem has no anisotropic "
+            "finite-strain law, so the remainder — geometric nonlinearity at 1% strain — "
+            "cannot be separated here)."
+        )
     return f

@@ -18,7 +18,10 @@ BASE = (10, 1, 1)
 SIZE = (0.1, 0.01, 0.01)
 
 
-MODELS = ("spring", "P1", "P2")
+MODELS = ("spring", "spring-exact", "P1", "P2")
+
+#: The exact spring element of issue 10 (DESIGN §4b), solved at the spring levels.
+EXACT = {"torsion": "energy", "volume": "axes", "calibration": "exact"}
 
 
 SPRING_TORSION = "energy"
@@ -44,12 +47,39 @@ class Settings:
         Level of the P2 reference solution.
     cosine_check_level
         Level of the extra spring case with cosine torsion.
+    scene, scene_path
+        A user scene table and its file (``study convergence --scene``; see
+        :mod:`studies.study_convergence.scene`).
+    scene_levels
+        Refinement levels of the user scene (1: its own mesh).
     """
 
     levels: tuple[int, ...] = (1, 2, 3, 4, 6, 8)
     p2_levels: tuple[int, ...] = (1, 2, 3, 4)
     ref: int = 8
     cosine_check_level: int = 4
+    scene: dict | None = None
+    scene_path: str | None = None
+    scene_levels: tuple[int, ...] = (1, 2, 3)
+
+    @classmethod
+    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
+        """Refinement of a user scene: levels 1-3 (quick: 1-2), each halving the mesh size.
+
+        Parameters
+        ----------
+        table
+            The scene table.
+        path
+            The scene file.
+        quick
+            Two levels instead of three (each level has 8x the tets).
+
+        Returns
+        -------
+        Settings
+        """
+        return cls(scene=table, scene_path=path, scene_levels=(1, 2) if quick else (1, 2, 3))
 
     @classmethod
     def full(cls) -> Settings:
@@ -79,6 +109,8 @@ def case(model: str, k: int, torsion: str | None = None) -> dict[str, Any]:
     data = bundled_scene("cantilever", divisions(k))
     if model == "spring":
         data.setdefault("spring", {})["torsion"] = torsion or SPRING_TORSION
+    if model == "spring-exact":
+        data.setdefault("spring", {}).update(EXACT)
     return {"study": "convergence", "version": VERSION, "model": model, "k": k, "table": data}
 
 
@@ -87,7 +119,7 @@ def work(c: dict[str, Any]) -> dict[str, Any]:
     from scipy.spatial import cKDTree
 
     scene = scene_from_dict(c["table"])
-    sol = solve_model(scene, c["model"])
+    sol = solve_model(scene, "spring" if c["model"] == "spring-exact" else c["model"])
     dist, idx = cKDTree(scene.mesh.points).query(coarse_vertices())
     if dist.max() > 1e-9 * max(SIZE):
         raise AssertionError("coarse vertices are not vertices of the refined mesh")

@@ -75,7 +75,7 @@ def tip_figure(
     from ..plots import loglog_rates
 
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.2))
-    for m, mk in zip(MODELS, "osD", strict=True):
+    for m, mk in zip(MODELS, "o*sD", strict=True):
         d = df[df["model"] == m].sort_values("k")
         ax.plot(d["k"], d["w / w_ref"], marker=mk, label=m)
     ax.axhline(1.0, color="k", lw=0.8, label=f"P2 reference (k = {cfg.ref})")

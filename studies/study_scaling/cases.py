@@ -28,6 +28,12 @@ class Settings:
         Largest tet count of the neo-Hookean Newton solve.
     """
 
+    #: Why ``study NAME --scene FILE`` is refused (the registry prints it).
+    NO_SCENE = (
+        "it times generated box meshes of chosen sizes (a cost curve), not one scene; "
+        "`springfem bench` times a model"
+    )
+
     step: tuple[int, ...] = (1_000, 3_000, 10_000, 30_000, 100_000, 200_000)
     static: tuple[int, ...] = (1_000, 3_000, 10_000, 30_000, 100_000)
     neo_max: int = 30_000  # the neo-Hookean Newton solve at 1e5 tets alone costs ~20 s

@@ -29,7 +29,13 @@ FEM_STATIC = {
     "fem-p2-linear": (2, "linear"),
     "fem-p2-neo-hookean": (2, "neo-hookean/coupled"),
 }
+#: The exact spring element of issue 10 (DESIGN §4b).
+EXACT = {"volume": "axes", "torsion": "energy", "calibration": "exact"}
+#: Methods of the exact element (points added to the seed model's).
+EXACT_METHODS = ("spring-exact-static", "spring-exact-explicit")
 LABELS = {
+    "spring-exact-static": "exact spring element, static Newton",
+    "spring-exact-explicit": "exact spring element, explicit to rest",
     "spring-static": "spring, static Newton",
     "spring-implicit": "spring, implicit to rest",
     "spring-explicit": "spring, explicit to rest",
@@ -40,6 +46,8 @@ LABELS = {
     "fem-p2-neo-hookean": "FEM P2 neo-Hookean, static",
 }
 STYLE = {  # marker, colour
+    "spring-exact-static": ("*", "tab:brown"),
+    "spring-exact-explicit": ("*", "tab:gray"),
     "spring-static": ("o", "tab:red"),
     "spring-implicit": ("o", "tab:orange"),
     "spring-explicit": ("o", "tab:pink"),
@@ -66,6 +74,13 @@ class Settings:
     implicit
         Time-step factor of the implicit runs -> largest ``(nx, ny)`` it runs on.
     """
+
+    #: Why ``study NAME --scene FILE`` is refused (the registry prints it).
+    NO_SCENE = (
+        "its accuracy axis is the tip error against a fine P2 reference on refined cantilever"
+        " meshes built by the study; use `springfem sweep` with mesh.divisions for a scene of"
+        " your own"
+    )
 
     meshes: tuple[tuple[int, int], ...] = ((10, 1), (20, 2), (40, 4))
     reference: tuple[int, int] = (60, 6)
@@ -135,12 +150,12 @@ def _solve(scene: Scene, method: str, setting: dict) -> tuple[np.ndarray, dict]:
         return sol.u_vertices, {"iterations": sol.result.iterations}
     from springfem.mechanics import explicit_static, implicit, stable_time_step
 
-    if method == "spring-static":
+    exact = EXACT if method.startswith("spring-exact") else {}
+    if method in ("spring-static", "spring-exact-static"):
         from springmodel.model import solve_spring
 
-        sol = solve_spring(
-            scene, replace(SpringOptions.of(scene), solver="static", tol=STATIC_TOL), parallel=None
-        )
+        opts = replace(SpringOptions.of(scene), solver="static", tol=STATIC_TOL, **exact)
+        sol = solve_spring(scene, opts, parallel=None)
         return sol.u, {"iterations": sol.result.iterations}
     if method == "fem-explicit-p1-neo-hookean":
         from reference_fem.explicit import ExplicitFem
@@ -149,7 +164,8 @@ def _solve(scene: Scene, method: str, setting: dict) -> tuple[np.ndarray, dict]:
     else:
         from springmodel.model import SpringModel
 
-        system = SpringModel(scene, parallel=None)
+        opts = replace(SpringOptions.of(scene), **exact) if exact else None
+        system = SpringModel(scene, opts, parallel=None)
     if method == "spring-implicit":
         dt = setting["dt_factor"] * stable_time_step(system)[0]
         traj = implicit(system, dt=dt, steps=5000, equilibrium_tol=IMPLICIT_TOL)
@@ -268,6 +284,7 @@ def cases_for(p: Settings) -> list[dict]:
         for method in FEM_STATIC:
             out.append({**base, "method": method, "setting": {}})
         out.append({**base, "method": "spring-static", "setting": {"tol": STATIC_TOL}})
+        out.append({**base, "method": "spring-exact-static", "setting": {"tol": STATIC_TOL}})
         for factor, (mx, _) in p.implicit.items():
             if nx <= mx:
                 out.append(
@@ -280,4 +297,12 @@ def cases_for(p: Settings) -> list[dict]:
         for tol, safety in p.explicit:
             for method in ("spring-explicit", "fem-explicit-p1-neo-hookean"):
                 out.append({**base, "method": method, "setting": {"tol": tol, "dt_safety": safety}})
+        tol, safety = p.explicit[-1]  # the exact element: the last explicit setting only
+        out.append(
+            {
+                **base,
+                "method": "spring-exact-explicit",
+                "setting": {"tol": tol, "dt_safety": safety},
+            }
+        )
     return out

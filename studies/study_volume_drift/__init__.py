@@ -155,7 +155,7 @@ def static_cases(s: Settings, nu: float = NU) -> list[dict[str, Any]]:
             for law in ("linear", "neo-hookean"):
                 cases.append({**base, "model": "fem", "law": law, "order": 1})
             if f == 1.0:
-                for v in ("volume off", "volume on", "volume on (nnls)"):
+                for v in ("volume off", "volume on", "volume on (nnls)", "axis-volume (exact)"):
                     cases.append({**base, "model": "spring", "variant": v})
     return cases
 

@@ -32,7 +32,11 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "LMS spec": {"volume": True, "lms": "spec"},
     "LMS abs": {"volume": True, "lms": "abs"},
     "volume on (nnls)": {"volume": True, "calibration": "nnls"},
+    # the exact element of issue 10: the volume term on J = det[zeta] / det[zeta0]
+    "axis-volume (exact)": {"volume": "axes", "torsion": "energy", "calibration": "exact"},
 }
+#: The seed model's variants (the headline counts stay over these).
+SEED_VARIANTS = tuple(v for v in VARIANTS if "exact" not in v)
 #: Clamp of the LMS stiffness ratio (the :class:`LMSOptions` defaults).
 K_MIN, K_MAX = LMSOptions().k_min, LMSOptions().k_max
 #: Element drift above which a run counts as diverged and is stopped.
@@ -43,6 +47,7 @@ COLORS = {
     "LMS spec": "tab:red",
     "LMS abs": "tab:green",
     "volume on (nnls)": "tab:purple",
+    "axis-volume (exact)": "tab:orange",
 }
 
 
@@ -342,6 +347,13 @@ class Settings:
     loads
         Fractions of the full stress of the static series.
     """
+
+    #: Why ``study NAME --scene FILE`` is refused (the registry prints it).
+    NO_SCENE = (
+        "its reference is the analytic volume change (1 - 2 nu) sigma / E of a block in "
+        "uniaxial stress, and its LMS runs need that block's step and ramp loads; `springfem "
+        "compare SCENE` reports each model's volume change on a scene"
+    )
 
     n: int = 4
     sag: tuple[int, int, int] | None = (12, 6, 3)

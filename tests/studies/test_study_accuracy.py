@@ -25,12 +25,15 @@ TINY = {
     "sag": (4, 2, 1),
 }
 
+EXTRA = {"cantilever-unstructured": (10, 2, 2), "cantilever-elongated": (5, 1, 1)}
+
 
 @pytest.fixture(scope="module")
 def output(tmp_path_factory):
     root = tmp_path_factory.mktemp("acc")
     ctx = StudyContext("accuracy", root / "accuracy", True, CaseCache(root, "a"), False)
-    out = sa.run(ctx, sa.Settings(divisions=TINY, figure_scenes=("cantilever",)))
+    settings = sa.Settings(divisions=TINY, figure_scenes=("cantilever",), extra=EXTRA)
+    out = sa.run(ctx, settings)
     errors = pd.read_csv(ctx.out / "accuracy_errors.csv").set_index("scene")
     probes = pd.read_csv(ctx.out / "accuracy_probes.csv").set_index("scene")
     return out, errors, probes
@@ -38,14 +41,17 @@ def output(tmp_path_factory):
 
 def test_outputs(output):
     out, errors, probes = output
-    assert list(errors.index) == list(sa.SCENES)
+    assert list(errors.index) == list(sa.SCENES) + list(EXTRA)
     assert len(out.figures) == 2  # bar chart + one error field
     for f in out.figures:
         assert f.path.read_bytes()[:4] == b"\x89PNG"
-    assert len(out.headline) == 2 * len(sa.SCENES) + len(sa.DISCRETISATION_HEADLINE)
+    n = len(sa.SCENES) + len(EXTRA)
+    # model + total per scene, discretisation on two, exact model/total and the seed's vs
+    # P1-NH on every scene, the exact vs P1-NH on the isotropic ones (4 of 6)
+    assert len(out.headline) == 2 * n + len(sa.DISCRETISATION_HEADLINE) + 2 * n + 2 * (n - 2)
     assert all(np.isfinite(v) for v in out.headline.values())
     json.dumps(out.headline)
-    assert len(out.findings) == 5
+    assert len(out.findings) == 7
 
 
 def test_p1_is_exact_for_uniaxial_stretch(output):
@@ -118,3 +124,44 @@ def test_sag_uses_neo_hookean_reference(output):
     assert errors.at["sag", "same-mesh P1"] == "P1-NH"
     assert errors.at["sag", "max strain (ref)"] > 0.05
     assert np.isfinite(errors.at["sag", "total err L2"])
+
+
+def _max_strain(errors, name):
+    return errors.at[name, "max strain (ref)"]
+
+
+@pytest.mark.parametrize("name", ["cantilever", *EXTRA])
+def test_exact_element_matches_p1_on_any_mesh(output, name):
+    """The exact element's small-strain stiffness is the P1 element's on any tet (DESIGN
+    §4b), so on the regular, unstructured and elongated cantilever meshes its error against
+    P1 neo-Hookean (both at finite strain) is of higher order in the strain: below the
+    reference's max Green-Lagrange strain. Against linear P1 the geometric nonlinearity of
+    the finite-strain spring model remains: O(rotation), below sqrt(2 max strain) (a rotation
+    theta has Green-Lagrange strain theta^2 / 2). The seed model misses by more than 5 %."""
+    _, errors, _ = output
+    strain = _max_strain(errors, name)
+    assert errors.at[name, "exact model nh err L2"] < strain
+    assert errors.at[name, "exact model err L2"] < np.sqrt(2 * strain)
+    assert errors.at[name, "model err L2"] > 0.05
+
+
+@pytest.mark.parametrize("name", ["stretch-fiber", "stretch-cross"])
+def test_exact_coupling_fixes_the_stretches(output, name):
+    """Exact element + Poisson coupling on the transversely isotropic stretches: P1 is exact
+    (uniform strain), and the spring model solved at finite strain differs from it at
+    O(strain) = 1 %; the seed model's lateral contraction error is gone."""
+    _, errors, probes = output
+    assert errors.at[name, "exact model err L2"] < STRAIN
+    assert errors.at[name, "model err L2"] > 5 * STRAIN
+    assert abs(probes.at[name, "exact / ref − 1"]) < STRAIN
+
+
+def test_unstructured_mesh_is_delaunay_of_the_box(output):
+    """The jittered Delaunay mesh fills the cantilever's box exactly (its faces stay planar)."""
+    from studies.study_accuracy.variants import jittered_box
+
+    m = jittered_box((0.1, 0.01, 0.01), (10, 2, 2), seed=0)
+    assert m.volumes().sum() == pytest.approx(1e-5, rel=1e-12)
+    assert (m.volumes() > 0).all()
+    lo, hi = m.bounding_box()
+    np.testing.assert_allclose(hi - lo, [0.1, 0.01, 0.01], rtol=1e-14)

@@ -92,3 +92,17 @@ def test_spring_anisotropy_trend():
     # still across them (E_f / E_c = 3).
     e0, e45, e90 = (_case(a, "spring")["E_eff"] for a in (0.0, 45.0, 90.0))
     assert e0 > e45 > e90
+
+
+@pytest.mark.parametrize("angle", [0.0, 30.0, 45.0, 72.0, 90.0])
+def test_exact_element_with_coupling_follows_the_off_axis_formula(material, angle):
+    """The exact element with Poisson coupling equals the transversely isotropic P1 element
+    at small strain on any tet (DESIGN §4b), and P1 is exact for this homogeneous field: the
+    spring model's effective modulus is the off-axis formula up to its finite-strain
+    kinematics, of relative order the applied strain (eps = sigma / E(theta))."""
+    c = {"angle": angle, "n": N, "model": "spring", "calibration": "exact"}
+    r = modulus_case(c)
+    assert r["status"] == "ok"
+    E = off_axis_modulus(material, angle)
+    strain = applied_stress(fiber_scene(angle, N)) / E
+    assert r["E_eff"] == pytest.approx(E, rel=strain)

@@ -35,7 +35,11 @@ def test_cantilever_variants():
 
 @pytest.mark.parametrize(
     ("explicit_method", "static_method"),
-    [("fem-explicit-p1-neo-hookean", "fem-p1-neo-hookean"), ("spring-explicit", "spring-static")],
+    [
+        ("fem-explicit-p1-neo-hookean", "fem-p1-neo-hookean"),
+        ("spring-explicit", "spring-static"),
+        ("spring-exact-explicit", "spring-exact-static"),
+    ],
 )
 def test_explicit_points_reach_the_static_answer(explicit_method, static_method):
     """Dynamic relaxation to 1e-6 relative residual lands on the static solution of the
@@ -58,6 +62,15 @@ def test_spring_and_fem_differ_on_the_same_mesh():
     spring = sa.point_case({**case, "method": "spring-static"})
     p1 = sa.point_case({**case, "method": "fem-p1-linear"})
     assert abs(spring["tip"][2]) > 1.05 * abs(p1["tip"][2])
+
+
+def test_exact_point_is_p1_on_the_same_mesh():
+    """The exact element's small-strain stiffness is P1's (DESIGN §4b): on 10x1x1 its tip
+    equals P1's up to the finite-strain kinematics, O(tip rotation w/L = 4e-3)."""
+    case = {"scene": sa.cantilever_table(10, 1), "torsion": sa.TORSION, "setting": {}}
+    exact = sa.point_case({**case, "method": "spring-exact-static"})
+    p1 = sa.point_case({**case, "method": "fem-p1-linear"})
+    assert exact["tip"][2] == pytest.approx(p1["tip"][2], rel=4e-3)
 
 
 @pytest.mark.slow

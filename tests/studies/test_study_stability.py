@@ -5,7 +5,7 @@ import pytest
 from studies.study_stability import critical_step_case, load_case, locking_case
 
 
-@pytest.mark.parametrize("method", ["spring-energy", "fem-linear"])
+@pytest.mark.parametrize("method", ["spring-energy", "fem-linear", "spring-exact"])
 def test_measured_critical_step_matches_prediction(method):
     """Symplectic Euler on a (nearly) linear system is stable iff omega_max dt < 2: the
     bisection must land within its resolution (1.5/2^4 ≈ 0.09) plus a margin for the
@@ -29,3 +29,12 @@ def test_p1_locks_and_p2_does_not():
     # a 10x1x1 P1 bar at nu = 0.499 keeps a small fraction of the beam-theory deflection
     assert p1["tip_ratio"] < 0.5 * p2["tip_ratio"]
     assert p2["tip_ratio"] > 0.7
+
+
+def test_exact_spring_element_locks_like_p1():
+    """The exact element's small-strain stiffness is the P1 element's on any tet (DESIGN
+    §4b), so near incompressibility it locks exactly as P1 does: tip ratios equal to the
+    finite-strain kinematics (relative O(w/L), here far below 1e-2 on the locked bar)."""
+    p1 = locking_case({"method": "fem-p1", "nu": 0.499, "nx": 10, "ny": 1})
+    ex = locking_case({"method": "spring-exact", "nu": 0.499, "nx": 10, "ny": 1})
+    assert ex["tip_ratio"] == pytest.approx(p1["tip_ratio"], rel=1e-2)
