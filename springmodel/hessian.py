@@ -31,8 +31,9 @@ The axial, torsion, coupling and axis-volume parts are assembled as one 9x9 Hess
 three axis vectors and mapped to the 12 vertex DOFs with ``G`` (``d zeta_l / d x_i = G[k,i,l] I``).
 
 The sparsity pattern (:mod:`springmodel.hessian_pattern`) is built once;
-each call only computes the element matrices and sums them into ``csr.data`` with one
-``np.bincount`` through a precomputed index map. The element matrices come from a numba
+each call only computes the element matrices and sums them into ``csr.data`` through a
+precomputed index map (a compiled serial scatter: 2-3x faster than ``np.bincount``, which
+converts the map and allocates per call). The element matrices come from a numba
 kernel (:mod:`springmodel.hessian_numba`, one pass per element, parallel over elements) or
 from the vectorised numpy reference (:mod:`springmodel.hessian_numpy`, about 20x slower); the
 tests check both.
@@ -47,7 +48,7 @@ import scipy.sparse as sp
 
 from .calibration import TORSION_PAIRS
 from .elements import SpringElements
-from .hessian_numba import _element_matrices_numba
+from .hessian_numba import _element_matrices_numba, _scatter_add
 from .hessian_numpy import (
     _element_matrices_numpy,
     axis_hessian,
@@ -159,14 +160,10 @@ class SpringHessian:
         x = np.ascontiguousarray(x, dtype=float).reshape(-1, 3)
         kv = self._volume_constants(k_volume)
         m = self.elements.n_elements
-        data = None
+        data = np.zeros(self._nnz)
         for lo in range(0, m, self.chunk):  # bounded memory: element matrices chunk by chunk
             hi = min(lo + self.chunk, m)
-            Ke = self._block(x, kv, lo, hi)
-            part = np.bincount(self._map[lo:hi].ravel(), weights=Ke.ravel(), minlength=self._nnz)
-            data = part if data is None else data + part
-        if data is None:
-            data = np.zeros(self._nnz)
+            _scatter_add(data, self._map[lo:hi], self._block(x, kv, lo, hi))
         K = sp.csr_matrix(
             (data, self._indices.copy(), self._indptr.copy()), shape=self.shape, copy=False
         )

@@ -204,3 +204,21 @@ def _element_matrices_numba(
                 v = 0.5 * (K[row, col] + K[col, row])
                 K[row, col] = v
                 K[col, row] = v
+
+
+@njit(cache=True, fastmath=False)
+def _scatter_add(data, index_map, Ke):  # pragma: no cover - compiled; checked in the tests
+    """``data[index_map[k, e]] += Ke[k].flat[e]``: element matrices summed into CSR data.
+
+    Serial (the sums collide across elements) and in element order, so the result is
+    deterministic; one pass over the element matrices, no temporaries.
+    """
+    m = Ke.shape[0]
+    for k in range(m):
+        K = Ke[k]
+        row = index_map[k]
+        e = 0
+        for r in range(12):
+            for c in range(12):
+                data[row[e]] += K[r, c]
+                e += 1

@@ -52,6 +52,9 @@ RESIDUAL_ACCEPT = 1e-6
 #: Relative asymmetry ``|K - K^T| / |K|`` below which a tangent is treated as symmetric
 #: (the central-difference Jacobian of a gradient field is symmetric to ~1e-10).
 SYMMETRY_TOL = 1e-6
+#: A reused AMG hierarchy is rebuilt once its Krylov iterations exceed this many times
+#: those of the first solve with it (:class:`Factorization`).
+REUSE_GROWTH = 2.0
 
 
 def is_symmetric(A: sp.spmatrix) -> bool:
@@ -154,6 +157,7 @@ class LinearSolver:
         free: np.ndarray | None = None,
         symmetric: bool | None = None,
         where: str = "",
+        reuse: Factorization | None = None,
     ) -> Factorization:
         """Prepare ``A`` for solves (LU factor or AMG hierarchy).
 
@@ -167,13 +171,17 @@ class LinearSolver:
             Whether ``A`` is symmetric (``None``: test with :func:`is_symmetric`).
         where
             Prefix of error messages (e.g. ``"step 2 iteration 3: "``).
+        reuse
+            A factorisation of a nearby matrix of the same shape (the previous Newton
+            iteration's tangent): its AMG hierarchy preconditions the Krylov solves of ``A``
+            (see :class:`Factorization`). Ignored by the direct solver.
 
         Returns
         -------
         Factorization
             Call its ``solve(b)``.
         """
-        return Factorization(self, A, free, symmetric, where)
+        return Factorization(self, A, free, symmetric, where, reuse)
 
     def solve(
         self,
@@ -212,11 +220,20 @@ class Factorization:
     ----------
     solver
         The settings (its ``stats`` and ``name`` are updated).
-    A, free, symmetric, where
+    A, free, symmetric, where, reuse
         As in :meth:`LinearSolver.factorize`.
+
+    Notes
+    -----
+    Hierarchy reuse: building the smoothed-aggregation hierarchy costs as much as several
+    preconditioned CG solves, and the tangents of successive Newton iterations differ
+    little. With ``reuse`` the previous hierarchy preconditions CG on the *new* matrix
+    (the solution is still the new matrix's to ``rtol``: only the iteration count can
+    change). It is rebuilt when its Krylov iterations exceed :data:`REUSE_GROWTH` times
+    those of the solve right after it was built, or when a solve with it fails.
     """
 
-    def __init__(self, solver: LinearSolver, A, free, symmetric, where: str):
+    def __init__(self, solver: LinearSolver, A, free, symmetric, where: str, reuse=None):
         self.solver = solver
         self.free = None if free is None else np.asarray(free, dtype=bool)
         self.A = eliminate(A, self.free) if self.free is not None else sp.csr_matrix(A)
@@ -233,6 +250,20 @@ class Factorization:
         self._lu = None
         self._ml = None
         self._coarse = "splu"  # pinv's dense SVD is slow with oversubscribed BLAS threads
+        self._reused = False
+        self._fresh_iterations: int | None = None  # Krylov iterations with a fresh hierarchy
+        if (
+            reuse is not None
+            and self.kind == "amg"
+            and reuse._ml is not None
+            and reuse.A.shape == self.A.shape
+            and reuse.symmetric == self.symmetric
+            and not reuse._stale()
+        ):
+            self._ml, self._coarse = reuse._ml, reuse._coarse
+            self._fresh_iterations = reuse._fresh_iterations
+            self._reused = True
+        self._last_iterations: int | None = None
         if self.kind == "direct":
             with warnings.catch_warnings():
                 # a rank-deficient factor is judged by the residual of its solutions (a
@@ -280,6 +311,9 @@ class Factorization:
             A = self._K
             try:
                 x = self._krylov(b)
+                if self._reused and not self._accepted(A, x, b, bnorm):
+                    self._ml, self._reused = None, False  # stale hierarchy: rebuild once
+                    x = self._krylov(b)
             except RuntimeError:
                 # exactly singular coarsest level (a mechanism): its pseudo-inverse lets CG
                 # solve a singular but consistent system; an inconsistent one is refused
@@ -306,8 +340,14 @@ class Factorization:
             return False
         return bool(np.linalg.norm(A @ x - b) <= RESIDUAL_ACCEPT * bnorm)
 
+    def _stale(self) -> bool:
+        """Whether the reused hierarchy's iterations grew past :data:`REUSE_GROWTH`."""
+        fresh, last = self._fresh_iterations, self._last_iterations
+        return fresh is not None and last is not None and last > REUSE_GROWTH * fresh + 2
+
     def _hierarchy(self):
         if self._ml is None:
+            self._fresh_iterations = None
             import pyamg
 
             A = self.A
@@ -345,6 +385,9 @@ class Factorization:
             )  # fmt: skip
             self.name = "gmres+amg"
         s.stats["krylov_iterations"] += count[0]
+        self._last_iterations = count[0]
+        if self._fresh_iterations is None:
+            self._fresh_iterations = count[0]
         return x
 
 
