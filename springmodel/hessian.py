@@ -48,7 +48,7 @@ import scipy.sparse as sp
 
 from .calibration import TORSION_PAIRS
 from .elements import SpringElements
-from .hessian_numba import _element_matrices_numba, _scatter_add
+from .hessian_numba import _element_matrices_numba, _element_matrices_serial, _scatter_add
 from .hessian_numpy import (
     _element_matrices_numpy,
     axis_hessian,
@@ -60,6 +60,10 @@ from .hessian_pattern import csr_pattern
 from .options import SpringOptions
 from .springs import is_conservative
 
+#: ``parallel=None`` runs the element matrices on all threads from this many elements up
+#: (below it, loading the parallel kernel costs more than the serial tangent; see
+#: :mod:`springmodel.hessian_numba`).
+PARALLEL_MIN_ELEMENTS = 20_000
 #: Axis-volume codes of :mod:`springmodel.hessian_numba` by volumetric energy.
 AXIS_VOLUME_CODES = {"quadratic": 3, "log": 4, "simo-taylor": 5}
 
@@ -94,6 +98,8 @@ class SpringHessian:
     chunk
         Elements per block when summing into the matrix (bounds the memory of the element
         matrices to ``chunk * 1152`` bytes).
+    parallel
+        Element matrices on all threads (``None``: from :data:`PARALLEL_MIN_ELEMENTS` up).
 
     Examples
     --------
@@ -114,6 +120,7 @@ class SpringHessian:
         options: SpringOptions,
         backend: Backend = "numba",
         chunk: int = 65536,
+        parallel: bool | None = None,
     ):
         if backend not in ("numba", "numpy"):
             raise ValueError(f"backend {backend!r} is not one of numba, numpy")
@@ -128,6 +135,9 @@ class SpringHessian:
         self.options = options
         self.backend = backend
         self.chunk = max(int(chunk), 1)
+        if parallel is None:
+            parallel = elements.n_elements >= PARALLEL_MIN_ELEMENTS
+        self.parallel = bool(parallel)
         n = int(elements.n_points)
         self.shape = (3 * n, 3 * n)
         self._indptr, self._indices, index_map = csr_pattern(elements.tets, n)
@@ -186,7 +196,8 @@ class SpringHessian:
         out = np.empty((hi - lo, 12, 12))
         b2, b3 = polynomial_coefficients(opts)
         axes = AXIS_VOLUME_CODES[opts.volumetric] if opts.axis_volume else 0
-        _element_matrices_numba(
+        kernel = _element_matrices_numba if self.parallel else _element_matrices_serial
+        kernel(
             x, tets, G, l0, ka, kt, c0, kv, el.L0[sl], b2, b3, opts.torsion == "energy",
             opts.barycentric_volume, _PAIR_L, _PAIR_M, bool(opts.coupling), axes, *parts, out,
         )  # fmt: skip
