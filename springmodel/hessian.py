@@ -61,8 +61,7 @@ from .options import SpringOptions
 from .springs import is_conservative
 
 #: ``parallel=None`` runs the element matrices on all threads from this many elements up
-#: (below it, loading the parallel kernel costs more than the serial tangent; see
-#: :mod:`springmodel.hessian_numba`).
+#: (the force kernels' rule; measurement in :mod:`springmodel.hessian_numba`).
 PARALLEL_MIN_ELEMENTS = 20_000
 #: Axis-volume codes of :mod:`springmodel.hessian_numba` by volumetric energy.
 AXIS_VOLUME_CODES = {"quadratic": 3, "log": 4, "simo-taylor": 5}
