@@ -42,6 +42,13 @@ import scipy.sparse.linalg as spla
 
 from springfem.errors import InputError, SolverError
 
+from .matrices import SYMMETRY_TOL, eliminate, is_symmetric
+
+__all__ = [
+    "DIRECT_MAX_DOFS", "RESIDUAL_ACCEPT", "REUSE_GROWTH", "SYMMETRY_TOL", "Factorization",
+    "LinearSolver", "LinearSolverKind", "eliminate", "is_symmetric", "solve_linear",
+]  # fmt: skip
+
 LinearSolverKind = Literal["auto", "direct", "amg"]
 
 #: ``auto`` factorises (SuperLU) up to this many unknowns and uses AMG above (see the
@@ -49,50 +56,8 @@ LinearSolverKind = Literal["auto", "direct", "amg"]
 DIRECT_MAX_DOFS = 5_000
 #: Largest accepted relative residual ``|A x - b| / |b|`` of a solution.
 RESIDUAL_ACCEPT = 1e-6
-#: Relative asymmetry ``|K - K^T| / |K|`` below which a tangent is treated as symmetric
-#: (the central-difference Jacobian of a gradient field is symmetric to ~1e-10).
-SYMMETRY_TOL = 1e-6
-#: A reused AMG hierarchy is rebuilt once its Krylov iterations exceed this many times
-#: those of the first solve with it (:class:`Factorization`).
+#: A reused AMG hierarchy is rebuilt past this growth of its Krylov iterations.
 REUSE_GROWTH = 2.0
-
-
-def is_symmetric(A: sp.spmatrix) -> bool:
-    """Whether ``|A - A^T| <= SYMMETRY_TOL |A|`` (Frobenius norms).
-
-    Parameters
-    ----------
-    A
-        Square sparse matrix.
-
-    Returns
-    -------
-    bool
-        ``True`` for a symmetric matrix up to finite-difference noise.
-    """
-    nrm = spla.norm(A)
-    return bool(nrm == 0 or spla.norm(A - A.T) <= SYMMETRY_TOL * nrm)
-
-
-def eliminate(K: sp.spmatrix, free: np.ndarray) -> sp.csr_matrix:
-    """``P K P + (I - P)`` with ``P = diag(free)``: constrained DOFs decoupled, unit diagonal.
-
-    Parameters
-    ----------
-    K
-        Square matrix.
-    free
-        Boolean mask of the free DOFs.
-
-    Returns
-    -------
-    scipy.sparse.csr_matrix
-        The eliminated matrix.
-    """
-    d = sp.diags(free.astype(float))
-    A = (d @ sp.csr_matrix(K) @ d + sp.diags((~free).astype(float))).tocsr()
-    A.eliminate_zeros()
-    return A
 
 
 @dataclass
@@ -172,9 +137,8 @@ class LinearSolver:
         where
             Prefix of error messages (e.g. ``"step 2 iteration 3: "``).
         reuse
-            A factorisation of a nearby matrix of the same shape (the previous Newton
-            iteration's tangent): its AMG hierarchy preconditions the Krylov solves of ``A``
-            (see :class:`Factorization`). Ignored by the direct solver.
+            A factorisation of a nearby matrix (the last Newton tangent) whose AMG
+            hierarchy may precondition ``A`` (:class:`Factorization`); not for ``direct``.
 
         Returns
         -------
@@ -225,12 +189,10 @@ class Factorization:
 
     Notes
     -----
-    Hierarchy reuse: building the smoothed-aggregation hierarchy costs as much as several
-    preconditioned CG solves, and the tangents of successive Newton iterations differ
-    little. With ``reuse`` the previous hierarchy preconditions CG on the *new* matrix
-    (the solution is still the new matrix's to ``rtol``: only the iteration count can
-    change). It is rebuilt when its Krylov iterations exceed :data:`REUSE_GROWTH` times
-    those of the solve right after it was built, or when a solve with it fails.
+    With ``reuse`` the previous hierarchy (costly to build; successive Newton tangents
+    differ little) preconditions CG on the *new* matrix, whose solution it still is to
+    ``rtol``. It is rebuilt when a solve with it fails or its iterations exceed
+    :data:`REUSE_GROWTH` times (+ 2) those of the first solve after it was built.
     """
 
     def __init__(self, solver: LinearSolver, A, free, symmetric, where: str, reuse=None):
@@ -250,20 +212,11 @@ class Factorization:
         self._lu = None
         self._ml = None
         self._coarse = "splu"  # pinv's dense SVD is slow with oversubscribed BLAS threads
-        self._reused = False
-        self._fresh_iterations: int | None = None  # Krylov iterations with a fresh hierarchy
-        if (
-            reuse is not None
-            and self.kind == "amg"
-            and reuse._ml is not None
-            and reuse.A.shape == self.A.shape
-            and reuse.symmetric == self.symmetric
-            and not reuse._stale()
-        ):
+        self._fresh_iterations = self._last_iterations = None  # Krylov its (fresh, last)
+        self._reused = reuse is not None and self.kind == "amg" and reuse._reusable(self)
+        if self._reused:
             self._ml, self._coarse = reuse._ml, reuse._coarse
             self._fresh_iterations = reuse._fresh_iterations
-            self._reused = True
-        self._last_iterations: int | None = None
         if self.kind == "direct":
             with warnings.catch_warnings():
                 # a rank-deficient factor is judged by the residual of its solutions (a
@@ -340,10 +293,11 @@ class Factorization:
             return False
         return bool(np.linalg.norm(A @ x - b) <= RESIDUAL_ACCEPT * bnorm)
 
-    def _stale(self) -> bool:
-        """Whether the reused hierarchy's iterations grew past :data:`REUSE_GROWTH`."""
-        fresh, last = self._fresh_iterations, self._last_iterations
-        return fresh is not None and last is not None and last > REUSE_GROWTH * fresh + 2
+    def _reusable(self, other: Factorization) -> bool:
+        """Whether this hierarchy may precondition ``other`` (same form, not stale)."""
+        fresh, last = self._fresh_iterations or 0, self._last_iterations or 0
+        same = self.A.shape == other.A.shape and self.symmetric == other.symmetric
+        return self._ml is not None and same and last <= REUSE_GROWTH * fresh + 2
 
     def _hierarchy(self):
         if self._ml is None:
@@ -386,8 +340,7 @@ class Factorization:
             self.name = "gmres+amg"
         s.stats["krylov_iterations"] += count[0]
         self._last_iterations = count[0]
-        if self._fresh_iterations is None:
-            self._fresh_iterations = count[0]
+        self._fresh_iterations = self._fresh_iterations or count[0]
         return x
 
 
