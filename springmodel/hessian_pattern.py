@@ -1,7 +1,7 @@
 """CSR structure of a stiffness matrix summed from 12x12 tet blocks, built once.
 
 The pattern is node-pair blocks of 3x3 DOFs; ``index_map`` sends every element entry to its
-position in ``csr.data``, so assembling is one ``np.bincount`` (:mod:`springmodel.hessian`).
+position in ``csr.data``, so assembling is one scatter-add (:mod:`springmodel.hessian`).
 
 Examples
 --------

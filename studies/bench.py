@@ -223,6 +223,11 @@ def bench_forces(
         for n in meta
         if n.endswith(" all") and n.replace(" all", " 1") in samples
     }
+    for n in meta:  # serial CPU time / parallel CPU time: 1 = threads add no work
+        if n.endswith(" all") and n.replace(" all", " 1") in samples:
+            ratios[f"threads_cpu_efficiency[{n}]"] = median_ratio(
+                samples, n.replace(" all", " 1"), n, "cpu"
+            )
     if seed in samples:
         ratios["oracle_over_seed_float64"] = median_ratio(samples, "spring numpy oracle", seed)
     info = machine()
@@ -258,6 +263,31 @@ class WithoutEnergy:
 
     def energy(self, x: np.ndarray, scale: float = 1.0) -> None:
         return None
+
+
+def explicit_steps(system, steps: int = STEP_COUNT) -> None:
+    """Run ``steps`` explicit steps (symplectic Euler, through the solver), no energies.
+
+    A step is what :func:`springfem.mechanics.explicit` does per step: one force evaluation,
+    the velocity and position updates, constraints, the blow-up check and ``post_step``.
+    The time step is tiny (the state barely moves, so no run can blow up); the cost of a
+    step does not depend on it. Time it with :func:`studies.timing.interleaved`.
+    """
+    from springfem.mechanics import explicit
+
+    explicit(WithoutEnergy(system), dt=1e-9, steps=steps, record_every=steps)
+
+
+def step_costs(systems: dict, steps: int, rounds: int) -> dict:
+    """Interleaved timings of ``steps`` explicit steps of every system (bench's rules).
+
+    Returns
+    -------
+    dict
+        :func:`studies.timing.interleaved` samples; divide by ``steps`` for per-step times.
+    """
+    cases = {name: (lambda s=s: explicit_steps(s, steps)) for name, s in systems.items()}
+    return interleaved(cases, rounds=rounds, warmup=1)
 
 
 def bench_step(n_tets: int = 100_000, repeats: int = 5, steps: int = STEP_COUNT) -> dict:

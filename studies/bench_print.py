@@ -65,7 +65,12 @@ def print_forces(res: dict, file=None) -> None:
     )
     for k, v in q.items():
         if k.startswith("threads_speedup"):
-            print(f"  two threads vs one, {k[16:-1]}: {v:.2f}x", file=file)
+            eff = q.get(f"threads_cpu_efficiency[{k[16:-1]}]")
+            print(
+                f"  all threads vs one, {k[16:-1]}: {v:.2f}x wall; serial/parallel CPU time "
+                f"{_f(eff, '.2f')} (1 = threads add no work)",
+                file=file,
+            )
     for note in res["notes"]:
         print(f"  note: {note}", file=file)
 

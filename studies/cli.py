@@ -214,6 +214,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tets", type=int, default=None, help="approximate number of tets")
     p.add_argument("--repeats", type=int, default=7, help="repeats (median reported)")
     p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument("--variants", action="store_true", help="forces: every spring variant too")
     p.set_defaults(func=_subcommand("studies.bench", "cmd_bench"))
     return parser
 

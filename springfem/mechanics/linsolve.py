@@ -42,6 +42,13 @@ import scipy.sparse.linalg as spla
 
 from springfem.errors import InputError, SolverError
 
+from .matrices import SYMMETRY_TOL, eliminate, is_symmetric
+
+__all__ = [
+    "DIRECT_MAX_DOFS", "RESIDUAL_ACCEPT", "REUSE_GROWTH", "SYMMETRY_TOL", "Factorization",
+    "LinearSolver", "LinearSolverKind", "eliminate", "is_symmetric", "solve_linear",
+]  # fmt: skip
+
 LinearSolverKind = Literal["auto", "direct", "amg"]
 
 #: ``auto`` factorises (SuperLU) up to this many unknowns and uses AMG above (see the
@@ -49,47 +56,8 @@ LinearSolverKind = Literal["auto", "direct", "amg"]
 DIRECT_MAX_DOFS = 5_000
 #: Largest accepted relative residual ``|A x - b| / |b|`` of a solution.
 RESIDUAL_ACCEPT = 1e-6
-#: Relative asymmetry ``|K - K^T| / |K|`` below which a tangent is treated as symmetric
-#: (the central-difference Jacobian of a gradient field is symmetric to ~1e-10).
-SYMMETRY_TOL = 1e-6
-
-
-def is_symmetric(A: sp.spmatrix) -> bool:
-    """Whether ``|A - A^T| <= SYMMETRY_TOL |A|`` (Frobenius norms).
-
-    Parameters
-    ----------
-    A
-        Square sparse matrix.
-
-    Returns
-    -------
-    bool
-        ``True`` for a symmetric matrix up to finite-difference noise.
-    """
-    nrm = spla.norm(A)
-    return bool(nrm == 0 or spla.norm(A - A.T) <= SYMMETRY_TOL * nrm)
-
-
-def eliminate(K: sp.spmatrix, free: np.ndarray) -> sp.csr_matrix:
-    """``P K P + (I - P)`` with ``P = diag(free)``: constrained DOFs decoupled, unit diagonal.
-
-    Parameters
-    ----------
-    K
-        Square matrix.
-    free
-        Boolean mask of the free DOFs.
-
-    Returns
-    -------
-    scipy.sparse.csr_matrix
-        The eliminated matrix.
-    """
-    d = sp.diags(free.astype(float))
-    A = (d @ sp.csr_matrix(K) @ d + sp.diags((~free).astype(float))).tocsr()
-    A.eliminate_zeros()
-    return A
+#: A reused AMG hierarchy is rebuilt past this growth of its Krylov iterations.
+REUSE_GROWTH = 2.0
 
 
 @dataclass
@@ -154,6 +122,7 @@ class LinearSolver:
         free: np.ndarray | None = None,
         symmetric: bool | None = None,
         where: str = "",
+        reuse: Factorization | None = None,
     ) -> Factorization:
         """Prepare ``A`` for solves (LU factor or AMG hierarchy).
 
@@ -167,13 +136,16 @@ class LinearSolver:
             Whether ``A`` is symmetric (``None``: test with :func:`is_symmetric`).
         where
             Prefix of error messages (e.g. ``"step 2 iteration 3: "``).
+        reuse
+            A factorisation of a nearby matrix (the last Newton tangent) whose AMG
+            hierarchy may precondition ``A`` (:class:`Factorization`); not for ``direct``.
 
         Returns
         -------
         Factorization
             Call its ``solve(b)``.
         """
-        return Factorization(self, A, free, symmetric, where)
+        return Factorization(self, A, free, symmetric, where, reuse)
 
     def solve(
         self,
@@ -212,11 +184,18 @@ class Factorization:
     ----------
     solver
         The settings (its ``stats`` and ``name`` are updated).
-    A, free, symmetric, where
+    A, free, symmetric, where, reuse
         As in :meth:`LinearSolver.factorize`.
+
+    Notes
+    -----
+    With ``reuse`` the previous hierarchy (costly to build; successive Newton tangents
+    differ little) preconditions CG on the *new* matrix, whose solution it still is to
+    ``rtol``. It is rebuilt when a solve with it fails or its iterations exceed
+    :data:`REUSE_GROWTH` times (+ 2) those of the first solve after it was built.
     """
 
-    def __init__(self, solver: LinearSolver, A, free, symmetric, where: str):
+    def __init__(self, solver: LinearSolver, A, free, symmetric, where: str, reuse=None):
         self.solver = solver
         self.free = None if free is None else np.asarray(free, dtype=bool)
         self.A = eliminate(A, self.free) if self.free is not None else sp.csr_matrix(A)
@@ -233,6 +212,11 @@ class Factorization:
         self._lu = None
         self._ml = None
         self._coarse = "splu"  # pinv's dense SVD is slow with oversubscribed BLAS threads
+        self._fresh_iterations = self._last_iterations = None  # Krylov its (fresh, last)
+        self._reused = reuse is not None and self.kind == "amg" and reuse._reusable(self)
+        if self._reused:
+            self._ml, self._coarse = reuse._ml, reuse._coarse
+            self._fresh_iterations = reuse._fresh_iterations
         if self.kind == "direct":
             with warnings.catch_warnings():
                 # a rank-deficient factor is judged by the residual of its solutions (a
@@ -280,6 +264,9 @@ class Factorization:
             A = self._K
             try:
                 x = self._krylov(b)
+                if self._reused and not self._accepted(A, x, b, bnorm):
+                    self._ml, self._reused = None, False  # stale hierarchy: rebuild once
+                    x = self._krylov(b)
             except RuntimeError:
                 # exactly singular coarsest level (a mechanism): its pseudo-inverse lets CG
                 # solve a singular but consistent system; an inconsistent one is refused
@@ -306,8 +293,15 @@ class Factorization:
             return False
         return bool(np.linalg.norm(A @ x - b) <= RESIDUAL_ACCEPT * bnorm)
 
+    def _reusable(self, other: Factorization) -> bool:
+        """Whether this hierarchy may precondition ``other`` (same form, not stale)."""
+        fresh, last = self._fresh_iterations or 0, self._last_iterations or 0
+        same = self.A.shape == other.A.shape and self.symmetric == other.symmetric
+        return self._ml is not None and same and last <= REUSE_GROWTH * fresh + 2
+
     def _hierarchy(self):
         if self._ml is None:
+            self._fresh_iterations = None
             import pyamg
 
             A = self.A
@@ -345,6 +339,8 @@ class Factorization:
             )  # fmt: skip
             self.name = "gmres+amg"
         s.stats["krylov_iterations"] += count[0]
+        self._last_iterations = count[0]
+        self._fresh_iterations = self._fresh_iterations or count[0]
         return x
 
 

@@ -51,6 +51,10 @@ class SpringStep:
         Tangent and linear solver kind.
     B
         Rigid-body modes on the free DOFs (near-nullspace of AMG).
+    previous
+        Holder ``{"factorization": ...}`` shared by the load steps of one solve: the last
+        tangent's factorisation, whose AMG hierarchy preconditions the next tangent's
+        solves (:meth:`~springfem.mechanics.linsolve.LinearSolver.factorize`, ``reuse``).
 
     Attributes
     ----------
@@ -58,9 +62,10 @@ class SpringStep:
         The last tangent (``None`` before the first correction).
     """
 
-    def __init__(self, ctx: SolveContext, s, f_ref, jacobian, linear_solver, B):
+    def __init__(self, ctx: SolveContext, s, f_ref, jacobian, linear_solver, B, previous=None):
         self.ctx, self.s, self.f_ref = ctx, s, f_ref
         self.jacobian, self.linear_solver, self.B = jacobian, linear_solver, B
+        self.previous = {} if previous is None else previous
         self.K = None
 
     def residual(self, x: np.ndarray) -> tuple[np.ndarray, float]:
@@ -71,8 +76,11 @@ class SpringStep:
     def correction(self, x: np.ndarray, R: np.ndarray):
         """Newton correction ``d = -K^-1 R`` and the re-solve with the same tangent."""
         self.K = self.ctx.stiffness(x, self.s, self.jacobian)
-        solver = LinearSolver(self.linear_solver, self.B).factorize(self.ctx.ff(self.K))
+        solver = LinearSolver(self.linear_solver, self.B).factorize(
+            self.ctx.ff(self.K), reuse=self.previous.get("factorization")
+        )
         d = solver.solve(-R)
+        self.previous["factorization"] = solver
         note_solver(self.ctx, solver.name)
         return d, lambda b: -solver.solve(b)
 
@@ -193,6 +201,7 @@ def static(
     first_attempt = [True]
     path_steps: list[float] = []  # converged load factors
     settings = NewtonSettings(tol=tol, max_iter=max_iter)
+    previous: dict = {}  # the last tangent's factorisation (its AMG hierarchy is reused)
 
     def try_step(lam_conv: float, lam_new: float) -> tuple[bool, int, str]:
         nonlocal total_its
@@ -221,7 +230,7 @@ def static(
                             "tangent stiffness at rest is singular",
                             state=state["x"],
                         ) from None
-        step = SpringStep(ctx, s_new, f_ref, jacobian, linear_solver, B)
+        step = SpringStep(ctx, s_new, f_ref, jacobian, linear_solver, B, previous)
         out = newton(step, x, settings, step.monitor(callback, total_its))
         ok, x, its, h, reason, K_last = (
             out.converged,

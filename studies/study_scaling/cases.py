@@ -98,7 +98,8 @@ def step_case(case: dict) -> dict:
     from reference_fem.explicit import ExplicitFem
     from springmodel.model import SpringModel
 
-    from ..bench import step_time
+    from ..bench import step_costs
+    from ..timing import median, median_ratio
 
     scene = _scene(case["n_tets"])
     t = _clock()
@@ -109,15 +110,7 @@ def step_case(case: dict) -> dict:
     fem_setup = _since(t)
     steps = int(np.clip(2_000_000 // scene.mesh.n_tets, 5, 200))
     systems = {"spring": spring, "fem": fem}
-    for s in systems.values():
-        step_time(s, 2, 1)  # warm-up
-    wall = {k: [] for k in systems}
-    cpu = {k: [] for k in systems}
-    for _ in range(case["repeats"]):
-        for name, s in systems.items():
-            w, c = step_time(s, steps, 1)
-            wall[name].append(w)
-            cpu[name].append(c)
+    samples = step_costs(systems, steps, case["repeats"])  # interleaved, shuffled
     out = {
         "tets": scene.mesh.n_tets,
         "nodes": scene.mesh.n_points,
@@ -128,9 +121,9 @@ def step_case(case: dict) -> dict:
         "fem_setup_cpu": fem_setup[1],
     }
     for name in systems:
-        out[f"{name}_step_wall"] = float(np.median(wall[name]))
-        out[f"{name}_step_cpu"] = float(np.median(cpu[name]))
-    out["ratio_cpu"] = float(np.median(np.array(cpu["spring"]) / np.array(cpu["fem"])))
+        out[f"{name}_step_wall"] = median(samples, name) / steps
+        out[f"{name}_step_cpu"] = median(samples, name, "cpu") / steps
+    out["ratio_cpu"] = median_ratio(samples, "spring", "fem", "cpu")
     return out
 
 

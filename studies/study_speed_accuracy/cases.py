@@ -243,25 +243,18 @@ def step_cost_case(case: dict) -> dict:
     from reference_fem.explicit import ExplicitFem
     from springmodel.model import SpringModel
 
-    from ..bench import step_time
+    from ..bench import step_costs
+    from ..timing import median, median_ratio
 
     scene = _scene(case)
     systems = {"spring": SpringModel(scene, parallel=None), "fem": ExplicitFem(scene)}
-    wall = {k: [] for k in systems}
-    cpu = {k: [] for k in systems}
-    for system in systems.values():  # warm-up
-        step_time(system, 2, 1)
-    for _ in range(case["repeats"]):
-        for name, system in systems.items():
-            w, c = step_time(system, case["steps"], 1)
-            wall[name].append(w)
-            cpu[name].append(c)
+    samples = step_costs(systems, case["steps"], case["repeats"])  # interleaved, shuffled
     out = {"tets": scene.mesh.n_tets}
     for name in systems:
-        out[f"{name}_wall"] = float(np.median(wall[name]))
-        out[f"{name}_cpu"] = float(np.median(cpu[name]))
-    out["ratio_wall"] = float(np.median(np.array(wall["spring"]) / np.array(wall["fem"])))
-    out["ratio_cpu"] = float(np.median(np.array(cpu["spring"]) / np.array(cpu["fem"])))
+        out[f"{name}_wall"] = median(samples, name) / case["steps"]
+        out[f"{name}_cpu"] = median(samples, name, "cpu") / case["steps"]
+    out["ratio_wall"] = median_ratio(samples, "spring", "fem")
+    out["ratio_cpu"] = median_ratio(samples, "spring", "fem", "cpu")
     out["parallel"] = {
         k: bool(
             getattr(s, "parallel", False) or getattr(getattr(s, "kernel", None), "parallel", False)

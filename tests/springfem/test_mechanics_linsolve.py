@@ -89,3 +89,39 @@ def test_singular_matrix_is_refused(method):
     solver = LinearSolver(method, near_nullspace=B, maxiter=200)
     with pytest.raises(SolverError, match="singular stiffness"):
         solver.solve(K, b, np.ones(K.shape[0], dtype=bool))
+
+
+def test_reused_hierarchy_solves_the_new_matrix():
+    """A hierarchy built for ``K`` preconditions CG on ``K + D`` (a stiffer nearby matrix,
+    as the next Newton tangent): the solution is ``(K + D)^-1 b`` (checked against SuperLU
+    to 1e-8, the cond * rtol margin of the test above), not ``K^-1 b``, and no hierarchy is
+    built again."""
+    K, free, b, B = jittered_block()
+    Kff, bf = K[free][:, free], b[free]
+    Kn = (Kff + sp.diags(0.3 * Kff.diagonal())).tocsr()  # a different SPD matrix
+    solver = LinearSolver("amg", near_nullspace=B[free], rtol=1e-12)
+    first = solver.factorize(Kff)
+    first.solve(bf)
+    second = solver.factorize(Kn, reuse=first)
+    assert second._ml is first._ml  # the hierarchy is shared, not rebuilt
+    x = second.solve(bf)
+    ref = LinearSolver("direct").solve(Kn, bf)
+    assert np.linalg.norm(x - ref) <= 1e-8 * np.linalg.norm(ref)
+    old = LinearSolver("direct").solve(Kff, bf)
+    assert np.linalg.norm(x - old) > 1e-3 * np.linalg.norm(ref)  # the new matrix's answer
+
+
+def test_stale_hierarchy_is_rebuilt():
+    """Once the reused hierarchy's iterations exceed REUSE_GROWTH times its first count,
+    the next factorisation builds its own; the direct solver never shares anything."""
+    from springfem.mechanics.linsolve import REUSE_GROWTH
+
+    K, free, b, B = jittered_block()
+    Kff, bf = K[free][:, free], b[free]
+    solver = LinearSolver("amg", near_nullspace=B[free], rtol=1e-12)
+    first = solver.factorize(Kff)
+    first.solve(bf)
+    first._last_iterations = int(REUSE_GROWTH * first._fresh_iterations) + 3
+    assert solver.factorize(Kff, reuse=first)._ml is None  # built afresh on first solve
+    lu = LinearSolver("direct").factorize(Kff, reuse=first)
+    assert lu._ml is None and lu._lu is not None

@@ -131,6 +131,10 @@ def test_numba_kernel_matches_numpy_reference(options):
     Kp = SpringHessian(el, options, backend="numpy").element_matrices(x)
     # same formulas, different summation order: round-off only
     assert rel_err(Kn, Kp) < 1e-12
+    # the serial and parallel drivers run the same per-element code: identical bits
+    for par in (False, True):
+        Ks = SpringHessian(el, options, parallel=par).element_matrices(x)
+        assert np.array_equal(Ks, Kn)
 
 
 # --------------------------------------------------------------------------- invariants
