@@ -45,12 +45,13 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
+from springfem.blocks import chunks
 from springfem.errors import InputError, SolverError
 from springfem.loads import external_forces, has_follower_loads, lumped_masses
 from springfem.mesh import tet_volumes
 from springfem.scene import Scene
 
-from .explicit_kernels import chunks, fem_kernel, fem_layout
+from .explicit_kernels import fem_kernel, fem_layout
 from .space import p1_gradients
 
 Law = Literal["neo-hookean", "linear"]

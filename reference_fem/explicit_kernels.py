@@ -1,8 +1,8 @@
 """Explicit P1 FEM force kernels specialised per law and precision, on a blocked layout.
 
-The same layout and rules as the spring kernels (:mod:`springmodel.blocks`, written again here
-since ``reference_fem`` imports only the core, DESIGN §2), so the two models are optimised
-alike: blocks of :data:`BLOCK` elements, connectivity ``T (nb, 4 B)`` int32, constants
+The same layout and drivers as the spring kernels (the core's :mod:`springfem.blocks`), so
+the two models are optimised alike: blocks of :data:`BLOCK` elements, connectivity
+``T (nb, 4 B)`` int32, constants
 ``K (nb, 10 B)`` lane-major (``grad N_1..3``, 9 values, and the rest volume; ``grad N_0 =
 -(grad N_1 + grad N_2 + grad N_3)`` is not stored), the edge vectors ``x_a - x_0`` gathered
 in float64, one branch-free loop over a block's lanes (``error_model='numpy'``, FMA
@@ -42,12 +42,12 @@ from __future__ import annotations
 import math
 from functools import cache
 
-import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
-#: Elements per block (as the spring kernels').
-BLOCK = 16
+from springfem.blocks import BLOCK, block_drivers, block_layout
+
+_NO_VELOCITY = np.zeros((1, 3))  # the drivers pass velocities; the FEM forces need none
 PRECISIONS = ("float64", "mixed", "float32")
 _FLAGS = {"error_model": "numpy", "fastmath": {"contract"}}
 #: Bytes per element the kernel reads: 10 constants and 4 int32 node ids.
@@ -73,23 +73,12 @@ def fem_layout(tets: np.ndarray, points: np.ndarray, precision: str):
     Ginv = np.linalg.inv(E)  # columns: grad N_1..3
     V = np.linalg.det(E) / 6.0
     cols = np.concatenate([Ginv.transpose(0, 2, 1).reshape(-1, 9), V[:, None]], axis=1).T
-    m = tets.shape[0]
-    nb = -(-m // BLOCK)
-    idx = np.minimum(np.arange(nb * BLOCK), m - 1)  # pad with the last element
-    T = np.asarray(tets)[idx].reshape(nb, BLOCK, 4).transpose(0, 2, 1).reshape(nb, 4 * BLOCK)
-    K = cols[:, idx].reshape(NCOL, nb, BLOCK).transpose(1, 0, 2).reshape(nb, NCOL * BLOCK)
-    dtype = np.float64 if precision == "float64" else np.float32
-    return np.ascontiguousarray(T, dtype=np.int32), np.ascontiguousarray(K, dtype=dtype)
-
-
-def chunks(n_blocks: int, n_threads: int | None = None) -> np.ndarray:
-    """Static contiguous block ranges ``ptr`` (one per thread)."""
-    n = max(1, min(n_threads or numba.get_num_threads(), n_blocks))
-    return np.linspace(0, n_blocks, n + 1).round().astype(np.int64)
+    return block_layout(tets, cols, np.float64 if precision == "float64" else np.float32)
 
 
 def _block_run(law: str, at):
-    """The law's block loop ``run(lo, hi, x, T, K, m, mu, lam, out) -> n_inverted``.
+    """The law's block loop ``run(lo, hi, x, w, T, K, m, mu, lam, out) -> n_inverted``
+    (``w`` unused: the drivers of :func:`springfem.blocks.block_drivers` pass velocities).
 
     It captures only numbers (numba compiles them as constants: the law branch folds away),
     which keeps it disk-cacheable; it calls no helpers (written out: with helpers the loop
@@ -100,7 +89,7 @@ def _block_run(law: str, at):
     neo = law == "neo-hookean"
 
     @njit(cache=True, **_FLAGS)
-    def run(lo, hi, x, T, K, m, mu_, lam_, out):
+    def run(lo, hi, x, w, T, K, m, mu_, lam_, out):
         X = np.empty(9 * B, at)
         S = np.empty(B, at)
         Jb = np.empty(B, at)
@@ -226,26 +215,12 @@ def fem_kernel(law: str, precision: str = "float64"):
     if precision not in PRECISIONS:
         raise ValueError(f"precision {precision!r} is not one of {', '.join(PRECISIONS)}")
     run = _block_run(law, np.float32 if precision == "float32" else np.float64)
+    serial_w, parallel_w = block_drivers(run)
 
     def serial(x, T, K, m, mu, lam, out):
-        out[:] = 0.0
-        return run(0, T.shape[0], x, T, K, m, mu, lam, out)
+        return serial_w(x, _NO_VELOCITY, T, K, m, mu, lam, out)
 
-    @njit(parallel=True, **_FLAGS)
     def parallel(x, T, K, m, mu, lam, ptr, buf, out):
-        nchunk = ptr.shape[0] - 1
-        bad = 0
-        for t in prange(nchunk):  # one buffer per static chunk: deterministic
-            bt = buf[t]
-            bt[:] = 0.0
-            bad += run(ptr[t], ptr[t + 1], x, T, K, m, mu, lam, bt)
-        n = out.shape[0]
-        for i in prange(n):
-            for d in range(3):
-                s = 0.0
-                for t in range(nchunk):
-                    s += buf[t, i, d]
-                out[i, d] = s
-        return bad
+        return parallel_w(x, _NO_VELOCITY, T, K, m, mu, lam, ptr, buf, out)
 
     return serial, parallel

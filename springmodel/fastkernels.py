@@ -4,7 +4,7 @@
 parts and laws (:class:`Variant`). The laws are chosen in Python when the kernel is built,
 so the compiled loop holds only the arithmetic of that variant: no law codes, no branches.
 
-Layout (:mod:`springmodel.blocks`): elements in blocks of :data:`BLOCK`, connectivity int32
+Layout (:mod:`springfem.blocks`): elements in blocks of :data:`BLOCK`, connectivity int32
 and constants lane-major. A block's edge vectors are gathered into a scratch, its lanes
 computed in one branch-free loop (LLVM vectorises it: ``error_model='numpy'``, contraction
 to FMA allowed; no law codes: the variant's choices are compile-time constants), and its
@@ -49,7 +49,7 @@ from functools import cache
 import numpy as np
 from numba import njit
 
-from .blocks import BLOCK, block_drivers
+from springfem.blocks import BLOCK, block_drivers
 
 PRECISIONS = ("float64", "mixed", "float32")
 _PAIRS = ((0, 1), (0, 2), (1, 2))
@@ -216,7 +216,8 @@ def _pair(law, ul, um, lam_l, lam_m, k_l, k_m, t0, bt, one):
 
 
 def _block_run(v: Variant):
-    """The variant's block loop ``run(lo, hi, x, w, T, K, m, out)``: gather, compute, scatter.
+    """The variant's block loop ``run(lo, hi, x, w, T, K, m, p, q, out)``: gather, compute,
+    scatter (``p``, ``q`` unused; returns 0).
 
     It captures only numbers (the law codes, coefficients and column offsets), which numba
     compiles as constants (so the law branches fold away) and which keep it disk-cacheable.
@@ -248,7 +249,7 @@ def _block_run(v: Variant):
     damp_v = at(v.damp_volume)
 
     @njit(cache=True, **_FLAGS)
-    def run(lo, hi, x, w, T, K, m, out):
+    def run(lo, hi, x, w, T, K, m, p, q, out):  # p, q: unused scalars of the drivers
         X = np.empty(9 * B, at)
         W = np.empty(9 * B, at) if uses_w else X
         F = np.empty(12 * B, at)
@@ -382,6 +383,8 @@ def _block_run(v: Variant):
                     out[i, 1] += F[(3 * k + 1) * B + j]
                     out[i, 2] += F[(3 * k + 2) * B + j]
 
+        return 0
+
     return run
 
 
@@ -389,8 +392,8 @@ def _block_run(v: Variant):
 def spring_kernel(variant: Variant):
     """``(serial, parallel)`` force drivers of ``variant`` (compiled on first call).
 
-    ``serial(x, w, T, K, m, out)``, ``parallel(x, w, T, K, m, ptr, buf, out)``; see
-    :func:`springmodel.blocks.block_drivers`.
+    ``serial(x, w, T, K, m, p, q, out)``, ``parallel(x, w, T, K, m, p, q, ptr, buf, out)``;
+    see :func:`springfem.blocks.block_drivers`.
     """
     return block_drivers(_block_run(variant))
 

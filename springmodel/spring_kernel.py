@@ -3,7 +3,7 @@
 :class:`SpringKernel` picks the :class:`~springmodel.fastkernels.Variant` of the options
 (with and without the damping terms, for calls with and without velocities), packs the
 compact constants of that variant (:func:`constant_columns`) in the blocked layout of
-:mod:`springmodel.blocks`, and runs the kernel of :func:`~springmodel.fastkernels.spring_kernel`
+:mod:`springfem.blocks`, and runs the kernel of :func:`~springmodel.fastkernels.spring_kernel`
 serially or on all threads.
 
 Threads (rule: parallel from :data:`PARALLEL_MIN_ELEMENTS` elements when numba has more
@@ -35,7 +35,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .blocks import BLOCK, block_layout, chunks, set_column
+from springfem.blocks import BLOCK, block_layout, chunks, set_column
+
 from .fastkernels import _PAIRS, PRECISIONS, Variant, spring_kernel
 
 #: Below this many elements ``SpringKernel(parallel=None)`` runs serially.
@@ -181,9 +182,9 @@ class SpringKernel:
         serial, parallel = spring_kernel(variant)
         m = self.elements.n_elements
         if self.parallel:
-            parallel(x, w, self._T, K, m, self._ptr, self._buf, out)
+            parallel(x, w, self._T, K, m, 0.0, 0.0, self._ptr, self._buf, out)
         else:
-            serial(x, w, self._T, K, m, out)
+            serial(x, w, self._T, K, m, 0.0, 0.0, out)
         return out
 
     def energy(self, x: np.ndarray) -> float:

@@ -50,7 +50,7 @@ def run(points, tets, x, law, precision, parallel=False):
     serial, par = fem_kernel(law, precision)
     out = np.full_like(x, np.nan)
     if parallel:
-        from reference_fem.explicit_kernels import chunks
+        from springfem.blocks import chunks
 
         ptr = chunks(T.shape[0])
         buf = np.zeros((ptr.size - 1, x.shape[0], 3))

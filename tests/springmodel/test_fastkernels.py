@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from springfem.blocks import BLOCK, block_layout
 from springfem.mesh import box_mesh
 from springmodel import springs
-from springmodel.blocks import BLOCK, block_layout
 from springmodel.elements import build_spring_elements
 from springmodel.fastkernels import Variant
 from springmodel.options import SpringOptions

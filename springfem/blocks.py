@@ -1,8 +1,10 @@
 """Blocked structure-of-arrays element layout and the drivers that run a block kernel.
 
+Both models' force kernels (the spring kernels of :mod:`springmodel.fastkernels` and the
+explicit FEM's of :mod:`reference_fem.explicit_kernels`) use this layout and these drivers.
 Elements are stored in blocks of :data:`BLOCK`: connectivity ``T (nb, 4 B)`` int32 and
 constants ``K (nb, ncol B)``, row ``b`` holding block ``b`` lane-major (``K[b, c B + j]``).
-A variant's block loop (:mod:`springmodel.fastkernels`) gathers a block's edge vectors
+A kernel's block loop gathers a block's edge vectors
 ``x_i - x_0`` (differences taken in float64, then stored in the arithmetic type) into a flat
 ``9 B`` scratch, computes the lanes in one loop with no gathers and no branches (LLVM
 vectorises it), and adds the ``12 B`` vertex forces into the nodal array (the only scattered
@@ -77,27 +79,30 @@ def block_drivers(run):
     Parameters
     ----------
     run
-        numba function ``run(lo, hi, x, w, T, K, m, out)`` adding the forces of blocks
-        ``lo..hi`` into ``out``.
+        numba function ``run(lo, hi, x, w, T, K, m, p, q, out) -> int`` adding the forces of
+        blocks ``lo..hi`` into ``out`` and returning a count (e.g. of inverted elements);
+        ``w`` (velocities) and the scalars ``p``, ``q`` are the kernel's own inputs.
 
     Returns
     -------
     serial, parallel
-        ``serial(x, w, T, K, m, out)`` and ``parallel(x, w, T, K, m, ptr, buf, out)``;
-        both overwrite ``out (n, 3)`` float64 with the nodal forces.
+        ``serial(x, w, T, K, m, p, q, out)`` and
+        ``parallel(x, w, T, K, m, p, q, ptr, buf, out)``; both overwrite ``out (n, 3)``
+        float64 with the nodal forces and return the summed count.
     """
 
-    def serial(x, w, T, K, m, out):
+    def serial(x, w, T, K, m, p, q, out):
         out[:] = 0.0
-        run(0, T.shape[0], x, w, T, K, m, out)
+        return run(0, T.shape[0], x, w, T, K, m, p, q, out)
 
     @njit(parallel=True, **_FLAGS)
-    def parallel(x, w, T, K, m, ptr, buf, out):
+    def parallel(x, w, T, K, m, p, q, ptr, buf, out):
         nchunk = ptr.shape[0] - 1
+        count = 0
         for t in prange(nchunk):  # one buffer per static chunk: deterministic
             bt = buf[t]
             bt[:] = 0.0
-            run(ptr[t], ptr[t + 1], x, w, T, K, m, bt)
+            count += run(ptr[t], ptr[t + 1], x, w, T, K, m, p, q, bt)
         n = out.shape[0]
         for i in prange(n):
             for d in range(3):
@@ -105,5 +110,6 @@ def block_drivers(run):
                 for t in range(nchunk):
                     s += buf[t, i, d]
                 out[i, d] = s
+        return count
 
     return serial, parallel
