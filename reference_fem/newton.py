@@ -24,6 +24,7 @@ Inverted elements reject a state: a trial is backtracked, a start fails the load
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -93,6 +94,9 @@ class NewtonOptions:
         Line-search halvings of a Newton step.
     verbose
         Print the residual history to stderr.
+    on_step
+        Called as ``on_step(load, u)`` with each converged load step, in order (e.g. to
+        record a pressure-volume curve).
     """
 
     tol: float = 1e-10
@@ -101,6 +105,7 @@ class NewtonOptions:
     max_cutbacks: int = 8
     max_backtracks: int = 8
     verbose: bool = False
+    on_step: Callable[[float, np.ndarray], None] | None = None
 
 
 @dataclass
@@ -304,6 +309,8 @@ def solve_nonlinear(
         _log(opts, f"step {len(report.steps)}: load {target:.4g} converged in {its} iterations")
         state["prev"] = (lam, state["u"])  # last converged (load, displacement)
         state["u"] = u_new
+        if opts.on_step is not None:
+            opts.on_step(target, u_new)
         return True, its, ""
 
     path = LoadStepping(opts.load_steps, opts.max_cutbacks).run(try_step)

@@ -42,10 +42,11 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
+from springfem.cardiac import pressure_volume
 from springfem.errors import InputError, SolverError
 from springfem.materials import voigt_to_tensor
 from springfem.mechanics import LinearSolver, rigid_body_modes
-from springfem.result import Result, volume_summary
+from springfem.result import Result, frame_cell_data, volume_summary
 from springfem.scene import FORMULATIONS, VOLUMETRIC, Scene
 
 from .assembly import (
@@ -355,11 +356,11 @@ def _solve(problem: FemProblem, verbose: bool, t0: float) -> FemSolution:
         if problem.loads.pressures:
             info["pressure"] = "reference surface (small-strain law)"
     else:
-        fem = FemOptions.of(scene)
-        opts = NewtonOptions(
-            tol=fem.tol, max_iter=fem.max_iter, load_steps=fem.load_steps, verbose=verbose
-        )
+        fem, pv = FemOptions.of(scene), pressure_volume(scene, problem.state)
+        opts = NewtonOptions(fem.tol, fem.max_iter, fem.load_steps, verbose=verbose, on_step=pv)
         u, report = solve_nonlinear(problem, opts)
+        if pv is not None:
+            info["cavity"] = pv.summary(problem.state(u))
         iterations = report.iterations
         info["newton"] = report.steps
         info["load_steps"] = len(report.steps)
@@ -373,7 +374,7 @@ def _solve(problem: FemProblem, verbose: bool, t0: float) -> FemSolution:
     volume = volume_summary(scene.mesh, u_vertices)
     if problem.order == 2:
         info["volume_p2"] = problem.p2_volume(u)
-    cell_data = problem.cell_data(u)
+    cell_data = {**problem.cell_data(u), **frame_cell_data(scene, u_vertices)}
     info["krylov_iterations"] = problem.linear_solver.stats["krylov_iterations"]
     wall = time.perf_counter() - t0
     result = Result(

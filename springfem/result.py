@@ -110,6 +110,51 @@ def volume_summary(mesh: TetMesh, u: np.ndarray) -> dict[str, float]:
     return {"initial": v0, "final": v1, "relative_change": (v1 - v0) / v0}
 
 
+def frame_cell_data(scene, u: np.ndarray) -> dict[str, np.ndarray]:
+    """The anisotropy fields of a VTU: frames, fibre stretch and (rule-based) depth.
+
+    Parameters
+    ----------
+    scene
+        A :class:`~springfem.scene.Scene` (its frames and mesh).
+    u
+        ``(n, 3)`` or flat vertex displacement.
+
+    Returns
+    -------
+    dict
+        ``fiber``, ``sheet`` (unit vectors at rest, ``(m, 3)``), ``fiber_stretch``
+        ``|F f|`` with ``F`` the tet's linear (vertex) deformation gradient, and
+        ``transmural_depth`` when the mesh has it (``[axes] type = "rule-based"``).
+
+    Examples
+    --------
+    >>> from springfem.mesh import box_mesh
+    >>> from types import SimpleNamespace
+    >>> m = box_mesh((1.0, 1.0, 1.0), (1, 1, 1))
+    >>> s = SimpleNamespace(mesh=m, frames=np.tile(np.eye(3), (m.n_tets, 1, 1)))
+    >>> d = frame_cell_data(s, 0.2 * m.points * [1.0, 0.0, 0.0])  # 20 % along the fibre
+    >>> np.round(d["fiber_stretch"], 12).tolist() == [1.2] * m.n_tets
+    True
+    """
+    mesh = scene.mesh
+    x0 = mesh.points[mesh.tets]
+    x = x0 + np.asarray(u).reshape(-1, 3)[mesh.tets]
+    d0 = x0[:, 1:] - x0[:, :1]  # (m, 3 edges, 3)
+    d = x[:, 1:] - x[:, :1]
+    # F d0_e = d_e for the three edges: F = D D0^-1 with the edges as columns
+    F = np.swapaxes(d, 1, 2) @ np.linalg.inv(np.swapaxes(d0, 1, 2))
+    f = np.asarray(scene.frames)[:, 0]
+    out = {
+        "fiber": f,
+        "sheet": np.asarray(scene.frames)[:, 1],
+        "fiber_stretch": np.linalg.norm(np.einsum("kij,kj->ki", F, f), axis=1),
+    }
+    if "transmural_depth" in mesh.cell_data:
+        out["transmural_depth"] = np.asarray(mesh.cell_data["transmural_depth"])
+    return out
+
+
 def write_result(
     out_dir: str | os.PathLike,
     result: Result,
@@ -150,4 +195,9 @@ def write_result(
     write_vtu(vtu, mesh, point_data=pdata, cell_data=cell_data)
     js = out / f"{stem}.json"
     atomic_write_text(js, result.to_json() + "\n")
+    curve = result.info.get("cavity", {}).get("pressure_volume")
+    if curve:
+        from .cardiac import write_pressure_volume
+
+        write_pressure_volume(out / f"{stem}_pressure_volume", curve, result.scene)
     return js, vtu

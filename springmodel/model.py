@@ -23,10 +23,11 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+from springfem.cardiac import cavity_summary, is_ventricle
 from springfem.errors import SolverError
 from springfem.loads import external_forces, has_follower_loads, lumped_masses, reactions
 from springfem.mechanics.limits import SolveStopped
-from springfem.result import Result, volume_summary
+from springfem.result import Result, frame_cell_data, volume_summary
 from springfem.scene import Scene
 
 from .advice import scene_warnings
@@ -249,7 +250,10 @@ def solve_spring(
             f"spring model ({opts.solver}) did not converge: {getattr(info, 'message', '')}",
             state=u,
         )
-    return SpringSolution(result=result, u=u, cell_data=model.cell_data(x), info=info)
+    if is_ventricle(scene.mesh):
+        result.info["cavity"] = cavity_summary(scene.mesh, u)
+    cells = {**model.cell_data(x), **frame_cell_data(scene, u)}
+    return SpringSolution(result=result, u=u, cell_data=cells, info=info)
 
 
 def dynamic_series(scene: Scene, model: SpringModel, opts: SpringOptions, folder) -> object:

@@ -38,17 +38,21 @@ from .types import (
     Material,
     Probe,
 )
+from .ventricle import ELLIPSOID_KEYS, RULE_BASED_KEYS, parse_ellipsoid, parse_rule_based
 
 #: The keys valid in each core section (messages suggest the closest for a misspelt one).
 SECTION_KEYS = {
-    "mesh": ("file", "scale", "generator", "size", "divisions", "split", "origin"),
+    "mesh": ("file", "scale", "generator", "size", "divisions", "split", "origin", *ELLIPSOID_KEYS),
     "material": (
         *("law", "density", "E", "nu", "mu", "kappa", "formulation", "volumetric"),
         *("E_fiber", "E_cross", "nu_fiber_cross", "nu_cross", "G_fiber"),
         *sorted({k for keys in TISSUE_LAWS.values() for k in keys}),
         *TISSUE_KEYS[1:],
     ),
-    "axes": ("type", "fiber_data", "sheet_data", "fiber", "sheet", "axis", "range", "angles"),
+    "axes": (
+        *("type", "fiber_data", "sheet_data", "fiber", "sheet", "axis", "range", "angles"),
+        *RULE_BASED_KEYS,
+    ),
     "boundary": ("region", "fix", "displacement"),
     "load": ("type", "value", "region"),
     "probe": ("name", "point"),
@@ -56,7 +60,7 @@ SECTION_KEYS = {
 
 
 def parse_mesh(r: TableReader, base: Path) -> TetMesh:
-    """The ``[mesh]`` section: a mesh file (``file``, ``scale``) or a box generator.
+    """The ``[mesh]`` section: a mesh file (``file``, ``scale``), a box or an ellipsoid.
 
     Parameters
     ----------
@@ -88,7 +92,9 @@ def parse_mesh(r: TableReader, base: Path) -> TetMesh:
         if too_big:
             raise r.fail("file", too_big)
         return mesh
-    gen = r.get("generator", "str", choices=("box",))
+    gen = r.get("generator", "str", choices=("box", "ellipsoid"))
+    if gen == "ellipsoid":
+        return parse_ellipsoid(r)
     size = r.get("size", "vec", length=3, positive=True)
     div = r.get("divisions", "ivec", length=3, positive=True)
     split: Split = r.get("split", "str", default="six", choices=opt_splits())
@@ -173,7 +179,8 @@ def parse_material(r: TableReader) -> Material:
 
 
 def parse_axes(r: TableReader, mesh: TetMesh) -> np.ndarray:
-    """The ``[axes]`` section: ``uniform``, ``helix`` or ``cells`` (mesh cell data) frames.
+    """The ``[axes]`` section: ``uniform``, ``helix``, ``cells`` (mesh cell data) or
+    ``rule-based`` (:func:`~springfem.scene.ventricle.parse_rule_based`) frames.
 
     Parameters
     ----------
@@ -187,7 +194,9 @@ def parse_axes(r: TableReader, mesh: TetMesh) -> np.ndarray:
     numpy.ndarray
         ``(m, 3, 3)`` frames (rows: fiber, sheet, normal).
     """
-    kind = r.get("type", "str", default="uniform", choices=AXES_TYPES)
+    kind = r.get("type", "str", default="uniform", choices=(*AXES_TYPES, "rule-based"))
+    if kind == "rule-based":
+        return parse_rule_based(r, mesh)
     try:
         if kind == "cells":
             fkey = r.get("fiber_data", "str", default="fiber")

@@ -86,8 +86,8 @@ def test_result_contract(order, tmp_path):
     assert sol.u_vertices.shape == (scene.mesh.n_points, 3)
     assert sol.u.shape == (3 * n_nodes,)
     np.testing.assert_array_equal(sol.u_vertices, sol.u.reshape(-1, 3)[: scene.mesh.n_points])
-    assert set(sol.cell_data) == {"J", "von_mises"}
-    assert all(v.shape == (scene.mesh.n_tets,) for v in sol.cell_data.values())
+    assert set(sol.cell_data) == {"J", "von_mises", "fiber", "sheet", "fiber_stretch"}
+    assert all(v.shape[0] == scene.mesh.n_tets for v in sol.cell_data.values())
     if order == 2:
         # exact P2 volume against scikit-fem's own interpolation of the same field
         basis = skfem.Basis(

@@ -1,0 +1,118 @@
+"""Scene parsers of the ventricle: ``[mesh] generator = "ellipsoid"`` and
+``[axes] type = "rule-based"``.
+
+The ellipsoid is Land et al. 2015's truncated ellipsoid (:mod:`springfem.ellipsoid`); the
+rule-based frames are :func:`springfem.fibres.rule_based_frames`, whose transmural depth is
+kept as the mesh's cell data ``transmural_depth`` (it is written into the VTU).
+
+Examples
+--------
+>>> from springfem.scene.reader import TableReader
+>>> r = TableReader({"generator": "ellipsoid", "size": 4.0}, "mesh", "<scene>")
+>>> m = parse_ellipsoid(r)
+>>> sorted(m.facet_sets)
+['base', 'endo', 'epi']
+>>> frames = parse_rule_based(TableReader({"type": "rule-based"}, "axes", "<scene>"), m)
+>>> frames.shape == (m.n_tets, 3, 3), "transmural_depth" in m.cell_data
+(True, True)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import ellipsoid
+from ..errors import InputError
+from ..fibres import rule_based_frames
+from ..mesh import TetMesh
+from .limits import check_mesh_size
+from .reader import TableReader
+
+#: ``[mesh]`` keys of the ellipsoid generator, ``[axes]`` keys of the rule-based frames.
+ELLIPSOID_KEYS = ("endo", "epi", "base_z")
+RULE_BASED_KEYS = ("endo_angle", "epi_angle", "endo", "epi")
+
+#: Volume of an average gmsh tet of target size ``h``, over ``h^3`` (a regular tet has
+#: 1/(6 sqrt 2) = 0.118; gmsh's are a little smaller): for the size check before meshing.
+_TET_VOLUME_FACTOR = 0.08
+
+
+def parse_ellipsoid(r: TableReader) -> TetMesh:
+    """``[mesh] generator = "ellipsoid"``: ``size``, ``endo``, ``epi``, ``base_z``.
+
+    Parameters
+    ----------
+    r
+        Reader over the ``[mesh]`` table (``generator`` may be read already).
+
+    Returns
+    -------
+    TetMesh
+        With facet sets ``endo``, ``epi`` and ``base``.
+    """
+    r.get("generator", "str", choices=("ellipsoid",))
+    size = r.get("size", "float", default=2.0, positive=True)
+    endo = r.get("endo", "vec", default=np.array(ellipsoid.ENDO), length=2, positive=True)
+    epi = r.get("epi", "vec", default=np.array(ellipsoid.EPI), length=2, positive=True)
+    base_z = r.get("base_z", "float", default=ellipsoid.BASE_Z)
+    r.finish()
+    if not (endo[0] < epi[0] and endo[1] < epi[1]):
+        raise r.fail("epi", f"radii {epi.tolist()} must exceed endo radii {endo.tolist()}")
+    if not -endo[1] < base_z < endo[1]:
+        raise r.fail("base_z", f"{base_z} must lie within (-{endo[1]:g}, {endo[1]:g})")
+    volume = ellipsoid.wall_volume(tuple(endo), tuple(epi), base_z)
+    estimate = volume / (_TET_VOLUME_FACTOR * size**3)
+    too_big = check_mesh_size(int(min(estimate, 1e15)))
+    if too_big:
+        raise r.fail("size", too_big)
+    try:
+        mesh = ellipsoid.ellipsoid_mesh(size, tuple(endo), tuple(epi), base_z)
+    except InputError as exc:
+        raise r.fail("size", str(exc)) from None
+    too_big = check_mesh_size(mesh.n_tets)
+    if too_big:
+        raise r.fail("size", too_big)
+    return mesh
+
+
+def parse_rule_based(r: TableReader, mesh: TetMesh) -> np.ndarray:
+    """``[axes] type = "rule-based"``: ``endo_angle``, ``epi_angle`` (degrees), ``axis``
+    (the long axis, ``"z"`` by default), ``endo`` and ``epi`` (facet-set names).
+
+    Parameters
+    ----------
+    r
+        Reader over the ``[axes]`` table.
+    mesh
+        The mesh; its cell data gets ``transmural_depth``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(m, 3, 3)`` frames (rows: fiber, sheet, normal).
+    """
+    r.get("type", "str", choices=("rule-based",))
+    endo_angle = r.get("endo_angle", "float", default=60.0)
+    epi_angle = r.get("epi_angle", "float", default=-60.0)
+    axis = r.get("axis", "str", default="z", choices=("x", "y", "z"))
+    endo = r.get("endo", "str", default="endo")
+    epi = r.get("epi", "str", default="epi")
+    r.finish()
+    for key, angle in (("endo_angle", endo_angle), ("epi_angle", epi_angle)):
+        if not (math.isfinite(angle) and abs(angle) <= 360.0):
+            raise r.fail(key, f"must be an angle in degrees within [-360, 360], got {angle}")
+    for key, name in (("endo", endo), ("epi", epi)):
+        if name not in mesh.facet_sets:
+            have = ", ".join(sorted(mesh.facet_sets)) or "none"
+            raise r.fail(key, f"mesh has no facet region {name!r} (has: {have})")
+    if endo == epi:
+        raise r.fail("epi", f"must differ from endo ({endo!r})")
+    k = np.eye(3)["xyz".index(axis)]
+    try:
+        frames, depth = rule_based_frames(mesh, endo_angle, epi_angle, k, endo, epi)
+    except InputError as exc:
+        raise r.fail("type", str(exc)) from None
+    mesh.cell_data["transmural_depth"] = depth
+    return frames

@@ -1,0 +1,75 @@
+"""Study ``tissue``: the spring model against the Guccione FEM at finite strain.
+
+Three measurements, each spring variant (:data:`~.cases.VARIANTS`: the exact element and the
+seed's default) against the FEM on the same mesh:
+
+- stress-stretch along and across the fibre: a unit cube of Land's problem-1 Guccione law
+  (C = 2 kPa, b_f = 8, b_t = 2, b_fs = 4, penalty kappa = 100 kPa), pulled to 30 % with the
+  lateral faces free; the nominal stress is the x reaction on the unit face;
+- the Land beam (problem 1): the deformed z of (10, 0.5, 1) mm (published 4.14-4.20 mm);
+- the Land ventricle (problem 2; the quick preset: problem 3's passive inflation, which
+  converges on a coarser mesh): the apex positions and the cavity's pressure-volume curve.
+
+The study is split into :mod:`.cases` (scenes, measurements, settings) and
+:mod:`.report` (tables, figure, findings).
+
+Examples
+--------
+>>> Settings.quick().stretches
+(1.1, 1.3)
+"""
+
+from __future__ import annotations
+
+from ..registry import StudyContext, StudyOutput, study
+from .cases import VARIANTS, Settings, beam_case, stretch_case, ventricle_case
+from .report import beam_frame, findings, pv_figure, stretch_frame, tables, ventricle_frame
+
+__all__ = ["Settings", "run"]
+
+MODELS = [("fem", None)] + [("spring", v) for v in VARIANTS]
+
+
+@study("tissue", Settings)
+def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
+    """Run the tissue study (see the module docstring).
+
+    Parameters
+    ----------
+    ctx
+        Output folder, cache and preset.
+    settings
+        Meshes and stretches.
+
+    Returns
+    -------
+    StudyOutput
+        Findings, the three tables, the stress-stretch and pressure-volume figure, and the
+        spring model's worst errors as headline numbers.
+    """
+    cube = [
+        {"direction": d, "stretch": s, "n": settings.n, "model": m, "variant": v}
+        for d in ("along", "across")
+        for s in settings.stretches
+        for m, v in MODELS
+    ]
+    cube_res = ctx.cache.run(cube, stretch_case, ctx.progress, "stretch")
+    beam = [{"divisions": list(settings.beam_divisions), "model": m, "variant": v}
+            for m, v in MODELS]  # fmt: skip
+    beam_res = ctx.cache.run(beam, beam_case, ctx.progress, "beam")
+    where = {"scene": settings.lv_scene, "size": settings.lv_size, "steps": settings.lv_steps}
+    lv = [{**where, "model": m, "variant": v} for m, v in MODELS
+          if v is None or v in settings.lv_variants]  # fmt: skip
+    lv_res = ctx.cache.run(lv, ventricle_case, ctx.progress, "ventricle")
+    sdf = stretch_frame(cube, cube_res)
+    bdf = beam_frame(beam, beam_res)
+    vdf = ventricle_frame(lv, lv_res)
+    text, headline = findings(sdf, bdf, vdf)
+    return StudyOutput(
+        name=ctx.name,
+        title="Tissue: finite-strain anisotropy, spring model vs Guccione FEM",
+        findings=text,
+        tables=tables(ctx, sdf, bdf, vdf, settings),
+        figures=[pv_figure(ctx, sdf, lv, lv_res, settings)],
+        headline=headline,
+    )

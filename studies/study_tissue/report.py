@@ -1,0 +1,139 @@
+"""Tables, figure and findings of the ``tissue`` study."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from ..registry import Figure, StudyContext, Table
+from ..tables import save_figure, write_table
+
+#: Land et al. 2015 problem 1: the published range of the beam's deformed tip z (mm).
+BEAM_RANGE = (4.14, 4.20)
+
+
+def _label(case: dict) -> str:
+    return "fem" if case["model"] == "fem" else f"spring ({case['variant']})"
+
+
+def _rel(value: float, ref: float) -> float:
+    return (value - ref) / abs(ref) if ref and math.isfinite(ref) else math.nan
+
+
+def stretch_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
+    """One row per (direction, stretch, model): stress and its error against the FEM."""
+    rows = [{"direction": c["direction"], "stretch": c["stretch"], "model": _label(c),
+             "stress": r["stress"], "error": r["error"]}
+            for c, r in zip(cases, results, strict=True)]  # fmt: skip
+    df = pd.DataFrame(rows)
+    df["stress"] = pd.to_numeric(df["stress"])
+    ref = df[df.model == "fem"].set_index(["direction", "stretch"])["stress"]
+    df["rel_error"] = [
+        _rel(s, ref[(d, lam)])
+        for d, lam, s in zip(df.direction, df.stretch, df.stress, strict=True)
+    ]
+    return df
+
+
+def beam_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
+    """One row per model: the beam's deformed tip z, its error against the FEM, time."""
+    rows = [{"model": _label(c), "tip_z": r["tip_z"], "wall_time": r["wall_time"],
+             "error": r["error"]} for c, r in zip(cases, results, strict=True)]  # fmt: skip
+    df = pd.DataFrame(rows)
+    df["tip_z"] = pd.to_numeric(df["tip_z"])
+    fem = float(df.loc[df.model == "fem", "tip_z"].iloc[0])
+    # the deflection is tip_z - 1 (the point starts at z = 1 mm)
+    df["rel_error"] = [_rel(z - 1.0, fem - 1.0) for z in df.tip_z]
+    return df
+
+
+def ventricle_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
+    """One row per model: apex z, cavity volumes, errors of the apex motion vs the FEM."""
+    rows = []
+    for c, r in zip(cases, results, strict=True):
+        cav = r.get("cavity") or {}
+        rows.append({"model": _label(c), "endo_apex_z": r["endo_apex_z"],
+                     "epi_apex_z": r["epi_apex_z"], "cavity_initial": cav.get("initial"),
+                     "cavity_final": cav.get("final"), "wall_time": r["wall_time"],
+                     "error": r["error"]})  # fmt: skip
+    df = pd.DataFrame(rows)
+    for col in ("endo_apex_z", "epi_apex_z", "cavity_initial", "cavity_final", "wall_time"):
+        df[col] = pd.to_numeric(df[col])  # a failed case's NaN comes back from JSON as None
+    fem = float(df.loc[df.model == "fem", "endo_apex_z"].iloc[0])
+    df["rel_error"] = [_rel(z + 17.0, fem + 17.0) for z in df.endo_apex_z]
+    return df
+
+
+def tables(ctx: StudyContext, sdf, bdf, vdf, settings) -> list[Table]:
+    """Write the three tables (CSV + Markdown)."""
+    out = []
+    for df, stem, caption in (
+        (sdf, "stress_stretch", f"Nominal stress (kPa) of the unit cube ({settings.n}^3 boxes "
+         "of 6 tets), fibre along or across the pull; rel_error against the P1 FEM."),
+        (bdf, "beam", f"Land beam {tuple(settings.beam_divisions)}: deformed z of "
+         f"(10, 0.5, 1) mm (published {BEAM_RANGE[0]}-{BEAM_RANGE[1]}); rel_error of the "
+         "deflection against the FEM (P2 mixed)."),
+        (vdf, "ventricle", f"{settings.lv_scene} (size {settings.lv_size} mm): apex z "
+         "(mm) and cavity volume (mm^3); rel_error of the endocardial apex motion vs the FEM."),
+    ):  # fmt: skip
+        out.append(Table(write_table(df, ctx.path(stem)), caption))
+    return out
+
+
+def pv_figure(ctx: StudyContext, sdf, lv_cases, lv_results, settings) -> Figure:
+    """Stress-stretch curves (left) and the ventricle's pressure-volume curve (right)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.5))
+    for (direction, model), g in sdf.groupby(["direction", "model"]):
+        style = "-" if model == "fem" else "--"
+        a.plot(g.stretch, g.stress, style, marker="o", ms=3, label=f"{model}, {direction}")
+    a.set_xlabel("stretch")
+    a.set_ylabel("nominal stress (kPa)")
+    a.legend(fontsize=7)
+    a.grid(True, alpha=0.3)
+    for c, r in zip(lv_cases, lv_results, strict=True):
+        rows = (r.get("cavity") or {}).get("pressure_volume")
+        if rows:
+            pv = np.asarray(rows, dtype=float)
+            b.plot(pv[:, 2] / 1000.0, pv[:, 1], "o-", ms=3, label=_label(c))
+    b.set_xlabel("cavity volume (ml)")
+    b.set_ylabel("endocardial pressure (kPa)")
+    b.legend(fontsize=7)
+    b.grid(True, alpha=0.3)
+    path = save_figure(fig, ctx.path("tissue.png"))
+    plt.close(fig)
+    return Figure(path, "Left: stress-stretch along and across the fibre. Right: the Land "
+                  "ventricle's pressure-volume curve over the FEM's load steps.")  # fmt: skip
+
+
+def findings(sdf, bdf, vdf) -> tuple[list[str], dict[str, float]]:
+    """Findings (one line each) and the headline numbers."""
+    text, head = [], {}
+    last = sdf[sdf.stretch == sdf.stretch.max()]
+    for _, row in last[last.model != "fem"].iterrows():
+        text.append(f"At stretch {row.stretch:g} {row.direction} the fibre, {row.model} is "
+                    f"{100 * row.rel_error:+.1f}% off the FEM's nominal stress"
+                    + (f" (failed: {row.error})" if row.error else "") + ".")  # fmt: skip
+        head[f"stress_error_{row.direction}_{row.model}"] = float(row.rel_error)
+    fem = bdf[bdf.model == "fem"].iloc[0]
+    inside = BEAM_RANGE[0] <= fem.tip_z <= BEAM_RANGE[1]
+    text.append(f"Land beam: FEM tip z = {fem.tip_z:.4g} mm "
+                f"({'inside' if inside else 'outside'} the published {BEAM_RANGE[0]}-"
+                f"{BEAM_RANGE[1]} mm on this mesh).")  # fmt: skip
+    for _, row in bdf[bdf.model != "fem"].iterrows():
+        what = f"failed: {row.error}" if row.error else f"{100 * row.rel_error:+.1f}% deflection"
+        text.append(f"Land beam, {row.model}: tip z = {row.tip_z:.4g} mm ({what}).")
+        head[f"beam_error_{row.model}"] = float(row.rel_error)
+    for _, row in vdf.iterrows():
+        what = (f"failed: {row.error}" if row.error else
+                f"endo apex z = {row.endo_apex_z:.4g} mm, epi {row.epi_apex_z:.4g} mm")  # fmt: skip
+        text.append(f"Land ventricle, {row.model}: {what}.")
+        if row.model != "fem":
+            head[f"ventricle_error_{row.model}"] = float(row.rel_error)
+    return text, head

@@ -1,0 +1,60 @@
+"""Study ``tissue``: the small-strain limit of its stress-stretch cases against the law's
+tangent, and the quick preset's outputs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import studies.study_tissue as st
+from springfem.materials.tissue import guccione_tangent
+from studies.cache import CaseCache
+from studies.registry import StudyContext
+from studies.study_tissue.cases import GUCCIONE, stretch_case
+
+
+@pytest.mark.parametrize("direction", ["along", "across"])
+@pytest.mark.parametrize(("model", "variant"), [("fem", None), ("spring", "exact")])
+def test_small_stretch_gives_the_uniaxial_modulus_of_the_tangent(direction, model, variant):
+    # uniaxial stress with free lateral faces: P = E eps with E = 1 / S_xx of the law's
+    # small-strain tangent; at eps = 0.002 the finite-strain terms are O(eps), < 1 %
+    g = GUCCIONE
+    S = np.linalg.inv(guccione_tangent(g["C"], g["b_f"], g["b_t"], g["b_fs"], g["kappa"]))
+    E = 1.0 / S[0, 0] if direction == "along" else 1.0 / S[1, 1]  # x is the sheet axis across
+    eps = 0.002
+    case = {"direction": direction, "stretch": 1 + eps, "n": 1, "model": model,
+            "variant": variant}  # fmt: skip
+    r = stretch_case(case)
+    assert r["error"] == ""
+    assert r["stress"] == pytest.approx(E * eps, rel=0.01)
+
+
+@pytest.fixture(scope="module")
+def output(tmp_path_factory):
+    root = tmp_path_factory.mktemp("tissue")
+    ctx = StudyContext("tissue", root / "tissue", True, CaseCache(root, "t"), False)
+    return ctx, st.run(ctx, st.Settings.quick())
+
+
+def test_quick_outputs(output):
+    ctx, out = output
+    assert [t.path.name for t in out.tables] == ["stress_stretch.md", "beam.md", "ventricle.md"]
+    assert out.figures[0].path.stat().st_size > 0
+    s = pd.read_csv(ctx.out / "stress_stretch.csv")
+    fem = s[s.model == "fem"].set_index(["direction", "stretch"]).stress
+    # Guccione stiffens along the fibre (b_f = 8 > b_t = 2): stiffer along than across, and
+    # more than linearly in the stretch
+    for lam in s.stretch.unique():
+        assert fem[("along", lam)] > fem[("across", lam)] > 0
+    lo, hi = sorted(s.stretch.unique())[:2]
+    assert fem[("along", hi)] / fem[("along", lo)] > (hi - 1) / (lo - 1)
+    beam = pd.read_csv(ctx.out / "beam.csv").set_index("model")
+    # Land problem 1 (published 4.14-4.20 mm); a 10x1x1 P2 mesh is within a few % of it
+    assert beam.loc["fem", "tip_z"] == pytest.approx(4.17, rel=0.05)
+    lv = pd.read_csv(ctx.out / "ventricle.csv").set_index("model")
+    # inflation: the apex moves away from the base and the cavity grows
+    assert lv.loc["fem", "endo_apex_z"] < -17.0
+    assert lv.loc["fem", "cavity_final"] > lv.loc["fem", "cavity_initial"]
+    assert any("Land beam" in f for f in out.findings)
+    assert "stress_error_along_spring (exact)" in out.headline
