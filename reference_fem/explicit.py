@@ -49,7 +49,7 @@ from springfem.blocks import chunks
 from springfem.errors import InputError, SolverError
 from springfem.loads import external_forces, has_follower_loads, lumped_masses
 from springfem.mesh import tet_volumes
-from springfem.scene import Scene
+from springfem.scene import Scene, model_precision
 
 from .explicit_kernels import fem_kernel, fem_layout
 from .space import p1_gradients
@@ -151,7 +151,7 @@ class ExplicitFem:
         if precision is None:
             from .options import FemOptions
 
-            precision = FemOptions.of(scene).precision
+            precision = model_precision(scene, "fem", FemOptions.of(scene).precision)
         self.precision = precision
         self.scene = scene
         self.law = "linear" if law == "linear" else "neo-hookean"

@@ -28,7 +28,7 @@ from springfem.errors import SolverError
 from springfem.loads import external_forces, has_follower_loads, lumped_masses, reactions
 from springfem.mechanics.limits import SolveStopped
 from springfem.result import Result, frame_cell_data, volume_summary
-from springfem.scene import Scene
+from springfem.scene import Scene, model_precision
 
 from .advice import scene_warnings
 from .elements import SpringElements, build_spring_elements
@@ -63,7 +63,10 @@ class SpringModel:
             mesh.points, mesh.tets, scene.frames, self.options, scene.material
         )
         self.kernel = SpringKernel(
-            self.elements, self.options, parallel=parallel, precision=self.options.precision
+            self.elements,
+            self.options,
+            parallel=parallel,
+            precision=model_precision(scene, "spring", self.options.precision),
         )
         self.x0 = mesh.points.copy()
         self.masses = lumped_masses(scene)

@@ -28,6 +28,7 @@ from .loader import load_scene, parse_scene
 from .output import OutputOptions, parse_output
 from .reader import MAX_INT, MAX_MAGNITUDE, MIN_MAGNITUDE, TableReader, suggestion
 from .sections import opt_splits
+from .solver import SolverOptions, model_precision, parse_solver
 from .types import (
     AXES_TYPES,
     COMPONENTS,
@@ -44,8 +45,12 @@ from .types import (
 )
 
 register_section("output", parse_output)
+register_section("solver", parse_solver)
 
 __all__ = [
+    "SolverOptions",
+    "model_precision",
+    "parse_solver",
     "AXES_TYPES",
     "BYTES_PER_TET",
     "COMPONENTS",

@@ -35,9 +35,9 @@ from .sections import (
 )
 from .types import Material, Scene
 
-MODEL_SECTIONS = ("spring", "fem", "output")
+MODEL_SECTIONS = ("spring", "fem", "output", "solver")
 """Sections parsed by a registered parser: the models' (``spring``, ``fem``) and the core's
-``output`` (:mod:`springfem.scene.output`)."""
+``output`` (:mod:`springfem.scene.output`), ``solver`` (:mod:`springfem.scene.solver`)."""
 
 _SECTION_PARSERS: dict[str, Callable[[TableReader], Any]] = {}
 
