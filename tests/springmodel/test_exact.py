@@ -252,7 +252,11 @@ def test_volume_damping_dissipates_the_volume_rate():
 
 
 @pytest.mark.parametrize("parallel", [False, True])
-@pytest.mark.parametrize("volumetric", ["quadratic", "log", "simo-taylor"])
+@pytest.mark.parametrize(
+    "volumetric",
+    # each case compiles four kernel variants (~8 s); the other two U(J) run with -m slow
+    ["quadratic", *(pytest.param(v, marks=pytest.mark.slow) for v in ("log", "simo-taylor"))],
+)
 def test_fused_kernel_equals_oracle(volumetric, parallel):
     # same arithmetic in a different order: 1e-12 relative to the largest force
     from springmodel.spring_kernel import SpringKernel
