@@ -59,9 +59,12 @@ Precision = Literal["float64", "mixed", "float32"]
 OnInverted = Literal["raise", "nan", "ignore"]
 LAWS = ("neo-hookean", "neo-hookean/coupled", "linear")
 _NEO, _LINEAR = 0, 1
-#: Below this many elements ``ExplicitFem(parallel=None)`` runs serially (as the spring
-#: kernel's default): starting threads costs more than it saves on small meshes, and far more
-#: on a busy machine.
+#: ``ExplicitFem(parallel=None)`` runs serially unless this is on, as the spring kernel: two
+#: threads were never faster than one here (neo-Hookean 0.64-0.73x wall at 210,912 tets on
+#: the shared 2-core machine, reference_fem.explicit_kernels).
+PARALLEL_BY_DEFAULT = False
+#: With :data:`PARALLEL_BY_DEFAULT` on, below this many elements the kernel runs serially:
+#: starting threads costs more than it saves on small meshes.
 PARALLEL_MIN_ELEMENTS = 20_000
 
 
@@ -117,8 +120,8 @@ class ExplicitFem:
         the scene's law) or ``linear`` (small-strain isotropic elasticity).
     parallel
         ``True``: parallel kernel on all numba threads; ``False``: serial, in mesh order;
-        ``None`` (default): parallel from :data:`PARALLEL_MIN_ELEMENTS` elements when there
-        is more than one thread.
+        ``None`` (default): serial unless :data:`PARALLEL_BY_DEFAULT` is on, then parallel
+        from :data:`PARALLEL_MIN_ELEMENTS` elements when there is more than one thread.
     precision
         ``float64`` (default), ``mixed`` (float32 constants, float64 arithmetic) or
         ``float32``; ``None``: the scene's ``[fem] precision``.
@@ -170,7 +173,7 @@ class ExplicitFem:
         self.V0 = V
         m = self.tets.shape[0]
         if parallel is None:
-            parallel = m >= PARALLEL_MIN_ELEMENTS
+            parallel = PARALLEL_BY_DEFAULT and m >= PARALLEL_MIN_ELEMENTS
         self.parallel = bool(parallel) and numba.get_num_threads() > 1
         self._grad = np.ascontiguousarray(G[:, 1:])  # grad N_1..3 (energy, in numpy)
         self._serial, self._parallel = fem_kernel(self.law, precision)

@@ -48,9 +48,9 @@ class SpringModel:
     options
         Overrides ``SpringOptions.of(scene)`` (studies switch parts on and off this way).
     parallel
-        Use the parallel fused kernel (both cores). ``None`` (default): the kernel's own
-        choice, parallel from ``spring_kernel.PARALLEL_MIN_ELEMENTS`` elements up; below that
-        thread synchronisation costs more than a serial pass.
+        Use the parallel kernel (both cores). ``None`` (default): the kernel's own choice,
+        serial (``spring_kernel.PARALLEL_BY_DEFAULT``: two threads were never faster than
+        one in this project's measurements).
     """
 
     def __init__(

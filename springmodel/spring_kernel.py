@@ -6,15 +6,17 @@ compact constants of that variant (:func:`constant_columns`) in the blocked layo
 :mod:`springfem.blocks`, and runs the kernel of :func:`~springmodel.fastkernels.spring_kernel`
 serially or on all threads.
 
-Threads (rule: parallel from :data:`PARALLEL_MIN_ELEMENTS` elements when numba has more
-than one thread; pass ``parallel=False`` on a machine whose cores are taken). Measured with
+Threads (rule: serial by default, :data:`PARALLEL_BY_DEFAULT`; with it on, parallel from
+:data:`PARALLEL_MIN_ELEMENTS` elements when numba has more than one thread; pass
+``parallel=True`` to use every thread). Measured with
 ``springfem bench forces --tets 200000`` (210,912 tets, 7 interleaved rounds, 2 CPUs shared
 by other engineers, load average 2.6-3.5, ``OMP_WAIT_POLICY=passive``): two threads against
 one, wall, seed variant (torsion cosine) 0.91x (float64), 0.96x (mixed), 0.96x (float32);
 the serial/parallel CPU-time ratio was 1.00, 0.98, 0.90: the threads add almost no work
 (no barrier or reduction cost worth naming), so the wall-time loss is the cores being
 busy, not the kernel. At a quieter moment the issue measured 1.87x at 49k tets. A load
-that leaves a core free lets two threads win; this machine's usual load does not.
+that leaves a core free lets two threads win; this machine's usual load does not, so the
+default is the faster one measured here: serial.
 
 Examples
 --------
@@ -39,7 +41,11 @@ from springfem.blocks import BLOCK, block_layout, chunks, set_column
 
 from .fastkernels import _PAIRS, PRECISIONS, Variant, spring_kernel
 
-#: Below this many elements ``SpringKernel(parallel=None)`` runs serially.
+#: ``SpringKernel(parallel=None)`` runs serially unless this is on: two threads were never
+#: faster than one in this project's measurements on its shared 2-core machine (module
+#: docstring); turn it on where a core is free.
+PARALLEL_BY_DEFAULT = False
+#: With :data:`PARALLEL_BY_DEFAULT` on, below this many elements the kernel still runs serially.
 PARALLEL_MIN_ELEMENTS = 20_000
 
 
@@ -124,7 +130,8 @@ class SpringKernel:
         Which parts are on and their laws.
     parallel
         Use all numba threads (per-thread buffers); ``None`` (default): parallel from
-        :data:`PARALLEL_MIN_ELEMENTS` elements when there is more than one thread.
+        :data:`PARALLEL_MIN_ELEMENTS` elements when there is more than one thread and
+        :data:`PARALLEL_BY_DEFAULT` is on (it is off: serial).
     precision
         ``float64`` (default), ``mixed`` or ``float32`` (see the module docstring).
 
@@ -150,7 +157,11 @@ class SpringKernel:
             ]
         )
         if parallel is None:
-            parallel = elements.n_elements >= PARALLEL_MIN_ELEMENTS and numba.get_num_threads() > 1
+            parallel = (
+                PARALLEL_BY_DEFAULT
+                and elements.n_elements >= PARALLEL_MIN_ELEMENTS
+                and numba.get_num_threads() > 1
+            )
         self.parallel = bool(parallel)
         self._ptr = chunks(self._T.shape[0])
         nchunk = self._ptr.size - 1
