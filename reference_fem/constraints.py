@@ -7,6 +7,18 @@ are in the region. Later boundaries override earlier ones on shared DOFs, as in 
 Reactions follow :func:`springfem.loads.reactions`: the support force on a constrained
 DOF is ``-(f_ext - f_int) = R`` with the residual ``R = f_int - f_ext``, summed per
 boundary region (key ``boundary.region.name``).
+
+Examples
+--------
+>>> from reference_fem.scenes import bench_scene
+>>> from reference_fem.space import Space
+>>> scene = bench_scene(100)  # clamped on x_min: 9 vertices, 3 components each
+>>> space = Space(scene.mesh, order=1)
+>>> d = dirichlet(scene, space)
+>>> len(d.dofs), int(d.free.sum())
+(27, 108)
+>>> check_rigid_motions(space, d.dofs) is None  # the clamp removes all six
+True
 """
 
 from __future__ import annotations

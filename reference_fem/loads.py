@@ -10,6 +10,16 @@ The follower pressure uses Nanson's formula on the reference facet,
 ``n da = J F^-T N dA`` (with ``F`` of the adjacent element), so its load vector is
 ``f_ai = -p sum_q dx N_a J F^-T N`` and its derivative
 ``df_ai/du_bk = -p sum_q dx N_a J [(F^-T N)_i (F^-T G_b)_k - (F^-T G_b)_i (F^-T N)_k]``.
+
+Examples
+--------
+>>> import numpy as np
+>>> from springfem.mesh import box_mesh
+>>> from reference_fem.space import Space
+>>> space = Space(box_mesh((1.0, 2.0, 1.0), (2, 2, 2)), order=1)
+>>> f = body_force_vector(space, np.array([0.0, 0.0, -1.0]))
+>>> f.reshape(-1, 3).sum(axis=0).round(12).tolist()  # total force b V, V = 2
+[0.0, 0.0, -2.0]
 """
 
 from __future__ import annotations

@@ -53,6 +53,12 @@ the cosine-type torsion laws, as ``||A_k - C|| / ||C||`` in the Frobenius norm o
 fourth-order tensor (= the Frobenius norm of the Mandel matrices, the "Mandel Frobenius
 norm"; :mod:`springmodel.tangent`). :func:`calibration_mismatch` is the same norm on Voigt
 matrices of the energy forms.
+
+Examples
+--------
+>>> import numpy as np
+>>> rest_cosines(np.eye(3)[None]).tolist()  # orthonormal axes: every c_lm^0 = 0
+[[0.0, 0.0, 0.0]]
 """
 
 from __future__ import annotations

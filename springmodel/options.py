@@ -4,6 +4,14 @@
 computed only when it is on. :func:`springfem.scene.load_scene` validates the TOML section
 and builds a :class:`SpringOptions`; code that builds models programmatically constructs
 one directly.
+
+Examples
+--------
+>>> o = SpringOptions()
+>>> o.axial, o.torsion, o.volume
+('linear', 'cosine', True)
+>>> LMSOptions().rule  # the sign-consistent LMS variant by default
+'abs'
 """
 
 from __future__ import annotations

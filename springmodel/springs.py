@@ -49,6 +49,21 @@ volume (2.76–2.77), ``xi_j = x_j - x_b`` (the restoring sign, DESIGN §3)
     net force zero. ``spec`` form: ``f_j = -k_s dL xh_j`` as written, whose net force
     ``-k_s dL sum_j xh_j`` is nonzero for irregular tets. Damping ``-c (v_j - v_b)``
     (it also damps rigid rotation, as written in the spec).
+
+Examples
+--------
+>>> import numpy as np
+>>> from springfem.scene import Material
+>>> from springmodel.elements import build_spring_elements
+>>> from springmodel.options import SpringOptions
+>>> X = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+>>> tets, frames = np.array([[0, 1, 2, 3]]), np.eye(3)[None]
+>>> e = build_spring_elements(X, tets, frames, material=Material("linear", 1.0e4, 0.3))
+>>> float(abs(internal_forces(X, None, e, SpringOptions())).max())  # no force at rest
+0.0
+>>> f = internal_forces(1.01 * X, None, e, SpringOptions())  # stretched: net force zero
+>>> bool(abs(f.sum(axis=0)).max() < 1e-12)
+True
 """
 
 from __future__ import annotations
