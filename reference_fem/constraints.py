@@ -37,7 +37,17 @@ from .space import Space
 
 @dataclass
 class Dirichlet:
-    """Constrained DOFs, their prescribed values, and the DOFs of each boundary."""
+    """Constrained DOFs, their prescribed values, and the DOFs of each boundary.
+
+    Attributes
+    ----------
+    dofs, values
+        Constrained DOF indices and their prescribed displacements (m).
+    boundary_dofs
+        Per boundary: ``(region name, dofs, components)``, for the reactions.
+    n_dofs
+        Number of DOFs of the space.
+    """
 
     dofs: np.ndarray
     values: np.ndarray
@@ -61,7 +71,20 @@ class Dirichlet:
 
 
 def dirichlet(scene: Scene, space: Space) -> Dirichlet:
-    """Constrained DOFs and values on ``space`` for the scene's boundaries."""
+    """Constrained DOFs and values on ``space`` for the scene's boundaries.
+
+    Parameters
+    ----------
+    scene
+        Scene whose boundaries prescribe displacement components on regions.
+    space
+        P1 or P2 space (P2 edge nodes inside a region get the same value).
+
+    Returns
+    -------
+    Dirichlet
+        The constraints (later boundaries override earlier ones on shared DOFs).
+    """
     values = np.full(space.n_dofs, np.nan)
     per_boundary = []
     for b in scene.boundaries:
@@ -79,6 +102,20 @@ def check_rigid_motions(space: Space, fixed_dofs: np.ndarray, where: str = "") -
 
     Each connected piece of the mesh needs constraints whose restriction of the six
     rigid-body modes has rank 6; otherwise the stiffness matrix is singular.
+
+    Parameters
+    ----------
+    space
+        Function space.
+    fixed_dofs
+        Indices of the constrained DOFs.
+    where
+        Context appended to the error message.
+
+    Raises
+    ------
+    SolverError
+        Naming the free translations and the number of free rotations.
     """
     tets = space.mesh.tets
     n_v = space.n_vertices

@@ -69,7 +69,22 @@ PARALLEL_MIN_ELEMENTS = 20_000
 
 
 def strain_energy_density(F: np.ndarray, mu: float, lam: float, law: int) -> np.ndarray:
-    """``psi(F)`` per element for ``(m, 3, 3)`` gradients (``inf`` where neo-Hookean J <= 0)."""
+    """``psi(F)`` per element for ``(m, 3, 3)`` gradients (``inf`` where neo-Hookean J <= 0).
+
+    Parameters
+    ----------
+    F
+        Deformation gradients ``(m, 3, 3)``.
+    mu, lam
+        Lamé constants (Pa).
+    law
+        0: compressible neo-Hookean (coupled), 1: linear (small-strain).
+
+    Returns
+    -------
+    ndarray
+        Energy density ``(m,)`` (J/m^3).
+    """
     if law == _NEO:
         J = np.linalg.det(F)
         lnJ = np.log(np.where(J > 0, J, 1.0))
