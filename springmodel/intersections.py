@@ -81,7 +81,6 @@ def barycenters(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
     Returns
     -------
     ndarray
-        ``(m, 3)`` barycenters.
     """
     points, tets = _as_mesh(points, tets)
     return points[tets].sum(axis=1) * 0.25  # eq. 2.22
@@ -240,7 +239,6 @@ def axis_vectors(points: np.ndarray, tets: np.ndarray, C: np.ndarray) -> np.ndar
     Returns
     -------
     ndarray
-        ``(m, 3, 3)`` axis vectors.
     """
     q = intersection_points(points, tets, C)
     return q[:, 0::2] - q[:, 1::2]
