@@ -128,7 +128,18 @@ class SpringElements:
 
 
 def axis_gradients_from(C: np.ndarray) -> np.ndarray:
-    """``G[k, i, l] = C[k, i, 2l] - C[k, i, 2l+1]``, ``(m, 4, 3)``."""
+    """``G[k, i, l] = C[k, i, 2l] - C[k, i, 2l+1]``, ``(m, 4, 3)``.
+
+    Parameters
+    ----------
+    C
+        Intersection coefficients ``(m, 4, 6)``.
+
+    Returns
+    -------
+    ndarray
+        Axis gradients ``(m, 4, 3)``.
+    """
     return C[:, :, 0::2] - C[:, :, 1::2]
 
 
@@ -154,6 +165,16 @@ def build_spring_elements(
         three constants are given explicitly.
     C
         Precomputed intersection coefficients (otherwise ray-cast here).
+
+    Returns
+    -------
+    SpringElements
+        Rest data and constants of the ``m`` elements.
+
+    Raises
+    ------
+    ValueError
+        Without a material unless ``k_axial``, ``k_torsion`` and ``k_volume`` are all given.
     """
     options = options or SpringOptions()
     points = np.asarray(points, dtype=float)
