@@ -304,6 +304,19 @@ def internal_forces(
     Only the enabled parts are computed: axial always, torsion unless ``off``, volume if
     ``options.volume`` (barycentric or axes), coupling if on; damping terms only if their
     coefficient is positive and ``v`` given.
+
+    Parameters
+    ----------
+    x, v
+        Positions and velocities ``(n, 3)`` (``v`` None: no damping).
+    elements, options
+        :class:`SpringElements` rest data and :class:`SpringOptions` parts and laws.
+    volume_form
+        Overrides ``options.volume_form``.
+
+    Returns
+    -------
+    ndarray
     """
     f = axial_forces(x, v, elements, options)
     if options.torsion != "off":
@@ -340,6 +353,16 @@ def spring_energy(
     derived from (``stress-scaled``: ``k d^2/2``; ``cosine``: ``k/2 dc^2``; ``cubic``:
     ``k (dc^2/2 + b dc^4/4)``; ``angle``: ``k/2 (alpha - alpha0)^2``, all with the energy
     constant ``k_torsion``), which is what an energy-drift measurement should watch.
+
+    Parameters
+    ----------
+    x, elements, options
+        Positions ``(n, 3)``, rest data and the switched-on parts.
+
+    Returns
+    -------
+    W, total
+        Energy per element ``(m,)`` (J) and its sum.
     """
     X = x[elements.tets]
     q = intersection_points(x, elements)
