@@ -24,6 +24,13 @@ solve(scene, order=None, law=None, verbose=False) -> FemSolution
 bench(n_tets=100_000) -> dict
 material_matrix(material, frames) -> (m, 6, 6) Voigt stiffness
 element_stiffness_p1(points, tets, Cmat) -> (m, 12, 12)
+
+Examples
+--------
+>>> import numpy as np
+>>> law = NeoHookean(mu=1.0, lam=2.0)
+>>> float(abs(law.stress(np.eye(3))).max())  # stress free at rest
+0.0
 """
 
 from . import options as _options  # noqa: F401  (registers the [fem] scene section)

@@ -71,7 +71,22 @@ class BlockPattern:
 
 
 def assemble_vector(element_nodes: np.ndarray, fe: np.ndarray, n_nodes: int) -> np.ndarray:
-    """Sum element vectors ``(m, nloc, 3)`` at ``element_nodes`` into ``(3 n_nodes,)``."""
+    """Sum element vectors ``(m, nloc, 3)`` at ``element_nodes`` into ``(3 n_nodes,)``.
+
+    Parameters
+    ----------
+    element_nodes
+        ``(m, nloc)`` node indices per element.
+    fe
+        Element vectors ``(m, nloc, 3)``.
+    n_nodes
+        Number of nodes.
+
+    Returns
+    -------
+    ndarray
+        Global vector ``(3 n_nodes,)``, DOF ``3 node + component``.
+    """
     dofs = (3 * np.asarray(element_nodes, dtype=np.int64)[..., None] + np.arange(3)).ravel()
     return np.bincount(dofs, weights=np.asarray(fe).ravel(), minlength=3 * n_nodes)
 
@@ -100,6 +115,18 @@ def linear_element_blocks(
 
     ``Ke[e, a, b, i, k] = sum_q dx sum_jl G_aj C_ijkl G_bl`` with the Voigt matrix
     ``D_groups[group[e]]``; one matrix product per material group.
+
+    Parameters
+    ----------
+    grads, dx
+        Shape-function gradients ``(m, nq, nloc, 3)`` and quadrature weights ``(m, nq)``.
+    D_groups, group
+        Voigt stiffness per material group ``(g, 6, 6)`` and each element's group ``(m,)``.
+
+    Returns
+    -------
+    ndarray
+        Element blocks ``(m, nloc, nloc, 3, 3)``.
     """
     m, _, nloc, _ = grads.shape
     C9 = _c9(np.asarray(D_groups).reshape(-1, 6, 6))
@@ -120,7 +147,18 @@ def linear_element_blocks(
 
 
 def blocks_to_dense(blocks: np.ndarray) -> np.ndarray:
-    """Element blocks ``(m, nloc, nloc, 3, 3)`` -> matrices ``(m, 3 nloc, 3 nloc)``."""
+    """Element blocks ``(m, nloc, nloc, 3, 3)`` -> matrices ``(m, 3 nloc, 3 nloc)``.
+
+    Parameters
+    ----------
+    blocks
+        Element blocks ``(m, nloc, nloc, 3, 3)``.
+
+    Returns
+    -------
+    ndarray
+        Element matrices ``(m, 3 nloc, 3 nloc)``, DOF ``3 a + i``.
+    """
     m, nloc = blocks.shape[:2]
     return blocks.transpose(0, 1, 3, 2, 4).reshape(m, 3 * nloc, 3 * nloc)
 
@@ -134,6 +172,11 @@ def element_stiffness_p1(points: np.ndarray, tets: np.ndarray, Cmat: np.ndarray)
         Mesh (tets positively oriented).
     Cmat
         Voigt stiffness ``(6, 6)`` or per element ``(m, 6, 6)``.
+
+    Returns
+    -------
+    ndarray
+        Element stiffness matrices ``(m, 12, 12)``.
     """
     G, V = p1_gradients(points, tets)
     Cmat = np.asarray(Cmat, dtype=float)
@@ -150,13 +193,43 @@ def stiffness_matrix(
     group: np.ndarray,
     pattern: BlockPattern | None = None,
 ) -> sp.bsr_matrix:
-    """Global linear elastic stiffness (BSR, 3x3 blocks) on ``space``."""
+    """Global linear elastic stiffness (BSR, 3x3 blocks) on ``space``.
+
+    Parameters
+    ----------
+    space
+        Function space (P1 or P2) on the mesh.
+    D_groups, group
+        Voigt stiffness per material group ``(g, 6, 6)`` and each element's group ``(m,)``.
+    pattern
+        Block pattern of ``space`` (built when None).
+
+    Returns
+    -------
+    scipy.sparse.bsr_matrix
+        Stiffness ``(3 n_nodes, 3 n_nodes)``.
+    """
     pattern = pattern or BlockPattern(space.element_nodes, space.n_nodes)
     return pattern.matrix(linear_element_blocks(space.grads, space.dx, D_groups, group))
 
 
 def displacement_gradient(space: Space, U: np.ndarray, sl: slice = slice(None)) -> np.ndarray:
-    """``grad u`` at the quadrature points ``(m, nq, 3, 3)``; ``U`` is nodal ``(n_nodes, 3)``."""
+    """``grad u`` at the quadrature points ``(m, nq, 3, 3)``; ``U`` is nodal ``(n_nodes, 3)``.
+
+    Parameters
+    ----------
+    space
+        Function space.
+    U
+        Nodal displacements ``(n_nodes, 3)``.
+    sl
+        Slice of the elements to evaluate.
+
+    Returns
+    -------
+    ndarray
+        ``grad u[e, q, i, j] = du_i / dX_j``, ``(m, nq, 3, 3)``.
+    """
     Ue = U[space.element_nodes[sl]]  # (m, nloc, 3)
     return np.einsum("eqaj,eai->eqij", space.grads[sl], Ue)
 
@@ -168,8 +241,24 @@ def hyperelastic_element_arrays(
 
     ``f_ai = sum_q dx P_ij G_aj``, ``K_abik = sum_q dx G_aj A_ijkl G_bl`` with ``P, A`` from
     ``law.stress_tangent(F)``, ``F = I + grad u``. NaN entries mark inverted elements.
-    ``frames`` ``(m, 3, 3)`` (anisotropic laws) are passed as ``law.stress_tangent(F,
-    frames=...)``, one frame per element.
+
+    Parameters
+    ----------
+    space
+        Function space.
+    law
+        Hyperelastic law with ``stress(F)`` and ``stress_tangent(F)``.
+    U
+        Nodal displacements ``(n_nodes, 3)`` (or flat ``(3 n_nodes,)``).
+    tangent
+        Also compute the tangent blocks.
+    frames
+        Element frames ``(m, 3, 3)`` (anisotropic laws), passed as ``frames=``.
+
+    Returns
+    -------
+    fe, Ke
+        Element forces ``(m, nloc, 3)``; tangent blocks ``(m, nloc, nloc, 3, 3)`` or None.
     """
     m, nq, nloc, _ = space.grads.shape
     U = np.asarray(U).reshape(-1, 3)

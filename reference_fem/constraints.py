@@ -7,6 +7,18 @@ are in the region. Later boundaries override earlier ones on shared DOFs, as in 
 Reactions follow :func:`springfem.loads.reactions`: the support force on a constrained
 DOF is ``-(f_ext - f_int) = R`` with the residual ``R = f_int - f_ext``, summed per
 boundary region (key ``boundary.region.name``).
+
+Examples
+--------
+>>> from reference_fem.scenes import bench_scene
+>>> from reference_fem.space import Space
+>>> scene = bench_scene(100)  # clamped on x_min: 9 vertices, 3 components each
+>>> space = Space(scene.mesh, order=1)
+>>> d = dirichlet(scene, space)
+>>> len(d.dofs), int(d.free.sum())
+(27, 108)
+>>> check_rigid_motions(space, d.dofs) is None  # the clamp removes all six
+True
 """
 
 from __future__ import annotations
@@ -25,7 +37,17 @@ from .space import Space
 
 @dataclass
 class Dirichlet:
-    """Constrained DOFs, their prescribed values, and the DOFs of each boundary."""
+    """Constrained DOFs, their prescribed values, and the DOFs of each boundary.
+
+    Attributes
+    ----------
+    dofs, values
+        Constrained DOF indices and their prescribed displacements (m).
+    boundary_dofs
+        Per boundary: ``(region name, dofs, components)``, for the reactions.
+    n_dofs
+        Number of DOFs of the space.
+    """
 
     dofs: np.ndarray
     values: np.ndarray
@@ -49,7 +71,20 @@ class Dirichlet:
 
 
 def dirichlet(scene: Scene, space: Space) -> Dirichlet:
-    """Constrained DOFs and values on ``space`` for the scene's boundaries."""
+    """Constrained DOFs and values on ``space`` for the scene's boundaries.
+
+    Parameters
+    ----------
+    scene
+        Scene whose boundaries prescribe displacement components on regions.
+    space
+        P1 or P2 space (P2 edge nodes inside a region get the same value).
+
+    Returns
+    -------
+    Dirichlet
+        The constraints (later boundaries override earlier ones on shared DOFs).
+    """
     values = np.full(space.n_dofs, np.nan)
     per_boundary = []
     for b in scene.boundaries:
@@ -67,6 +102,20 @@ def check_rigid_motions(space: Space, fixed_dofs: np.ndarray, where: str = "") -
 
     Each connected piece of the mesh needs constraints whose restriction of the six
     rigid-body modes has rank 6; otherwise the stiffness matrix is singular.
+
+    Parameters
+    ----------
+    space
+        Function space.
+    fixed_dofs
+        Indices of the constrained DOFs.
+    where
+        Context appended to the error message.
+
+    Raises
+    ------
+    SolverError
+        Naming the free translations and the number of free rotations.
     """
     tets = space.mesh.tets
     n_v = space.n_vertices

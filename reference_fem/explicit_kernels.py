@@ -209,6 +209,23 @@ def fem_kernel(law: str, precision: str = "float64"):
     ``serial(x, T, K, m, mu, lam, out)`` and ``parallel(x, T, K, m, mu, lam, ptr, buf, out)``
     overwrite ``out (n, 3)`` with the internal forces and return the number of elements with
     ``J <= 0``.
+
+    Parameters
+    ----------
+    law
+        ``neo-hookean`` or ``linear``.
+    precision
+        ``float64``, ``mixed`` (float32 constants, float64 arithmetic) or ``float32``.
+
+    Returns
+    -------
+    serial, parallel
+        The two drivers.
+
+    Raises
+    ------
+    ValueError
+        For an unknown law or precision.
     """
     if law not in ("neo-hookean", "linear"):
         raise ValueError(f"law {law!r} is not one of neo-hookean, linear")

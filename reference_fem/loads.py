@@ -10,6 +10,16 @@ The follower pressure uses Nanson's formula on the reference facet,
 ``n da = J F^-T N dA`` (with ``F`` of the adjacent element), so its load vector is
 ``f_ai = -p sum_q dx N_a J F^-T N`` and its derivative
 ``df_ai/du_bk = -p sum_q dx N_a J [(F^-T N)_i (F^-T G_b)_k - (F^-T G_b)_i (F^-T N)_k]``.
+
+Examples
+--------
+>>> import numpy as np
+>>> from springfem.mesh import box_mesh
+>>> from reference_fem.space import Space
+>>> space = Space(box_mesh((1.0, 2.0, 1.0), (2, 2, 2)), order=1)
+>>> f = body_force_vector(space, np.array([0.0, 0.0, -1.0]))
+>>> f.reshape(-1, 3).sum(axis=0).round(12).tolist()  # total force b V, V = 2
+[0.0, 0.0, -2.0]
 """
 
 from __future__ import annotations
@@ -28,7 +38,17 @@ from .space import Space
 
 @dataclass
 class FacetData:
-    """Quadrature data of a set of boundary facets (from a scikit-fem ``FacetBasis``)."""
+    """Quadrature data of a set of boundary facets (from a scikit-fem ``FacetBasis``).
+
+    Attributes
+    ----------
+    element_nodes
+        ``(nf, nloc)`` nodes of each facet's adjacent element.
+    values, grads
+        Shape functions ``(nf, nq, nloc)`` and their gradients ``(nf, nq, nloc, 3)``.
+    dx, normals
+        Reference area weights ``(nf, nq)`` and outward unit normals ``(nf, nq, 3)``.
+    """
 
     element_nodes: np.ndarray  # (nf, nloc) nodes of the adjacent element
     values: np.ndarray  # (nf, nq, nloc)
@@ -53,7 +73,20 @@ class FacetData:
 
 
 def traction_vector(space: Space, fd: FacetData, traction: np.ndarray) -> np.ndarray:
-    """``f_ai = int N_a t_i dA`` for a uniform dead traction ``t`` (3,)."""
+    """``f_ai = int N_a t_i dA`` for a uniform dead traction ``t`` (3,).
+
+    Parameters
+    ----------
+    space, fd
+        Function space and the loaded facets.
+    traction
+        Traction ``(3,)`` (Pa) on the reference surface.
+
+    Returns
+    -------
+    ndarray
+        Load vector ``(3 n_nodes,)`` (N).
+    """
     fe = np.einsum("fq,fqa,i->fai", fd.dx, fd.values, np.asarray(traction, dtype=float))
     return assemble_vector(fd.element_nodes, fe, space.n_nodes)
 
@@ -61,7 +94,18 @@ def traction_vector(space: Space, fd: FacetData, traction: np.ndarray) -> np.nda
 def body_force_vector(space: Space, force: np.ndarray | Callable) -> np.ndarray:
     """``f_ai = int N_a b_i dV`` for a uniform body force (3,) or a function of ``x``.
 
-    A callable receives quadrature points ``(m, nq, 3)`` and returns ``(m, nq, 3)``.
+    Parameters
+    ----------
+    space
+        Function space.
+    force
+        Body force per unit reference volume ``(3,)`` (N/m^3), or a callable taking the
+        quadrature points ``(m, nq, 3)`` and returning ``(m, nq, 3)``.
+
+    Returns
+    -------
+    ndarray
+        Load vector ``(3 n_nodes,)`` (N).
     """
     if callable(force):
         b = np.asarray(force(space.quadrature_points()), dtype=float)
@@ -76,7 +120,22 @@ def pressure_arrays(
 ) -> tuple[np.ndarray, np.ndarray | None]:
     """Follower pressure: element forces ``(nf, nloc, 3)`` and ``d f / d u`` blocks.
 
-    ``U = None`` gives the dead (reference-surface) load and no stiffness.
+    Parameters
+    ----------
+    fd
+        The loaded facets.
+    p
+        Pressure (Pa), positive into the surface (``t = -p n``).
+    U
+        Nodal displacements ``(n_nodes, 3)``; None gives the dead (reference-surface) load
+        and no stiffness.
+    tangent
+        Also compute the load stiffness.
+
+    Returns
+    -------
+    fe, Ke
+        Element forces ``(nf, nloc, 3)`` and blocks ``(nf, nloc, nloc, 3, 3)`` (or None).
     """
     nf, nq, nloc = fd.values.shape
     if U is None:

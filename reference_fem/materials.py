@@ -39,6 +39,26 @@ def material_groups(material: Material, frames: np.ndarray, law: str | None = No
     """Distinct Voigt matrices and each element's group: ``(D_groups (g, 6, 6), group (m,))``.
 
     Uniform axes give one group, so assembly can use one matrix product per group.
+
+    Parameters
+    ----------
+    material
+        The scene's material.
+    frames
+        ``(m, 3, 3)`` element frames; ``frames[k, 0]`` is the fiber.
+    law
+        ``linear``, ``neo-hookean`` (isotropic) or ``transverse-linear``; default
+        ``material.law``.
+
+    Returns
+    -------
+    D_groups, group
+        Global-frame Voigt matrices ``(g, 6, 6)`` and each element's index ``(m,)``.
+
+    Raises
+    ------
+    InputError
+        For a law without a linear matrix, or missing transverse constants.
     """
     law = law or material.law
     m = len(frames)
@@ -68,6 +88,11 @@ def material_matrix(material: Material, frames: np.ndarray, law: str | None = No
     law
         ``linear`` (isotropic ``E``, ``nu``) or ``transverse-linear``; default
         ``material.law`` (``neo-hookean`` gives its small-strain isotropic matrix).
+
+    Returns
+    -------
+    ndarray
+        Voigt stiffness ``(m, 6, 6)`` (Pa).
 
     Examples
     --------

@@ -42,7 +42,15 @@ from springfem.mechanics.newton import (
 
 
 class InvertedElements(RejectedState):
-    """Raised by a problem's residual when elements have ``J <= 0``."""
+    """Raised by a problem's residual when elements have ``J <= 0``.
+
+    Parameters
+    ----------
+    elements
+        Indices of the inverted elements (kept as :attr:`elements`).
+    where
+        Context appended to the message.
+    """
 
     def __init__(self, elements: np.ndarray, where: str = ""):
         msg = f"{len(elements)} inverted element(s) (J <= 0): {elements[:5].tolist()}"

@@ -3,6 +3,14 @@
 :func:`parse_fem_options` validates the section (registered with the core, so
 :func:`springfem.scene.load_scene` checks it on load); :meth:`FemOptions.of` reads it
 from a scene.
+
+Examples
+--------
+>>> from reference_fem.scenes import bench_scene
+>>> FemOptions().order, FemOptions().linear_solver  # the defaults
+(1, 'auto')
+>>> FemOptions.of(bench_scene(100)).linear_solver  # the bench scene's [fem] section
+'amg'
 """
 
 from __future__ import annotations

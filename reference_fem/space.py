@@ -32,6 +32,16 @@ from springfem.mesh import TetMesh
 def p1_gradients(points: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Constant P1 shape-function gradients ``(m, 4, 3)`` and signed volumes ``(m,)``.
 
+    Parameters
+    ----------
+    points, tets
+        Vertex coordinates ``(n, 3)`` and node indices ``(m, 4)``.
+
+    Returns
+    -------
+    G, V
+        ``G[k, a] = grad N_a`` ``(m, 4, 3)`` and signed volumes ``(m,)``.
+
     Examples
     --------
     >>> G, V = p1_gradients(np.eye(4)[:, 1:], np.array([[0, 1, 2, 3]]))  # the unit corner tet
@@ -50,6 +60,18 @@ def default_intorder(order: int, nonlinear: bool = False) -> int:
 
     The 4-point rule is exact for the linear P2 stiffness on straight tets; for
     hyperelastic P2 it is the usual full integration (as in Abaqus' C3D10).
+
+    Parameters
+    ----------
+    order
+        Element order, 1 or 2.
+    nonlinear
+        Hyperelastic problem (the same rule today).
+
+    Returns
+    -------
+    int
+        scikit-fem ``intorder``: 1 for P1, 2 (4 points) for P2.
     """
     return 1 if order == 1 else 2
 

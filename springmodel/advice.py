@@ -114,7 +114,22 @@ def model_warnings(
 
 
 def scene_warnings(scene: Any, mismatch: np.ndarray, options: SpringOptions) -> list[str]:
-    """:func:`model_warnings` for a scene's material."""
+    """:func:`model_warnings` for a scene's material.
+
+    Parameters
+    ----------
+    scene
+        The scene (its material says whether it is transversely isotropic).
+    mismatch
+        Per-element calibration mismatch ``(m,)``.
+    options
+        Spring options.
+
+    Returns
+    -------
+    list of str
+        One-line warnings (empty when the model fits the material).
+    """
     from springfem.materials import is_transverse
 
     return model_warnings(mismatch, options, is_transverse(scene.material))

@@ -33,12 +33,36 @@ from .calibration import TORSION_PAIRS
 
 
 def volume_ratio(zeta: np.ndarray, det0: np.ndarray) -> np.ndarray:
-    """``J = det[zeta_1 zeta_2 zeta_3] / det0`` of current axes ``(m, 3, 3)``, ``(m,)``."""
+    """``J = det[zeta_1 zeta_2 zeta_3] / det0`` of current axes ``(m, 3, 3)``, ``(m,)``.
+
+    Parameters
+    ----------
+    zeta
+        Current axis vectors ``(m, 3, 3)``, ``zeta[k, l]`` for axis ``l``.
+    det0
+        Rest determinants ``det[zeta_1^0 zeta_2^0 zeta_3^0]`` ``(m,)``.
+
+    Returns
+    -------
+    ndarray
+        Volume ratio ``J`` ``(m,)``.
+    """
     return np.einsum("kc,kc->k", zeta[:, 0], np.cross(zeta[:, 1], zeta[:, 2])) / det0
 
 
 def volume_ratio_gradient(zeta: np.ndarray, det0: np.ndarray) -> np.ndarray:
-    """``dJ / d zeta_l``, ``(m, 3, 3)`` (row ``l``)."""
+    """``dJ / d zeta_l``, ``(m, 3, 3)`` (row ``l``).
+
+    Parameters
+    ----------
+    zeta, det0
+        Current axis vectors ``(m, 3, 3)`` and rest determinants ``(m,)``.
+
+    Returns
+    -------
+    ndarray
+        ``dJ / d zeta_l`` ``(m, 3, 3)``.
+    """
     z0, z1, z2 = zeta[:, 0], zeta[:, 1], zeta[:, 2]
     g = np.stack([np.cross(z1, z2), np.cross(z2, z0), np.cross(z0, z1)], axis=1)
     return g / det0[:, None, None]
@@ -59,6 +83,11 @@ def axis_volume_axis_forces(
         Volumetric energy (``quadratic``, ``log``, ``simo-taylor``).
     eta
         Volume viscosity (Pa s); used when positive and ``zeta_dot`` is given.
+
+    Returns
+    -------
+    ndarray
+        ``g_l`` ``(m, 3, 3)`` (N); ``-g_l`` acts on the ``-`` ends.
     """
     J = volume_ratio(zeta, elements.det0)
     gJ = volume_ratio_gradient(zeta, elements.det0)
@@ -70,7 +99,20 @@ def axis_volume_axis_forces(
 
 
 def coupling_axis_forces(zeta: np.ndarray, elements) -> np.ndarray:
-    """Forces ``g_l`` ``(m, 3, 3)`` of the Poisson-coupling springs on the ``+`` ends."""
+    """Forces ``g_l`` ``(m, 3, 3)`` of the Poisson-coupling springs on the ``+`` ends.
+
+    Parameters
+    ----------
+    zeta
+        Current axis vectors ``(m, 3, 3)``.
+    elements
+        :class:`~springmodel.elements.SpringElements` (``l0``, ``k_coupling``).
+
+    Returns
+    -------
+    ndarray
+        ``g_l`` ``(m, 3, 3)`` (N).
+    """
     L = np.linalg.norm(zeta, axis=-1)
     u = zeta / L[..., None]
     s = L / elements.l0 - 1.0
@@ -83,7 +125,22 @@ def coupling_axis_forces(zeta: np.ndarray, elements) -> np.ndarray:
 
 
 def axis_spring_energy(zeta: np.ndarray, elements, options) -> np.ndarray:
-    """Energy per element ``(m,)`` of the axis-volume and coupling springs that are on."""
+    """Energy per element ``(m,)`` of the axis-volume and coupling springs that are on.
+
+    Parameters
+    ----------
+    zeta
+        Current axis vectors ``(m, 3, 3)``.
+    elements
+        :class:`~springmodel.elements.SpringElements`.
+    options
+        :class:`~springmodel.options.SpringOptions` (``axis_volume``, ``coupling``).
+
+    Returns
+    -------
+    ndarray
+        Energy ``(m,)`` (J).
+    """
     W = np.zeros(zeta.shape[0])
     if options.axis_volume:
         J = volume_ratio(zeta, elements.det0)

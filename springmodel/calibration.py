@@ -53,6 +53,12 @@ the cosine-type torsion laws, as ``||A_k - C|| / ||C||`` in the Frobenius norm o
 fourth-order tensor (= the Frobenius norm of the Mandel matrices, the "Mandel Frobenius
 norm"; :mod:`springmodel.tangent`). :func:`calibration_mismatch` is the same norm on Voigt
 matrices of the energy forms.
+
+Examples
+--------
+>>> import numpy as np
+>>> rest_cosines(np.eye(3)[None]).tolist()  # orthonormal axes: every c_lm^0 = 0
+[[0.0, 0.0, 0.0]]
 """
 
 from __future__ import annotations
@@ -93,7 +99,15 @@ class RestGeometry(NamedTuple):
 
 
 class Calibrated(NamedTuple):
-    """Spring constants of every element and how well they reproduce the material."""
+    """Spring constants of every element and how well they reproduce the material.
+
+    Attributes
+    ----------
+    k_axial, k_torsion, k_volume, mismatch
+        ``(m, 3)`` N/m, ``(m, 3)`` J, ``(m,)`` N/m, ``(m,)`` Mandel ``||A_k - C|| / ||C||``.
+    k_axis_volume, k_coupling
+        ``(m,)`` Pa and ``(m, 3)`` J, or None when those parts are off.
+    """
 
     k_axial: np.ndarray  # (m, 3)  N/m
     k_torsion: np.ndarray  # (m, 3) J (energy units: U = k/2 (c - c0)^2)
@@ -178,6 +192,11 @@ def effective_matrix(geometry: Any, k_axial, k_torsion, k_volume) -> np.ndarray:
         :class:`RestGeometry` or :class:`~springmodel.elements.SpringElements`).
     k_axial, k_torsion, k_volume
         ``(m, 3)``, ``(m, 3)``, ``(m,)`` or broadcastable; torsion in energy units.
+
+    Returns
+    -------
+    ndarray
+        ``D_k`` ``(m, 6, 6)`` (Pa), engineering-shear Voigt.
     """
     v = voigt_vector(spring_strain_tensors(geometry.zeta0, geometry.xi0))  # (m, 7, 6)
     k = _stack_constants(k_axial, k_torsion, k_volume, v.shape[0])
@@ -189,9 +208,17 @@ def calibration_mismatch(
 ) -> np.ndarray:
     """Relative Frobenius mismatch ``||D - C|| / ||C||`` of Voigt matrices, ``(m,)``.
 
-    ``norm = "mandel"`` (default) measures the fourth-order tensors (frame-independent);
-    ``"voigt"`` takes the Frobenius norm of the Voigt matrices as they are (engineering
-    shear), which depends on the orientation of the axes relative to the global frame.
+    Parameters
+    ----------
+    D, C
+        ``(m, 6, 6)`` effective and material Voigt matrices (``C`` may be ``(6, 6)``).
+    norm
+        ``mandel``: of the fourth-order tensors (frame-independent); ``voigt``: of the
+        Voigt matrices as they are (engineering shear; depends on the axes' orientation).
+
+    Returns
+    -------
+    ndarray
     """
     if norm == "mandel":
         Dm, Cm = to_mandel(np.asarray(D, float)), to_mandel(np.asarray(C, float))
@@ -219,6 +246,16 @@ def analytic_constants(
         least-squares fit of ``k_s R R`` to ``b V I I`` (Frobenius),
         ``k_s = b V tr(R)^2 / ||R||^4``; both are exact when ``R = rho I``, ``lsq`` is about
         half the ``mean`` value on the six-tet split and leaves a smaller mismatch there.
+
+    Returns
+    -------
+    k_axial, k_torsion, k_volume
+        ``(m, 3)`` (N/m), ``(m, 3)`` (J), ``(m,)`` (N/m).
+
+    Raises
+    ------
+    ValueError
+        If ``volume`` is neither ``mean`` nor ``lsq``.
     """
     V = geometry.V0
     l0 = np.linalg.norm(geometry.zeta0, axis=-1)

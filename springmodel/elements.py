@@ -4,6 +4,18 @@ Everything here is computed once, in the rest configuration (DESIGN §3): the in
 coefficients ``C^k`` (eqs. 2.22–2.25), their axis differences ``G`` (the fast-kernel
 identity ``G[k,i,l] = C[k,i,2l] - C[k,i,2l+1] = grad N_i . zeta_l^0``), the rest lengths,
 cosines, radial lengths and volumes, and the calibrated spring constants.
+
+Examples
+--------
+>>> import numpy as np
+>>> from springfem.scene import Material
+>>> X = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+>>> e = build_spring_elements(X, np.array([[0, 1, 2, 3]]), np.eye(3)[None],
+...                           material=Material("linear", 1.0e4, 0.3))
+>>> e.l0.tolist(), round(float(e.V0[0]), 12)  # axes through the barycenter, V = 1/6
+([[0.5, 0.5, 0.5]], 0.166666666667)
+>>> round(float(e.k_axial[0, 0]), 1)  # 2 mu V0 / l0^2 with mu = E / (2 (1 + nu))
+5128.2
 """
 
 from __future__ import annotations
@@ -116,7 +128,18 @@ class SpringElements:
 
 
 def axis_gradients_from(C: np.ndarray) -> np.ndarray:
-    """``G[k, i, l] = C[k, i, 2l] - C[k, i, 2l+1]``, ``(m, 4, 3)``."""
+    """``G[k, i, l] = C[k, i, 2l] - C[k, i, 2l+1]``, ``(m, 4, 3)``.
+
+    Parameters
+    ----------
+    C
+        Intersection coefficients ``(m, 4, 6)``.
+
+    Returns
+    -------
+    ndarray
+        Axis gradients ``(m, 4, 3)``.
+    """
     return C[:, :, 0::2] - C[:, :, 1::2]
 
 
@@ -142,6 +165,16 @@ def build_spring_elements(
         three constants are given explicitly.
     C
         Precomputed intersection coefficients (otherwise ray-cast here).
+
+    Returns
+    -------
+    SpringElements
+        Rest data and constants of the ``m`` elements.
+
+    Raises
+    ------
+    ValueError
+        Without a material unless ``k_axial``, ``k_torsion`` and ``k_volume`` are all given.
     """
     options = options or SpringOptions()
     points = np.asarray(points, dtype=float)

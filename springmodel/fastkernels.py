@@ -394,6 +394,16 @@ def spring_kernel(variant: Variant):
 
     ``serial(x, w, T, K, m, p, q, out)``, ``parallel(x, w, T, K, m, p, q, ptr, buf, out)``;
     see :func:`springfem.blocks.block_drivers`.
+
+    Parameters
+    ----------
+    variant
+        The switched-on parts, laws and precision (:class:`Variant`).
+
+    Returns
+    -------
+    serial, parallel
+        The two drivers.
     """
     return block_drivers(_block_run(variant))
 

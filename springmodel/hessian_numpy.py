@@ -28,7 +28,18 @@ from .options import SpringOptions
 
 
 def polynomial_coefficients(options: SpringOptions) -> tuple[float, float]:
-    """``(b2, b3)`` of the axial law (zero for ``linear``, ``b3 = 0`` for ``quadratic``)."""
+    """``(b2, b3)`` of the axial law (zero for ``linear``, ``b3 = 0`` for ``quadratic``).
+
+    Parameters
+    ----------
+    options
+        Spring options (``axial``, ``axial_coefficients``).
+
+    Returns
+    -------
+    tuple of float
+        ``(b2, b3)``.
+    """
     if options.axial in ("quadratic", "cubic"):
         b2, b3 = options.axial_coefficients
         return float(b2), float(b3) if options.axial == "cubic" else 0.0
@@ -49,8 +60,20 @@ def axis_hessian(
 ) -> np.ndarray:
     """Hessian of the axial + torsion energy in the axis vectors, ``(m, 3, 3, 3, 3)``.
 
-    Index order ``[k, l, a, m, b]``: ``d^2 U / d zeta_l[a] d zeta_m[b]``. ``zeta (m, 3, 3)``
-    are the current axes, the other arrays the elements' rest lengths, constants and cosines.
+    Parameters
+    ----------
+    zeta
+        Current axes ``(m, 3, 3)``.
+    l0, k_axial, k_torsion, c0
+        Rest lengths ``(m, 3)``, axial (N/m) and torsion (J) constants ``(m, 3)``, rest
+        cosines ``(m, 3)``.
+    options
+        Spring options (axial law and coefficients, torsion on or off).
+
+    Returns
+    -------
+    ndarray
+        ``H[k, l, a, m, b] = d^2 U / d zeta_l[a] d zeta_m[b]``, ``(m, 3, 3, 3, 3)``.
     """
     m = zeta.shape[0]
     eye = np.eye(3)
@@ -94,7 +117,20 @@ def axis_hessian(
 
 
 def volume_hessian(X: np.ndarray, L0: np.ndarray, k_volume: np.ndarray) -> np.ndarray:
-    """Hessian of ``k_s/2 (sum_j |x_j - x_b| - L0)^2`` in the vertices, ``(m, 4, 3, 4, 3)``."""
+    """Hessian of ``k_s/2 (sum_j |x_j - x_b| - L0)^2`` in the vertices, ``(m, 4, 3, 4, 3)``.
+
+    Parameters
+    ----------
+    X
+        Element vertex positions ``(m, 4, 3)``.
+    L0, k_volume
+        Rest radial sums and volume constants (N/m), each ``(m,)``.
+
+    Returns
+    -------
+    ndarray
+        ``(m, 4, 3, 4, 3)``, index ``[k, i, a, j, b]``.
+    """
     xi = X - X.mean(axis=1, keepdims=True)  # restoring sign, barycenter -> vertex
     r = np.linalg.norm(xi, axis=-1)
     xh = xi / r[..., None]
@@ -131,6 +167,22 @@ def axis_parts_hessian(
     det0`` (``E[a, b] = eps_abc z_c``), its transpose for ``(m, l)``. Coupling
     ``c s_l s_m``: ``c s_m (I - zh_l zh_l^T) / (l_l |zeta_l|)`` on ``(l, l)`` (and ``l <-> m``),
     ``c zh_l zh_m^T / (l_l l_m)`` on ``(l, m)``.
+
+    Parameters
+    ----------
+    zeta, l0
+        Current axes ``(m, 3, 3)`` and rest lengths ``(m, 3)``.
+    k_coupling
+        Coupling constants ``(m, 3)`` (J) for the pairs (0,1), (0,2), (1,2).
+    kappa_V0, inv_det0
+        ``kappa V0`` (J) and ``1 / det0``, each ``(m,)``.
+    options
+        Spring options (``axis_volume``, ``volumetric``, ``coupling``).
+
+    Returns
+    -------
+    ndarray
+        ``(m, 3, 3, 3, 3)``, index order as in :func:`axis_hessian`.
     """
     m = zeta.shape[0]
     H = np.zeros((m, 3, 3, 3, 3))

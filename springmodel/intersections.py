@@ -71,7 +71,17 @@ class RayCast(NamedTuple):
 
 
 def barycenters(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """Barycenters ``x_b = (1/4) sum_i x_i`` of the tets, ``(m, 3)`` (eq. 2.22)."""
+    """Barycenters ``x_b = (1/4) sum_i x_i`` of the tets, ``(m, 3)`` (eq. 2.22).
+
+    Parameters
+    ----------
+    points, tets
+        ``(n, 3)`` coordinates and ``(m, 4)`` node indices.
+
+    Returns
+    -------
+    ndarray
+    """
     points, tets = _as_mesh(points, tets)
     return points[tets].sum(axis=1) * 0.25  # eq. 2.22
 
@@ -81,6 +91,16 @@ def shape_gradients(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
 
     ``N_1..N_3`` are the coordinates ``J^-1 (x - x_0)`` with ``J = [x1-x0, x2-x0, x3-x0]``;
     the rows of ``J^-1`` are the cofactor cross products over ``det J``. ``N_0 = 1 - sum``.
+
+    Parameters
+    ----------
+    points, tets
+        ``(n, 3)`` coordinates and ``(m, 4)`` node indices.
+
+    Returns
+    -------
+    ndarray
+        ``(m, 4, 3)`` gradients (1/m).
 
     Raises
     ------
@@ -173,7 +193,18 @@ def cast_rays(points: np.ndarray, tets: np.ndarray, frames: np.ndarray) -> RayCa
 def intersection_coefficients(
     points: np.ndarray, tets: np.ndarray, frames: np.ndarray
 ) -> np.ndarray:
-    """Intersection coefficients ``C^k``, ``(m, 4, 6)``: ``cast_rays(...).coefficients``."""
+    """Intersection coefficients ``C^k``, ``(m, 4, 6)``: ``cast_rays(...).coefficients``.
+
+    Parameters
+    ----------
+    points, tets, frames
+        As for :func:`cast_rays`.
+
+    Returns
+    -------
+    ndarray
+        ``C[k, i, j] = N_i(q_j)`` ``(m, 4, 6)``; column ``2l`` is the hit along ``+axis l``.
+    """
     return cast_rays(points, tets, frames).coefficients
 
 
@@ -182,13 +213,33 @@ def intersection_points(points: np.ndarray, tets: np.ndarray, C: np.ndarray) -> 
 
     Exact for any affine deformation of the tet, so ``C`` from the rest configuration
     serves every step (eq. 2.25).
+
+    Parameters
+    ----------
+    points, tets, C
+        ``(n, 3)`` current coordinates, ``(m, 4)`` node indices, ``(m, 4, 6)`` coefficients.
+
+    Returns
+    -------
+    ndarray
+        ``(m, 6, 3)`` points ``q_j``.
     """
     points, tets = _as_mesh(points, tets)
     return np.matmul(np.asarray(C).transpose(0, 2, 1), points[tets])  # eq. 2.25
 
 
 def axis_vectors(points: np.ndarray, tets: np.ndarray, C: np.ndarray) -> np.ndarray:
-    """Axis vectors ``zeta_l = q_{2l} - q_{2l+1}``, ``(m, 3, 3)`` with ``[k, l]`` axis ``l``."""
+    """Axis vectors ``zeta_l = q_{2l} - q_{2l+1}``, ``(m, 3, 3)`` with ``[k, l]`` axis ``l``.
+
+    Parameters
+    ----------
+    points, tets, C
+        As for :func:`intersection_points`.
+
+    Returns
+    -------
+    ndarray
+    """
     q = intersection_points(points, tets, C)
     return q[:, 0::2] - q[:, 1::2]
 
@@ -198,6 +249,16 @@ def axis_gradients(C: np.ndarray) -> np.ndarray:
 
     Equal to ``grad N_i . zeta_l^0`` (DESIGN §4), so ``zeta_l = sum_i G[k, i, l] x_i`` and
     opposite forces ``+-g_l`` on the two points of axis ``l`` give ``f_i = sum_l G[k, i, l] g_l``.
+
+    Parameters
+    ----------
+    C
+        ``(m, 4, 6)`` intersection coefficients.
+
+    Returns
+    -------
+    ndarray
+        ``(m, 4, 3)`` axis gradients.
     """
     C = np.asarray(C)
     return C[:, :, 0::2] - C[:, :, 1::2]
@@ -210,6 +271,21 @@ def intersection_matrix(tets: np.ndarray, C: np.ndarray, n_points: int) -> sp.cs
     including the exact zero of the opposite vertex, so the pattern is fixed). Hence
     ``intersection_points(points, tets, C).reshape(-1, 3) == S @ points`` and forces
     ``F (6m, 3)`` on the intersection points act on the vertices as ``S.T @ F``.
+
+    Parameters
+    ----------
+    tets, C, n_points
+        ``(m, 4)`` node indices, ``(m, 4, 6)`` coefficients, number of mesh nodes ``n``.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+        ``S`` ``(6m, n)``.
+
+    Raises
+    ------
+    ValueError
+        If ``C`` does not have the shape ``(m, 4, 6)``.
     """
     tets = np.asarray(tets, dtype=np.int64)
     C = np.asarray(C, dtype=np.float64)

@@ -148,7 +148,19 @@ class SpringModel:
 
 @dataclass
 class SpringSolution:
-    """Spring-model outcome: result record, nodal displacement, VTU cell data, raw info."""
+    """Spring-model outcome: result record, nodal displacement, VTU cell data, raw info.
+
+    Attributes
+    ----------
+    result
+        The :class:`~springfem.result.Result` record.
+    u
+        Nodal displacements ``(n, 3)`` (m).
+    cell_data
+        Per-element arrays for the VTU output.
+    info
+        The solver's own outcome (iterations, residual history, times).
+    """
 
     result: Result
     u: np.ndarray
@@ -157,7 +169,18 @@ class SpringSolution:
 
 
 def variant_label(options: SpringOptions) -> str:
-    """Short description of the enabled spring parts, e.g. ``axial=linear,torsion=cosine``."""
+    """Short description of the enabled spring parts, e.g. ``axial=linear,torsion=cosine``.
+
+    Parameters
+    ----------
+    options
+        Spring options.
+
+    Returns
+    -------
+    str
+        Comma-separated ``part=law`` items, ending with the calibration.
+    """
     parts = [f"axial={options.axial}", f"torsion={options.torsion}"]
     if options.axis_volume:
         parts.append(f"volume=axes/{options.volumetric}")
@@ -183,6 +206,24 @@ def solve_spring(
     A timed run (``steps`` or ``t_end``) of a scene with ``[output] interval`` writes its
     time series into ``series_dir`` (:class:`springfem.series.SeriesWriter`); its result
     says "end of run" and whether it reached rest (``info["at_rest"]``), not "converged".
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    options
+        Spring options; default ``SpringOptions.of(scene)``.
+    verbose
+        Print the solver's progress.
+    parallel
+        Run the force kernel in parallel (None: by mesh size).
+    series_dir
+        Folder of the time series of a timed run.
+
+    Returns
+    -------
+    SpringSolution
+        Result, displacements ``(n, 3)`` and cell data.
 
     Raises
     ------
@@ -262,7 +303,17 @@ def solve_spring(
 def dynamic_series(scene: Scene, model: SpringModel, opts: SpringOptions, folder) -> object:
     """The :class:`~springfem.series.SeriesWriter` of a timed run with ``[output] interval``.
 
-    ``None`` for equilibrium solves, without a folder or without an interval.
+    Parameters
+    ----------
+    scene, model, opts
+        Scene, its spring model and options.
+    folder
+        Output folder of the series, or None.
+
+    Returns
+    -------
+    SeriesWriter or None
+        None for equilibrium solves, without a folder or without an interval.
     """
     from springfem.scene import OutputOptions
     from springfem.series import SeriesWriter
@@ -278,7 +329,20 @@ def dynamic_series(scene: Scene, model: SpringModel, opts: SpringOptions, folder
 
 
 def end_of_run(info, writer) -> dict:
-    """``status`` ("end of run at t = … : at rest / still moving"), ``at_rest``, series files."""
+    """``status`` ("end of run at t = … : at rest / still moving"), ``at_rest``, series files.
+
+    Parameters
+    ----------
+    info
+        Outcome of the timed solve (``kinetic``, ``times``, ``steps``).
+    writer
+        The run's series writer (closed here), or None.
+
+    Returns
+    -------
+    dict
+        ``status``, ``at_rest``, ``end_time`` and, with a writer, ``series`` and ``frames``.
+    """
     from springfem.series import reached_rest
 
     if writer is not None:
@@ -302,5 +366,18 @@ def end_of_run(info, writer) -> dict:
 
 
 def with_options(scene: Scene, **changes) -> Scene:
-    """A shallow copy of ``scene`` with ``[spring]`` options changed."""
+    """A shallow copy of ``scene`` with ``[spring]`` options changed.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    **changes
+        :class:`~springmodel.options.SpringOptions` fields to replace.
+
+    Returns
+    -------
+    Scene
+        The copy.
+    """
     return scene.with_options(spring=replace(SpringOptions.of(scene), **changes))

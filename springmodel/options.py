@@ -4,6 +4,14 @@
 computed only when it is on. :func:`springfem.scene.load_scene` validates the TOML section
 and builds a :class:`SpringOptions`; code that builds models programmatically constructs
 one directly.
+
+Examples
+--------
+>>> o = SpringOptions()
+>>> o.axial, o.torsion, o.volume
+('linear', 'cosine', True)
+>>> LMSOptions().rule  # the sign-consistent LMS variant by default
+'abs'
 """
 
 from __future__ import annotations
@@ -35,6 +43,15 @@ class LMSOptions:
     stiffness of a compressed element); ``rule = "abs"`` is the sign-consistent variant
     driven by ``|dV|`` (stiffness grows with any volume error). ``mu`` is dimensionless: the
     update is applied to ``k_s / k_s0`` with ``dV / V0`` and ``sum|xi| / sum|xi0|``.
+
+    Attributes
+    ----------
+    mu
+        Dimensionless learning rate.
+    k_min, k_max
+        Clamp of ``k_s / k_s0``.
+    rule
+        ``abs`` or ``spec``.
     """
 
     mu: float = 1.0

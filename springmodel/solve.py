@@ -44,6 +44,11 @@ def print_newton(iteration: int, load_factor: float, x: np.ndarray, residual: fl
     ----------
     iteration, load_factor, x, residual
         As passed by :func:`~springfem.mechanics.static` to its ``callback``.
+
+    Returns
+    -------
+    None
+        Writes to stderr.
     """
     print(
         f"newton iteration {iteration}: load factor {load_factor:.4g}, "

@@ -50,7 +50,20 @@ PARALLEL_MIN_ELEMENTS = 20_000
 
 
 def constant_columns(elements, variant: Variant) -> np.ndarray:
-    """The constants ``(ncol, m)`` of ``variant`` from :class:`SpringElements` rest data."""
+    """The constants ``(ncol, m)`` of ``variant`` from :class:`SpringElements` rest data.
+
+    Parameters
+    ----------
+    elements
+        :class:`~springmodel.elements.SpringElements`.
+    variant
+        Kernel variant; its ``columns()`` name the rows.
+
+    Returns
+    -------
+    ndarray
+        ``(ncol, m)``, one row per column name (lengths folded in, e.g. ``k_l l0_l^2``).
+    """
     el = elements
     l0 = el.l0
     Gp = el.G[:, 1:, :] / l0[:, None, :]  # (m, 3 vertices, 3 axes)
@@ -81,12 +94,47 @@ def constant_columns(elements, variant: Variant) -> np.ndarray:
 
 
 def needs_c0(elements, tol: float = 1e-14) -> bool:
-    """False when every rest cosine is zero to round-off (orthonormal frames, DESIGN §4b)."""
+    """False when every rest cosine is zero to round-off (orthonormal frames, DESIGN §4b).
+
+    Parameters
+    ----------
+    elements
+        :class:`~springmodel.elements.SpringElements` (``c0``).
+    tol
+        Largest ``|c0|`` counted as zero.
+
+    Returns
+    -------
+    bool
+        True if some ``|c0| > tol``.
+    """
     return bool(np.abs(elements.c0).max(initial=0.0) > tol)
 
 
 def variant_of(elements, options, precision: str = "float64", velocity: bool = True) -> Variant:
-    """The :class:`Variant` of ``options`` on ``elements`` (``velocity=False``: no damping)."""
+    """The :class:`Variant` of ``options`` on ``elements`` (``velocity=False``: no damping).
+
+    Parameters
+    ----------
+    elements
+        :class:`~springmodel.elements.SpringElements`.
+    options
+        :class:`~springmodel.options.SpringOptions`.
+    precision
+        ``float64``, ``mixed`` or ``float32``.
+    velocity
+        Include the damping terms.
+
+    Returns
+    -------
+    Variant
+        The kernel variant to compile.
+
+    Raises
+    ------
+    ValueError
+        For an unknown axial or torsion law or precision.
+    """
     if options.axial not in ("linear", "quadratic", "cubic", "stress-scaled"):
         raise ValueError(
             f"axial law {options.axial!r} is not one of linear, quadratic, cubic, stress-scaled"

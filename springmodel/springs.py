@@ -49,6 +49,21 @@ volume (2.76–2.77), ``xi_j = x_j - x_b`` (the restoring sign, DESIGN §3)
     net force zero. ``spec`` form: ``f_j = -k_s dL xh_j`` as written, whose net force
     ``-k_s dL sum_j xh_j`` is nonzero for irregular tets. Damping ``-c (v_j - v_b)``
     (it also damps rigid rotation, as written in the spec).
+
+Examples
+--------
+>>> import numpy as np
+>>> from springfem.scene import Material
+>>> from springmodel.elements import build_spring_elements
+>>> from springmodel.options import SpringOptions
+>>> X = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+>>> tets, frames = np.array([[0, 1, 2, 3]]), np.eye(3)[None]
+>>> e = build_spring_elements(X, tets, frames, material=Material("linear", 1.0e4, 0.3))
+>>> float(abs(internal_forces(X, None, e, SpringOptions())).max())  # no force at rest
+0.0
+>>> f = internal_forces(1.01 * X, None, e, SpringOptions())  # stretched: net force zero
+>>> bool(abs(f.sum(axis=0)).max() < 1e-12)
+True
 """
 
 from __future__ import annotations
@@ -289,6 +304,19 @@ def internal_forces(
     Only the enabled parts are computed: axial always, torsion unless ``off``, volume if
     ``options.volume`` (barycentric or axes), coupling if on; damping terms only if their
     coefficient is positive and ``v`` given.
+
+    Parameters
+    ----------
+    x, v
+        Positions and velocities ``(n, 3)`` (``v`` None: no damping).
+    elements, options
+        :class:`SpringElements` rest data and :class:`SpringOptions` parts and laws.
+    volume_form
+        Overrides ``options.volume_form``.
+
+    Returns
+    -------
+    ndarray
     """
     f = axial_forces(x, v, elements, options)
     if options.torsion != "off":
@@ -325,6 +353,16 @@ def spring_energy(
     derived from (``stress-scaled``: ``k d^2/2``; ``cosine``: ``k/2 dc^2``; ``cubic``:
     ``k (dc^2/2 + b dc^4/4)``; ``angle``: ``k/2 (alpha - alpha0)^2``, all with the energy
     constant ``k_torsion``), which is what an energy-drift measurement should watch.
+
+    Parameters
+    ----------
+    x, elements, options
+        Positions ``(n, 3)``, rest data and the switched-on parts.
+
+    Returns
+    -------
+    W, total
+        Energy per element ``(m,)`` (J) and its sum.
     """
     X = x[elements.tets]
     q = intersection_points(x, elements)

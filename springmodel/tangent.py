@@ -57,7 +57,18 @@ def _dyad(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def basis_names(torsion: str, volume: Any, coupling: bool) -> list[str]:
-    """Names of the constants :func:`tangent_basis` returns, in order."""
+    """Names of the constants :func:`tangent_basis` returns, in order.
+
+    Parameters
+    ----------
+    torsion, volume, coupling
+        The options' torsion law, ``volume`` (``True``, ``False`` or ``"axes"``) and coupling.
+
+    Returns
+    -------
+    list of str
+        E.g. ``["axial0", "axial1", "axial2", "torsion01", ..., "volume"]``.
+    """
     names = ["axial0", "axial1", "axial2"]
     if torsion != "off":
         names += ["torsion01", "torsion02", "torsion12"]
@@ -126,6 +137,11 @@ def spring_tangent(geometry: Any, constants: np.ndarray, options: Any) -> np.nda
         ``(m, nb)`` constants in the order of :func:`basis_names`.
     options
         :class:`~springmodel.options.SpringOptions` (``torsion``, ``volume``, ``coupling``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``A`` ``(m, 3, 3, 3, 3)`` (Pa).
     """
     B = tangent_basis(geometry, options.torsion, options.volume, options.coupling)
     return np.einsum("kb,kbijmn->kijmn", constants, B)
@@ -140,6 +156,11 @@ def tangent_mismatch(A: np.ndarray, C_voigt: np.ndarray) -> np.ndarray:
         ``(m, 3, 3, 3, 3)`` spring tangents.
     C_voigt
         ``(6, 6)`` or ``(m, 6, 6)`` material matrices (engineering-shear Voigt).
+
+    Returns
+    -------
+    numpy.ndarray
+        Relative mismatch ``(m,)``.
     """
     Ct = np.broadcast_to(voigt_to_tensor(np.asarray(C_voigt, float)), A.shape)
     m = A.shape[0]
@@ -148,7 +169,20 @@ def tangent_mismatch(A: np.ndarray, C_voigt: np.ndarray) -> np.ndarray:
 
 
 def element_mismatch(geometry: Any, constants: np.ndarray, C_voigt: np.ndarray, options: Any):
-    """Mismatch of every element (chunked so that large meshes fit in memory), ``(m,)``."""
+    """Mismatch of every element (chunked so that large meshes fit in memory), ``(m,)``.
+
+    Parameters
+    ----------
+    geometry, constants, options
+        As for :func:`spring_tangent`.
+    C_voigt
+        ``(6, 6)`` or ``(m, 6, 6)`` material matrices.
+
+    Returns
+    -------
+    ndarray
+        :func:`tangent_mismatch` of each element, ``(m,)``.
+    """
     m = geometry.V0.shape[0]
     C = np.asarray(C_voigt, float)
     out = np.empty(m)

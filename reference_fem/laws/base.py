@@ -10,6 +10,16 @@ inverted elements (``J <= 0``) with NaN, like :class:`~reference_fem.hyperelasti
 The fibre invariants are those of the full ``C``, never split isochorically (Nolan et al.
 2014); incompressibility comes from ``U(J)`` or from the mixed formulation
 (``kappa = 0``, :mod:`reference_fem.mixed`).
+
+Examples
+--------
+>>> import numpy as np
+>>> from reference_fem.laws.guccione import Guccione
+>>> law = Guccione(C=2.0, b_f=8.0, b_t=2.0, b_fs=4.0, kappa=1.0)
+>>> law.name, float(law.energy(np.eye(3)))
+('guccione/log', 0.0)
+>>> bool(np.isnan(law.energy(-np.eye(3))))  # inverted (J <= 0): NaN
+True
 """
 
 from __future__ import annotations

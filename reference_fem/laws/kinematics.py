@@ -26,21 +26,60 @@ II = np.einsum("ik,jl->ijkl", _I, _I)
 
 
 def to_frame(F: np.ndarray, frames: np.ndarray | None) -> np.ndarray:
-    """``F' = F R^T`` (``frames`` broadcast against ``F``; ``None``: the global frame)."""
+    """``F' = F R^T`` (``frames`` broadcast against ``F``; ``None``: the global frame).
+
+    Parameters
+    ----------
+    F
+        Deformation gradients ``(..., 3, 3)``.
+    frames
+        Element frames ``R`` ``(..., 3, 3)`` (rows: fiber, sheet, normal) or None.
+
+    Returns
+    -------
+    ndarray
+        ``F`` in the element frame, ``(..., 3, 3)``.
+    """
     if frames is None:
         return F
     return np.einsum("...iJ,...KJ->...iK", F, frames)
 
 
 def stress_from_frame(P: np.ndarray, frames: np.ndarray | None) -> np.ndarray:
-    """``P = P' R``."""
+    """``P = P' R``.
+
+    Parameters
+    ----------
+    P
+        First Piola stress in the element frame ``(..., 3, 3)``.
+    frames
+        Element frames ``R`` ``(..., 3, 3)`` or None.
+
+    Returns
+    -------
+    ndarray
+        ``P`` in the global frame, ``(..., 3, 3)``.
+    """
     if frames is None:
         return P
     return np.einsum("...iM,...MJ->...iJ", P, frames)
 
 
 def tangent_from_frame(A: np.ndarray, frames: np.ndarray | None) -> np.ndarray:
-    """``A_iJkL = A'_iMkN R_MJ R_NL``."""
+    """``A_iJkL = A'_iMkN R_MJ R_NL``.
+
+    Parameters
+    ----------
+    A
+        Tangent ``dP/dF`` in the element frame ``(..., 3, 3, 3, 3)``.
+    frames
+        Element frames ``R`` ``(..., 3, 3)`` or None.
+
+    Returns
+    -------
+    ndarray
+        The tangent in the global frame, ``(..., 3, 3, 3, 3)``.
+    """
     if frames is None:
         return A
     return np.einsum("...iMkN,...MJ,...NL->...iJkL", A, frames, frames, optimize=True)
@@ -50,6 +89,19 @@ def piola_from_pk2(F: np.ndarray, S: np.ndarray, CC: np.ndarray | None):
     """``P = F S`` and ``A_iJkL = delta_ik S_JL + F_iM CC_MJNL F_kN``.
 
     ``CC = dS/dE`` must have the minor symmetries (``CC_MJNL = CC_MJLN``).
+
+    Parameters
+    ----------
+    F, S
+        Deformation gradient and second Piola stress, ``(..., 3, 3)``.
+    CC
+        ``dS/dE`` ``(..., 3, 3, 3, 3)``, or None for the stress only.
+
+    Returns
+    -------
+    P, A
+        First Piola stress ``(..., 3, 3)`` and tangent ``(..., 3, 3, 3, 3)`` (None without
+        ``CC``).
     """
     P = np.einsum("...iM,...MJ->...iJ", F, S)
     if CC is None:
@@ -64,6 +116,21 @@ def volumetric_terms(F: np.ndarray, kappa: float, kind: str):
     """``U(J)``, its first Piola stress and tangent (the neo-Hookean module's ``U``).
 
     ``P = J U' F^-T``, ``A = J (U' + J U'') F^-T (x) F^-T - J U' F^-T_iL F^-T_kJ``.
+
+    Parameters
+    ----------
+    F
+        Deformation gradients ``(..., 3, 3)``.
+    kappa
+        Bulk modulus (Pa).
+    kind
+        ``log``, ``quadratic`` or ``simo-taylor``.
+
+    Returns
+    -------
+    U, P, A
+        Energy density ``(...)``, stress ``(..., 3, 3)``, tangent ``(..., 3, 3, 3, 3)``; NaN
+        where ``J <= 0``.
     """
     J = _det(F)
     bad = ~(J > 0)
@@ -82,6 +149,16 @@ def isochoric_i1(F: np.ndarray):
     """``I1bar = J^(-2/3) tr C``, ``d I1bar / dF`` and ``d^2 I1bar / dF^2``.
 
     ``dI1bar/dF = 2 J^(-2/3) (F - I1/3 F^-T)``; NaN where ``J <= 0``.
+
+    Parameters
+    ----------
+    F
+        Deformation gradients ``(..., 3, 3)``.
+
+    Returns
+    -------
+    I1bar, D1, D2
+        ``(...)``, ``(..., 3, 3)`` and ``(..., 3, 3, 3, 3)``.
     """
     J = _det(F)
     bad = ~(J > 0)
@@ -104,5 +181,16 @@ def isochoric_i1(F: np.ndarray):
 
 
 def green_lagrange(F: np.ndarray) -> np.ndarray:
-    """``E = (F^T F - I) / 2``."""
+    """``E = (F^T F - I) / 2``.
+
+    Parameters
+    ----------
+    F
+        Deformation gradients ``(..., 3, 3)``.
+
+    Returns
+    -------
+    ndarray
+        Green–Lagrange strain ``(..., 3, 3)``.
+    """
     return 0.5 * (np.einsum("...kI,...kJ->...IJ", F, F) - _I)
