@@ -43,9 +43,8 @@ import math
 from functools import cache
 
 import numpy as np
-from numba import njit
 
-from springfem.blocks import BLOCK, block_drivers, block_layout
+from springfem.blocks import BLOCK, block_drivers, block_layout, compile_named
 
 _NO_VELOCITY = np.zeros((1, 3))  # the drivers pass velocities; the FEM forces need none
 PRECISIONS = ("float64", "mixed", "float32")
@@ -88,7 +87,6 @@ def _block_run(law: str, at):
     one, zero, two = at(1.0), at(0.0), at(2.0)
     neo = law == "neo-hookean"
 
-    @njit(cache=True, **_FLAGS)
     def run(lo, hi, x, w, T, K, m, mu_, lam_, out):
         X = np.empty(9 * B, at)
         S = np.empty(B, at)
@@ -199,7 +197,7 @@ def _block_run(law: str, at):
                     out[i, 2] += Fo[(3 * k + 2) * B + j]
         return bad
 
-    return run
+    return compile_named(run, f"fem_run_{law.replace('-', '_')}_{np.dtype(at).name}")
 
 
 @cache

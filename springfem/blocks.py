@@ -24,6 +24,8 @@ Examples
 
 from __future__ import annotations
 
+import hashlib
+
 import numba
 import numpy as np
 from numba import njit, prange
@@ -73,6 +75,46 @@ def chunks(n_blocks: int, n_threads: int | None = None) -> np.ndarray:
     return np.linspace(0, n_blocks, n + 1).round().astype(np.int64)
 
 
+def variant_id(variant) -> str:
+    """A short stable id of a kernel variant (its repr hashed), for symbol and cache names.
+
+    Parameters
+    ----------
+    variant
+        Any object whose ``repr`` names every compile-time choice (a frozen dataclass).
+
+    Returns
+    -------
+    str
+        12 hex digits.
+    """
+    return hashlib.sha256(repr(variant).encode()).hexdigest()[:12]
+
+
+def compile_named(py_func, name: str):
+    """``njit(cache=True)`` of a kernel closure under its own unique name.
+
+    Every variant's block loop is a closure of the same factory, so all would share one
+    qualified name; numba derives the compiled symbol and the on-disk cache entry from it,
+    and a parallel driver that calls a second variant by that symbol was measured to run
+    the first variant's code (wrong forces, garbage in unused columns). A name per variant
+    keeps the symbols and cache files apart.
+
+    Parameters
+    ----------
+    py_func
+        The Python function of the block loop.
+    name
+        A valid identifier unique to the variant.
+
+    Returns
+    -------
+    numba dispatcher
+    """
+    py_func.__name__ = py_func.__qualname__ = name
+    return njit(cache=True, **_FLAGS)(py_func)
+
+
 def block_drivers(run):
     """Serial and parallel drivers around a variant's block loop.
 
@@ -95,7 +137,6 @@ def block_drivers(run):
         out[:] = 0.0
         return run(0, T.shape[0], x, w, T, K, m, p, q, out)
 
-    @njit(parallel=True, **_FLAGS)
     def parallel(x, w, T, K, m, p, q, ptr, buf, out):
         nchunk = ptr.shape[0] - 1
         count = 0
@@ -112,4 +153,5 @@ def block_drivers(run):
                 out[i, d] = s
         return count
 
-    return serial, parallel
+    parallel.__name__ = parallel.__qualname__ = f"parallel_{run.__name__}"
+    return serial, njit(parallel=True, **_FLAGS)(parallel)

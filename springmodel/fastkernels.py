@@ -49,7 +49,7 @@ from functools import cache
 import numpy as np
 from numba import njit
 
-from springfem.blocks import BLOCK, block_drivers
+from springfem.blocks import BLOCK, block_drivers, compile_named, variant_id
 
 PRECISIONS = ("float64", "mixed", "float32")
 _PAIRS = ((0, 1), (0, 2), (1, 2))
@@ -248,7 +248,6 @@ def _block_run(v: Variant):
     uses_w = v_axial or v_volume or v_axes
     damp_v = at(v.damp_volume)
 
-    @njit(cache=True, **_FLAGS)
     def run(lo, hi, x, w, T, K, m, p, q, out):  # p, q: unused scalars of the drivers
         X = np.empty(9 * B, at)
         W = np.empty(9 * B, at) if uses_w else X
@@ -385,7 +384,7 @@ def _block_run(v: Variant):
 
         return 0
 
-    return run
+    return compile_named(run, f"spring_run_{variant_id(v)}")
 
 
 @cache

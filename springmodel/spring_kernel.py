@@ -18,6 +18,12 @@ busy, not the kernel. At a quieter moment the issue measured 1.87x at 49k tets. 
 that leaves a core free lets two threads win; this machine's usual load does not, so the
 default is the faster one measured here: serial.
 
+Known fault (open): with ``parallel=True`` the kernel returned wrong forces (garbage in the
+last rows, relative error up to 0.4) in 3 of about 8 runs of the whole test suite on the
+loaded machine, in tests that pass every time when run alone, in their folder or in any
+subset tried, with cold or warm numba caches; the serial kernel never did. Until it is
+found, the parallel path is opt-in and its tests run with ``-m slow``.
+
 Examples
 --------
 >>> import numpy as np
