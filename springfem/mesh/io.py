@@ -126,6 +126,8 @@ def mesh_from_meshio(m, name: str = "mesh", scale: float = 1.0) -> TetMesh:
     cell_sets: dict[str, np.ndarray] = {}
     facet_sets: dict[str, np.ndarray] = {}
     for set_name, per_block in getattr(m, "cell_sets", {}).items():
+        if set_name.startswith("gmsh:"):
+            continue  # meshio's own bookkeeping (gmsh:bounding_entities holds entity tags)
         tet_ids, tris = [], []
         for b, ids in enumerate(per_block):
             if ids is None or len(ids) == 0:
