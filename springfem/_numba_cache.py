@@ -8,16 +8,16 @@ any edit start from a clean cache, while an unchanged checkout reuses its kernel
 
 Examples
 --------
->>> import numba
->>> use_source_keyed_numba_cache() == numba.config.CACHE_DIR or bool(os.environ.get(
-...     "NUMBA_CACHE_DIR"))
-True
+>>> h = source_hash(Path(__file__).resolve().parents[1])
+>>> len(h), h == source_hash(Path(__file__).resolve().parents[1])  # stable for a checkout
+(16, True)
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import sys
 from pathlib import Path
 
 PACKAGES = ("springfem", "springmodel", "reference_fem")
@@ -56,9 +56,10 @@ def use_source_keyed_numba_cache() -> str | None:
     """
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
-    import numba
-
     base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "springfem"
-    folder = base / f"numba-{source_hash(Path(__file__).resolve().parents[1])}"
-    numba.config.CACHE_DIR = str(folder)
-    return str(folder)
+    folder = str(base / f"numba-{source_hash(Path(__file__).resolve().parents[1])}")
+    if "numba" in sys.modules:  # already configured from the environment: set it directly
+        sys.modules["numba"].config.CACHE_DIR = folder
+    else:  # numba reads it when first imported; importing numba here would slow start-up
+        os.environ["NUMBA_CACHE_DIR"] = folder
+    return folder
