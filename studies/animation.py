@@ -4,6 +4,8 @@ Examples
 --------
 >>> animation_path("out/sag/series", "gif").name
 'animation.gif'
+>>> [n % 16 for n in WINDOW]   # an MP4 frame is the window, not resized by the encoder
+[0, 0]
 """
 
 from __future__ import annotations
@@ -14,6 +16,26 @@ from pathlib import Path
 import numpy as np
 
 from springfem.errors import InputError
+
+#: The frame size in pixels (width, height): both multiples of 16, the macro-block size of
+#: the H.264 encoder, so an MP4 keeps the exact frame size (ffmpeg would resize otherwise).
+WINDOW = (480, 368)
+
+
+def video_backend() -> str | None:
+    """The installed package that writes MP4 for imageio (``imageio_ffmpeg`` or ``av``).
+
+    Returns
+    -------
+    str or None
+        The module name, or ``None`` when neither is installed (GIF needs neither).
+    """
+    import importlib.util
+
+    for name in ("imageio_ffmpeg", "av"):
+        if importlib.util.find_spec(name) is not None:
+            return name
+    return None
 
 
 def animation_path(folder: str | os.PathLike, fmt: str) -> Path:
@@ -59,6 +81,11 @@ def animate_frames(
     import pyvista as pv
 
     path = Path(path)
+    if path.suffix == ".mp4" and video_backend() is None:
+        raise InputError(
+            f"cannot write the animation {path}: mp4 needs the imageio-ffmpeg or av package"
+            " (gif needs neither)"
+        )
     meshes = [pv.read(str(f)) for f in frames]
     mags = [np.linalg.norm(m.point_data["displacement"], axis=1) for m in meshes]
     clim = [0.0, max(float(max(m.max() for m in mags)), 1e-300)]
@@ -67,7 +94,7 @@ def animate_frames(
     for mesh, mag in zip(meshes, mags, strict=True):
         warped = mesh.warp_by_vector("displacement", factor=warp)
         warped.point_data["|u| (m)"] = mag
-        plotter = pv.Plotter(off_screen=True, window_size=(480, 360))
+        plotter = pv.Plotter(off_screen=True, window_size=WINDOW)
         plotter.add_mesh(warped, scalars="|u| (m)", clim=clim, show_edges=False)
         if bounds is None:
             plotter.view_isometric()
@@ -84,8 +111,6 @@ def animate_frames(
     except (ValueError, RuntimeError, ImportError) as exc:
         tmp.unlink(missing_ok=True)
         why = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        if path.suffix == ".mp4":
-            why = "mp4 needs the imageio-ffmpeg or av package (gif needs neither)"
         raise InputError(f"cannot write the animation {path}: {why}") from None
     os.replace(tmp, path)
     return path
