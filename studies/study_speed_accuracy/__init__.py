@@ -76,6 +76,10 @@ def run(ctx: StudyContext, p: Settings) -> StudyOutput:
     StudyOutput
         Findings, points and step-cost tables, the Pareto figure, headline numbers.
     """
+    if p.scene is not None:
+        from .scene import run_on_scene
+
+        return run_on_scene(ctx, p)
     rx, ry = p.reference
     ref_case = {
         "kind": "reference",

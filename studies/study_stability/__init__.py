@@ -73,6 +73,10 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
     StudyOutput
         Findings, four tables, figures and headline numbers.
     """
+    if settings.scene is not None:
+        from .scene import run_on_scene
+
+        return run_on_scene(ctx, settings)
     cases = grids(settings)
     results = {
         k: ctx.cache.run(cases[k], fn, ctx.progress, label) for k, (fn, label) in WORK.items()
