@@ -77,6 +77,10 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
     StudyOutput
         Findings, modulus and ratio tables, the modulus figure, headline errors.
     """
+    if settings.scene is not None:
+        from .scene import run_on_scene
+
+        return run_on_scene(ctx, settings)
     n = settings.n
     scene0 = fiber_scene(0.0, n)
     mat = scene0.material
