@@ -75,8 +75,9 @@ class Settings:
         Time-step factor of the implicit runs -> largest ``(nx, ny)`` it runs on.
     scene, scene_path
         A user scene table and its file (``study speed-accuracy --scene``; see :mod:`.scene`).
-    scene_levels, scene_explicit_levels
-        Refinement levels of the user scene (1: its own mesh), and those of the explicit runs.
+    scene_levels, scene_costly_levels
+        Refinement levels of the user scene (1: its own mesh), and those of the costly
+        points (explicit runs, neo-Hookean FEM).
     """
 
     meshes: tuple[tuple[int, int], ...] = ((10, 1), (20, 2), (40, 4))
@@ -88,7 +89,7 @@ class Settings:
     scene: dict | None = None
     scene_path: str | None = None
     scene_levels: tuple[int, ...] = (1, 2, 3)
-    scene_explicit_levels: tuple[int, ...] = (1, 2)
+    scene_costly_levels: tuple[int, ...] = (1, 2)
 
     @classmethod
     def full(cls) -> Settings:
@@ -106,7 +107,7 @@ class Settings:
         path
             The scene file.
         quick
-            Levels 1-2 (explicit methods on level 1) instead of 1-3 (explicit on 1-2).
+            Levels 1-2 (costly points on level 1) instead of 1-3 (costly points on 1-2).
 
         Returns
         -------
@@ -114,7 +115,7 @@ class Settings:
         """
         if quick:
             return cls(scene=table, scene_path=path, scene_levels=(1, 2),
-                       scene_explicit_levels=(1,))  # fmt: skip
+                       scene_costly_levels=(1,))  # fmt: skip
         return cls(scene=table, scene_path=path)
 
     @classmethod

@@ -11,8 +11,9 @@ Methods: FEM P1 and P2 with the scene's small-strain law and, for isotropic mate
 coupled neo-Hookean (for a tissue law: the law itself); the spring model (energy torsion,
 as on the bundled cantilever) by static Newton, implicit pseudo-time stepping (level 1) and
 explicit dynamic relaxation, the exact spring element by static Newton and explicit
-relaxation, and the explicit P1 FEM (isotropic materials). Explicit methods run on the
-levels in ``Settings.scene_explicit_levels``. Timings are one run each on a shared machine.
+relaxation, and the explicit P1 FEM (isotropic materials). The costly points (explicit
+methods, neo-Hookean FEM) run on the levels in ``Settings.scene_costly_levels``. Timings
+are one run each on a shared machine.
 
 Examples
 --------
@@ -109,7 +110,7 @@ def scene_points(cfg, law: str) -> list[dict]:
     Parameters
     ----------
     cfg
-        Settings with ``scene``, ``scene_path``, ``scene_levels``, ``scene_explicit_levels``.
+        Settings with ``scene``, ``scene_path``, ``scene_levels``, ``scene_costly_levels``.
     law
         The scene's material law.
 
@@ -134,12 +135,13 @@ def scene_points(cfg, law: str) -> list[dict]:
             )
 
         for m in fem_methods(law):
-            add(m, {})
+            if k in cfg.scene_costly_levels or not m.endswith("neo-hookean"):
+                add(m, {})
         add("spring-static", {"tol": STATIC_TOL})
         add("spring-exact-static", {"tol": STATIC_TOL})
         if k == cfg.scene_levels[0]:
             add("spring-implicit", IMPLICIT)
-        if k in cfg.scene_explicit_levels:
+        if k in cfg.scene_costly_levels:
             add("spring-explicit", EXPLICIT)
             add("spring-exact-explicit", EXPLICIT)
             if law in ISOTROPIC:
@@ -155,7 +157,7 @@ def run_on_scene(ctx: StudyContext, cfg) -> StudyOutput:
     ctx
         Output folder, cache and preset.
     cfg
-        Settings with ``scene``, ``scene_path``, ``scene_levels``, ``scene_explicit_levels``.
+        Settings with ``scene``, ``scene_path``, ``scene_levels``, ``scene_costly_levels``.
 
     Returns
     -------
