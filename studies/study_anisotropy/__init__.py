@@ -21,6 +21,9 @@ against the rotated compliance.
 The study is split into :mod:`.cases` (scene, off-axis formula, one measurement,
 settings), :mod:`.tables`, :mod:`.figures` and :mod:`.findings`.
 
+On a user's scene (``springfem study anisotropy --scene FILE``) the study runs as described in
+:mod:`.scene`.
+
 Examples
 --------
 >>> round(off_axis_modulus(fiber_scene(0.0, 1).material, 0.0))

@@ -22,6 +22,9 @@ headline numbers.
 The study is split into :mod:`.cases` (settings, scenes, one timed solve), :mod:`.tables`
 (points with the Pareto front, step costs), :mod:`.figures` and :mod:`.findings`.
 
+On a user's scene (``springfem study speed-accuracy --scene FILE``) the study runs as described in
+:mod:`.scene`.
+
 Examples
 --------
 >>> Settings.quick().reference

@@ -13,6 +13,9 @@
 The study is split into :mod:`.cases` (the bar, one run per series, settings and grids),
 :mod:`.tables`, :mod:`.figures` and :mod:`.findings`.
 
+On a user's scene (``springfem study stability --scene FILE``) the study runs as described in
+:mod:`.scene`.
+
 Examples
 --------
 >>> sorted(grids(Settings.quick()))

@@ -30,6 +30,9 @@ The study is split into :mod:`.cases` (scenes, settings, one run), :mod:`.tables
 (the runs' outcomes, the numbers quoted and the two tables), :mod:`.figures` and
 :mod:`.findings`.
 
+On a user's scene (``springfem study volume-drift --scene FILE``) the study runs as described in
+:mod:`.scene`.
+
 Examples
 --------
 >>> Settings.quick().n
