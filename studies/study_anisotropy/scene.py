@@ -20,8 +20,8 @@ refused with the reason.
 
 Examples
 --------
->>> refusal({"material": {"law": "linear"}}, "ball.toml")[:40]
-'scene ball has isotropic material (law li'
+>>> refusal({"material": {"law": "linear"}}, "ball.toml").split(":")[0]
+'scene ball has isotropic material (law linear)'
 """
 
 from __future__ import annotations

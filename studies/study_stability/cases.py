@@ -280,38 +280,20 @@ class Settings:
     def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
         """The critical-step, largest-load and failure-map series on a user scene.
 
-        Load factors multiply the scene's own loads (see :mod:`.scene`).
-
         Parameters
         ----------
-        table
-            The scene table.
-        path
-            The scene file.
+        table, path
+            The scene table and its file.
         quick
-            Shorter runs, fewer load factors and time-step factors.
+            Shorter runs, fewer load and time-step factors (see :mod:`.scene`).
 
         Returns
         -------
         Settings
         """
-        if quick:
-            return cls(
-                dt_steps=400,
-                dt_bisections=4,
-                load_factors=(1, 10, 1000),
-                map_loads=(1, 100),
-                map_dt_factors=(0.5, 1.1),
-                map_steps=400,
-                scene=table,
-                scene_path=path,
-            )
-        return cls(
-            load_factors=(1, 3, 10, 30, 100, 300, 1000, 3000),
-            map_loads=(1, 10, 100, 1000),
-            scene=table,
-            scene_path=path,
-        )
+        from .scene import SCENE_FULL, SCENE_QUICK
+
+        return cls(**(SCENE_QUICK if quick else SCENE_FULL), scene=table, scene_path=path)
 
     @classmethod
     def quick(cls) -> Settings:

@@ -37,6 +37,11 @@ from .cases import spring_options
 
 VERSION = 1
 
+#: Settings of ``for_scene``: load factors multiply the scene's own loads.
+SCENE_QUICK = {"dt_steps": 400, "dt_bisections": 4, "load_factors": (1, 10, 1000),
+               "map_loads": (1, 100), "map_dt_factors": (0.5, 1.1), "map_steps": 400}  # fmt: skip
+SCENE_FULL = {"load_factors": (1, 3, 10, 30, 100, 300, 1000, 3000), "map_loads": (1, 10, 100, 1000)}
+
 SPRINGS = ("spring-energy", "spring-cosine", "spring-exact")
 
 #: Beyond this largest displacement over the body's size a small-strain solution is not one.

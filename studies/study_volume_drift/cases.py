@@ -150,18 +150,12 @@ def first_period(scene: Scene, user: bool = False) -> float:
     """Time scale of the slowest motion that sets the run lengths and damping: for the cube
     the period of a quarter-wave rod of its height (from E and the density); for the sag
     scene a fixed 0.5 s (the block swings down and back in roughly that time, see the
-    drift-against-time figure); for a user scene (``user``) the quarter-wave period of a
-    rod as long as the body's largest extent, with the stiffest longitudinal modulus of
-    the material's small-strain matrix."""
-    mat = scene.material
+    drift-against-time figure); for a user scene see :func:`.scene.user_period`."""
     if user:
-        from springfem.materials import material_matrix
+        from .scene import user_period  # lazy: .scene imports this module
 
-        from ..user_scene import body_size
-
-        c_max = float(np.max(np.diag(material_matrix(mat))[:3]))
-        return 4.0 * body_size(scene) / np.sqrt(c_max / mat.density)
-    c = np.sqrt(mat.E / mat.density)
+        return user_period(scene)
+    c = np.sqrt(scene.material.E / scene.material.density)
     if scene.name == "drift-cube":
         return 4.0 * CUBE_L / c
     return 0.5
@@ -383,10 +377,8 @@ class Settings:
 
         Parameters
         ----------
-        table
-            The scene table.
-        path
-            The scene file.
+        table, path
+            The scene table and its file.
         quick
             Shorter runs (3 periods instead of 5), fewer samples.
 
@@ -394,9 +386,8 @@ class Settings:
         -------
         Settings
         """
-        if quick:
-            return cls(periods=3.0, records=30, scene=table, scene_path=path)
-        return cls(scene=table, scene_path=path)
+        short = {"periods": 3.0, "records": 30} if quick else {}
+        return cls(**short, scene=table, scene_path=path)
 
     @classmethod
     def quick(cls) -> Settings:

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from springfem.errors import SolverError
@@ -37,6 +38,29 @@ VERSION = 1
 
 SPRING_STATIC = ("volume off", "volume on", "volume on (nnls)", "axis-volume (exact)")
 DYNAMIC = ("volume off", "volume on", "LMS spec", "LMS abs", "axis-volume (exact)")
+
+
+def user_period(scene) -> float:
+    """The run-length time scale on a user scene: the quarter-wave period ``4 l / c`` of a rod
+    as long as the body's largest extent ``l``, ``c`` from the stiffest longitudinal modulus
+    of the material's small-strain matrix and the density.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+
+    Returns
+    -------
+    float
+        Seconds.
+    """
+    from springfem.materials import material_matrix
+
+    from ..user_scene import body_size
+
+    c_max = float(np.max(np.diag(material_matrix(scene.material))[:3]))
+    return 4.0 * body_size(scene) / np.sqrt(c_max / scene.material.density)
 
 
 def static_methods(law: str) -> tuple[str, ...]:
