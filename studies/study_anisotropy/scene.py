@@ -16,7 +16,7 @@ direction and across it, on the user's mesh, axes, material and loads:
 Models: the spring model (analytic, nnls and exact + coupling calibrations, as in the
 bundled study), FEM P1 and P2 with the scene's law. Errors against P2 (total) and against
 P1 on the same mesh (model error). The study needs an anisotropic law; an isotropic scene is
-refused with the reason.
+refused with the reason, and so is one without an ``[axes]`` section.
 
 Examples
 --------
@@ -56,13 +56,19 @@ def refusal(table: dict, path: str | None) -> str | None:
     str or None
     """
     law = str(table.get("material", {}).get("law", "linear"))
-    if law in ANISOTROPIC:
-        return None
-    return (
-        f"scene {scene_label(table, path)} has isotropic material (law {law}): anisotropy "
-        f"needs a fibre-reinforced law ({', '.join(ANISOTROPIC)}) with its fibre direction "
-        "from [axes]"
-    )
+    name = scene_label(table, path)
+    if law not in ANISOTROPIC:
+        return (
+            f"scene {name} has isotropic material (law {law}): anisotropy needs a "
+            f"fibre-reinforced law ({', '.join(ANISOTROPIC)}) with its fibre direction from "
+            "[axes]"
+        )
+    if "axes" not in table:
+        return (
+            f"scene {name} has no [axes] section (its fibre would be the default x axis): "
+            "anisotropy needs the fibre direction stated (uniform, helix, rule-based or cells)"
+        )
+    return None
 
 
 def solve_work(case: dict) -> dict:

@@ -186,3 +186,7 @@ def test_anisotropy_refuses_an_isotropic_scene(mesh_dir, tmp_path, capsys):
     err = capsys.readouterr().err
     assert "scene cyl-bend has isotropic material (law linear): anisotropy needs" in err
     assert err.count("\n") == 1
+    no_axes = TRANSVERSE.split("[axes]")[0]
+    scene = write_scene(mesh_dir, "t-no-axes", no_axes, CLAMPED.format(tz=-1.0))
+    assert main(["study", "anisotropy", "--scene", scene, "--out", str(tmp_path)]) == 2
+    assert "scene t-no-axes has no [axes] section" in capsys.readouterr().err
