@@ -116,11 +116,13 @@ class _StudyParser(_Parser):
 
         from .runner import REGISTRY
 
-        names = "\n".join(
-            f"  {name.replace('_', '-'):<16}{_first_line(inspect.getmodule(spec.run).__doc__)}"
-            for name, spec in REGISTRY.items()
-        )
-        return super().format_help() + f"\nstudies:\n{names}\n"
+        rows = []
+        for name, spec in REGISTRY.items():
+            doc = _first_line(inspect.getmodule(spec.run).__doc__)
+            mark = "*" if hasattr(spec.settings, "for_scene") else " "
+            rows.append(f"  {name.replace('_', '-'):<16}{mark} {doc}")
+        names = "\n".join(rows)
+        return super().format_help() + f"\nstudies (* also runs on --scene FILE):\n{names}\n"
 
 
 def _first_line(doc: str | None) -> str:

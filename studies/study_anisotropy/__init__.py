@@ -21,6 +21,9 @@ against the rotated compliance.
 The study is split into :mod:`.cases` (scene, off-axis formula, one measurement,
 settings), :mod:`.tables`, :mod:`.figures` and :mod:`.findings`.
 
+On a user's scene (``springfem study anisotropy --scene FILE``) the study runs as described in
+:mod:`.scene`.
+
 Examples
 --------
 >>> round(off_axis_modulus(fiber_scene(0.0, 1).material, 0.0))
@@ -77,6 +80,10 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
     StudyOutput
         Findings, modulus and ratio tables, the modulus figure, headline errors.
     """
+    if settings.scene is not None:
+        from .scene import run_on_scene
+
+        return run_on_scene(ctx, settings)
     n = settings.n
     scene0 = fiber_scene(0.0, n)
     mat = scene0.material

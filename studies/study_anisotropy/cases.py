@@ -190,21 +190,50 @@ class Settings:
         Fiber angles θ (degrees); 0 and 90 give the anisotropy ratio.
     n
         Divisions per side of the cube.
+    scene, scene_path
+        A user scene table and its file (``study anisotropy --scene``; see :mod:`.scene`).
     """
-
-    #: Why ``study NAME --scene FILE`` is refused (the registry prints it).
-    NO_SCENE = (
-        "it rotates the fiber axis of a cube in uniaxial stress and compares with the off-"
-        "axis modulus formula; a scene's own axes and loads have no such closed form"
-    )
 
     angles: tuple[float, ...] = tuple(float(a) for a in np.arange(0.0, 90.1, 7.5))
     n: int = 6
+    scene: dict | None = None
+    scene_path: str | None = None
 
     @classmethod
     def full(cls) -> Settings:
         """Every 7.5° on a 6³ cube."""
         return cls()
+
+    @classmethod
+    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
+        """The fibre / cross-fibre error split on a user scene (see :mod:`.scene`).
+
+        Parameters
+        ----------
+        table
+            The scene table.
+        path
+            The scene file.
+        quick
+            Unused (the user's mesh is the mesh).
+
+        Returns
+        -------
+        Settings
+
+        Raises
+        ------
+        InputError
+            If the scene's material is isotropic (the message says what is needed).
+        """
+        from springfem.errors import InputError
+
+        from .scene import refusal
+
+        why = refusal(table, path)
+        if why is not None:
+            raise InputError(f"study anisotropy cannot run on --scene: {why}")
+        return cls(scene=table, scene_path=path)
 
     @classmethod
     def quick(cls) -> Settings:

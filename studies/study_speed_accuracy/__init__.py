@@ -22,6 +22,9 @@ headline numbers.
 The study is split into :mod:`.cases` (settings, scenes, one timed solve), :mod:`.tables`
 (points with the Pareto front, step costs), :mod:`.figures` and :mod:`.findings`.
 
+On a user's scene (``springfem study speed-accuracy --scene FILE``) the study runs as described in
+:mod:`.scene`.
+
 Examples
 --------
 >>> Settings.quick().reference
@@ -76,6 +79,10 @@ def run(ctx: StudyContext, p: Settings) -> StudyOutput:
     StudyOutput
         Findings, points and step-cost tables, the Pareto figure, headline numbers.
     """
+    if p.scene is not None:
+        from .scene import run_on_scene
+
+        return run_on_scene(ctx, p)
     rx, ry = p.reference
     ref_case = {
         "kind": "reference",

@@ -73,14 +73,12 @@ class Settings:
         ``(tol, dt_safety)`` settings of the explicit runs.
     implicit
         Time-step factor of the implicit runs -> largest ``(nx, ny)`` it runs on.
+    scene, scene_path
+        A user scene table and its file (``study speed-accuracy --scene``; see :mod:`.scene`).
+    scene_levels, scene_costly_levels
+        Refinement levels of the user scene (1: its own mesh), and those of the costly
+        points (explicit runs, neo-Hookean FEM).
     """
-
-    #: Why ``study NAME --scene FILE`` is refused (the registry prints it).
-    NO_SCENE = (
-        "its accuracy axis is the tip error against a fine P2 reference on refined cantilever"
-        " meshes built by the study; use `springfem sweep` with mesh.divisions for a scene of"
-        " your own"
-    )
 
     meshes: tuple[tuple[int, int], ...] = ((10, 1), (20, 2), (40, 4))
     reference: tuple[int, int] = (60, 6)
@@ -88,11 +86,37 @@ class Settings:
     implicit: dict[float, tuple[int, int]] = field(
         default_factory=lambda: {100.0: (20, 2), 1e4: (40, 4)}
     )
+    scene: dict | None = None
+    scene_path: str | None = None
+    scene_levels: tuple[int, ...] = (1, 2, 3)
+    scene_costly_levels: tuple[int, ...] = (1, 2)
 
     @classmethod
     def full(cls) -> Settings:
         """Three meshes up to 40 × 4 × 4, reference 60 × 6 × 6."""
         return cls()
+
+    @classmethod
+    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
+        """Every method on a user scene's refinement levels (see :mod:`.scene`).
+
+        Parameters
+        ----------
+        table
+            The scene table.
+        path
+            The scene file.
+        quick
+            Levels 1-2 (costly points on level 1) instead of 1-3 (costly points on 1-2).
+
+        Returns
+        -------
+        Settings
+        """
+        if quick:
+            return cls(scene=table, scene_path=path, scene_levels=(1, 2),
+                       scene_costly_levels=(1,))  # fmt: skip
+        return cls(scene=table, scene_path=path)
 
     @classmethod
     def quick(cls) -> Settings:

@@ -13,6 +13,9 @@
 The study is split into :mod:`.cases` (the bar, one run per series, settings and grids),
 :mod:`.tables`, :mod:`.figures` and :mod:`.findings`.
 
+On a user's scene (``springfem study stability --scene FILE``) the study runs as described in
+:mod:`.scene`.
+
 Examples
 --------
 >>> sorted(grids(Settings.quick()))
@@ -73,6 +76,10 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
     StudyOutput
         Findings, four tables, figures and headline numbers.
     """
+    if settings.scene is not None:
+        from .scene import run_on_scene
+
+        return run_on_scene(ctx, settings)
     cases = grids(settings)
     results = {
         k: ctx.cache.run(cases[k], fn, ctx.progress, label) for k, (fn, label) in WORK.items()

@@ -254,15 +254,9 @@ class Settings:
         Poisson ratios and mesh of the locking series.
     map_loads, map_dt_factors, map_steps
         Load multiples, time-step factors and run length of the failure map (10 × 1 × 1).
+    scene, scene_path
+        A user scene table and its file (``study stability --scene``; see :mod:`.scene`).
     """
-
-    #: Why ``study NAME --scene FILE`` is refused (the registry prints it).
-    NO_SCENE = (
-        "its series bisect the critical time step, load and Poisson ratio of a generated "
-        "cantilever bar against beam theory (Timoshenko); a scene's own loads and BCs give no"
-        ' such reference — run `springfem solve` with [spring] solver = "explicit" and --set '
-        "spring.dt=... instead"
-    )
 
     dt_meshes: tuple[tuple[int, int], ...] = ((10, 1), (20, 2))
     dt_steps: int = 2000
@@ -274,11 +268,32 @@ class Settings:
     map_loads: tuple[float, ...] = (1, 100, 1000, 3000, 10000, 30000)
     map_dt_factors: tuple[float, ...] = (0.3, 0.6, 0.9, 1.0, 1.1, 1.5)
     map_steps: int = 3000
+    scene: dict | None = None
+    scene_path: str | None = None
 
     @classmethod
     def full(cls) -> Settings:
         """The report's grids."""
         return cls()
+
+    @classmethod
+    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
+        """The critical-step, largest-load and failure-map series on a user scene.
+
+        Parameters
+        ----------
+        table, path
+            The scene table and its file.
+        quick
+            Shorter runs, fewer load and time-step factors (see :mod:`.scene`).
+
+        Returns
+        -------
+        Settings
+        """
+        from .scene import SCENE_FULL, SCENE_QUICK
+
+        return cls(**(SCENE_QUICK if quick else SCENE_FULL), scene=table, scene_path=path)
 
     @classmethod
     def quick(cls) -> Settings:

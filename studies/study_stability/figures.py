@@ -54,7 +54,9 @@ def locking_figure(ctx: StudyContext, dk: pd.DataFrame, q: Settings) -> Figure:
     )
 
 
-def failure_map_figure(ctx: StudyContext, dm: pd.DataFrame, q: Settings) -> Figure:
+def failure_map_figure(
+    ctx: StudyContext, dm: pd.DataFrame, q: Settings, methods: tuple[str, ...] | None = None
+) -> Figure:
     """The failure map per method: ok, inverted or blew up on the load × dt grid.
 
     Parameters
@@ -65,6 +67,8 @@ def failure_map_figure(ctx: StudyContext, dm: pd.DataFrame, q: Settings) -> Figu
         The failure-map frame.
     q
         The study's settings.
+    methods
+        The methods shown (default :data:`~.cases.MAP_METHODS`).
 
     Returns
     -------
@@ -74,9 +78,10 @@ def failure_map_figure(ctx: StudyContext, dm: pd.DataFrame, q: Settings) -> Figu
     from matplotlib.colors import ListedColormap
 
     lf, df_ = list(q.map_loads), list(q.map_dt_factors)
-    mmethods = list(MAP_METHODS)
+    mmethods = list(methods or MAP_METHODS)
     codes = {"ok": 0, "inverted": 1, "blew up": 2}
     fig, axes = plt.subplots(1, len(mmethods), figsize=(4.2 * len(mmethods), 3.8), sharey=True)
+    axes = np.atleast_1d(axes)
     cmap = ListedColormap(["#4caf50", "#ff9800", "#d32f2f"])
     for a, m in zip(axes, mmethods):
         g = dm[dm.method == m]

@@ -30,6 +30,9 @@ The study is split into :mod:`.cases` (scenes, settings, one run), :mod:`.tables
 (the runs' outcomes, the numbers quoted and the two tables), :mod:`.figures` and
 :mod:`.findings`.
 
+On a user's scene (``springfem study volume-drift --scene FILE``) the study runs as described in
+:mod:`.scene`.
+
 Examples
 --------
 >>> Settings.quick().n
@@ -176,6 +179,10 @@ def run(ctx: StudyContext, s: Settings) -> StudyOutput:
     StudyOutput
         Findings, drift tables, the drift figures, headline drifts.
     """
+    if s.scene is not None:
+        from .scene import run_on_scene
+
+        return run_on_scene(ctx, s)
     grid = dynamic_cases(s)
     res = ctx.cache.run([g[0] for g in grid], dynamic_case, ctx.progress, "dynamic runs")
     dyn = [(c, label, kind, r) for (c, label, kind), r in zip(grid, res)]

@@ -127,7 +127,11 @@ def sag_scene(divisions: tuple[int, int, int] = (16, 8, 4)) -> Scene:
 
 
 def case_scene(case: dict[str, Any], law: str = "linear") -> Scene:
-    """The scene a case describes (``scene`` = ``cube`` or ``sag``)."""
+    """The scene a case describes (``scene`` = ``cube``, ``sag`` or ``user``)."""
+    if case["scene"] == "user":  # study volume-drift --scene FILE (see .scene)
+        from ..user_scene import case_scene as user_scene
+
+        return user_scene(case)
     if case["scene"] == "cube":
         return cube_scene(case["n"], case["nu"], case["stress"], law)
     return sag_scene(tuple(case["divisions"]))
@@ -142,13 +146,16 @@ def spring_options(scene: Scene, variant: str) -> SpringOptions:
     return replace(SpringOptions.of(scene), **changes)
 
 
-def first_period(scene: Scene) -> float:
+def first_period(scene: Scene, user: bool = False) -> float:
     """Time scale of the slowest motion that sets the run lengths and damping: for the cube
     the period of a quarter-wave rod of its height (from E and the density); for the sag
     scene a fixed 0.5 s (the block swings down and back in roughly that time, see the
-    drift-against-time figure)."""
-    mat = scene.material
-    c = np.sqrt(mat.E / mat.density)
+    drift-against-time figure); for a user scene see :func:`.scene.user_period`."""
+    if user:
+        from .scene import user_period  # lazy: .scene imports this module
+
+        return user_period(scene)
+    c = np.sqrt(scene.material.E / scene.material.density)
     if scene.name == "drift-cube":
         return 4.0 * CUBE_L / c
     return 0.5
@@ -206,7 +213,7 @@ def dynamic_case(case: dict[str, Any]) -> dict[str, Any]:
     scene = case_scene(case)
     opts = spring_options(scene, case["variant"])
     model = SpringModel(scene, opts, parallel=False)
-    period = first_period(scene)
+    period = first_period(scene, user=case["scene"] == "user")
     dt = common_time_step(scene)
     steps = int(np.ceil(case["periods"] * period / dt))
     every = max(1, steps // int(case["records"]))
@@ -346,14 +353,9 @@ class Settings:
         Samples recorded per run.
     loads
         Fractions of the full stress of the static series.
+    scene, scene_path
+        A user scene table and its file (``study volume-drift --scene``; see :mod:`.scene`).
     """
-
-    #: Why ``study NAME --scene FILE`` is refused (the registry prints it).
-    NO_SCENE = (
-        "its reference is the analytic volume change (1 - 2 nu) sigma / E of a block in "
-        "uniaxial stress, and its LMS runs need that block's step and ramp loads; `springfem "
-        "compare SCENE` reports each model's volume change on a scene"
-    )
 
     n: int = 4
     sag: tuple[int, int, int] | None = (12, 6, 3)
@@ -361,11 +363,31 @@ class Settings:
     ramp_periods: float = 6.0
     records: int = 120
     loads: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0)
+    scene: dict | None = None
+    scene_path: str | None = None
 
     @classmethod
     def full(cls) -> Settings:
         """4³ cube and the sag scene."""
         return cls()
+
+    @classmethod
+    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
+        """Statics and sudden-load explicit runs on a user scene (see :mod:`.scene`).
+
+        Parameters
+        ----------
+        table, path
+            The scene table and its file.
+        quick
+            Shorter runs (3 periods instead of 5), fewer samples.
+
+        Returns
+        -------
+        Settings
+        """
+        short = {"periods": 3.0, "records": 30} if quick else {}
+        return cls(**short, scene=table, scene_path=path)
 
     @classmethod
     def quick(cls) -> Settings:

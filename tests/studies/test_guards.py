@@ -157,8 +157,14 @@ def test_study_help_lists_the_registered_studies(capsys):
         main(["study", "--help"])
     assert exc.value.code == 0
     text = capsys.readouterr().out
-    listed = text.split("studies:", 1)[1]
+    listed = text.split("studies (* also runs on --scene FILE):", 1)[1]
     assert REGISTRY and all(f"  {n.replace('_', '-')} " in listed for n in REGISTRY)
+    rows = {line.split()[0]: line.split()[1] == "*" for line in listed.strip().splitlines()}
+    # the mark is the registry's: a study runs on --scene iff its Settings has for_scene
+    assert rows == {
+        n.replace("_", "-"): hasattr(s.settings, "for_scene") for n, s in REGISTRY.items()
+    }
+    assert not rows["scaling"] and rows["stability"]
 
 
 def test_p2_result_says_it_is_reduced_to_vertices(tmp_path, capsys):
