@@ -6,6 +6,11 @@ export PYVISTA_OFF_SCREEN := true
 export MPLBACKEND := Agg
 export OPENBLAS_NUM_THREADS ?= 1
 export OMP_WAIT_POLICY ?= passive
+# pytest-xdist workers of `make test` (one per core of the 2-core CI machine; 0 runs serially).
+# Test files are kept whole on one worker (--dist loadfile): a module's shared fixtures are
+# built once, and numba's on-disk kernel cache is safe to fill from two processes (it writes
+# through a temporary file and an atomic rename).
+TEST_WORKERS ?= 2
 
 .PHONY: demo test test-slow lint report quick-report bench clean
 
@@ -27,7 +32,7 @@ demo: $(VENV)/.installed
 # Default selection (not slow); it checks reports/quick/ when `make quick-report` wrote it.
 test: $(VENV)/.installed-test
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 
 # The slow tests alone (full-size studies, a fresh quick report).
 test-slow: $(VENV)/.installed-test
