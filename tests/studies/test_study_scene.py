@@ -158,11 +158,18 @@ def test_set_without_scene_is_an_input_error(tmp_path, capsys):
 def test_executor_cache_writes_each_case_and_resumes(tmp_path):
     """The study cache on a 1-process LocalCluster: results in case order, one file per case,
     and a rerun computes nothing (its work would raise)."""
+    import os
+
+    from studies.executor import WORKER_ENV
     from studies.runner import ExecutorCache
 
+    before = {k: os.environ.get(k) for k in WORKER_ENV}
     cache = ExecutorCache(tmp_path, "t", "fp", workers=1)
     cases = [{"a": 1}, {"a": 2}, {"a": 3}]
     assert cache.run(cases, dict, progress=False) == cases
+    # the workers' one-thread environment does not outlive the cluster in this process
+    # (numba raises at the next compile if NUMBA_NUM_THREADS changed after its threads ran)
+    assert {k: os.environ.get(k) for k in WORKER_ENV} == before
     assert len(list((tmp_path / "t").glob("*.json"))) == 3
 
     def boom(case):
