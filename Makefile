@@ -6,6 +6,14 @@ export PYVISTA_OFF_SCREEN := true
 export MPLBACKEND := Agg
 export OPENBLAS_NUM_THREADS ?= 1
 export OMP_WAIT_POLICY ?= passive
+# pytest-xdist workers of `make test` (0: one process, the default). Two workers were slower
+# than one on the shared, loaded 2-core machine (issue 9: 151 s vs 130 s wall for tests/studies
+# + tests/reliability, warm numba cache); on an idle machine try `make test TEST_WORKERS=2`.
+# Test files are kept whole on one worker (--dist loadfile): a module's shared fixtures are
+# built once; numba's on-disk kernel cache is safe to fill from two processes (it writes
+# through a temporary file and an atomic rename).
+TEST_WORKERS ?= 0
+XDIST = $(if $(filter-out 0,$(TEST_WORKERS)),-n $(TEST_WORKERS) --dist loadfile)
 
 .PHONY: demo test test-slow lint report quick-report bench clean
 
@@ -27,7 +35,7 @@ demo: $(VENV)/.installed
 # Default selection (not slow); it checks reports/quick/ when `make quick-report` wrote it.
 test: $(VENV)/.installed-test
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q $(XDIST)
 
 # The slow tests alone (full-size studies, a fresh quick report).
 test-slow: $(VENV)/.installed-test

@@ -120,7 +120,11 @@ class _client:
         n = self.workers or os.cpu_count() or 1
         if n < 0:
             raise InputError(f"--workers must be at least 1, got {n}")
-        for k, v in WORKER_ENV.items():  # the spawned workers inherit these too
+        # the spawned workers (and any respawned after a crash) inherit these too; the
+        # caller's own values come back on exit: numba rereads NUMBA_NUM_THREADS at every
+        # compile and raises if it changed after its threads started
+        self.saved_env = {k: os.environ.get(k) for k in WORKER_ENV}
+        for k, v in WORKER_ENV.items():
             os.environ.setdefault(k, v)
         self.cluster = LocalCluster(
             n_workers=n,
@@ -138,3 +142,8 @@ class _client:
             self.client.close()
         if self.cluster is not None:
             self.cluster.close()
+        for k, v in getattr(self, "saved_env", {}).items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v

@@ -700,45 +700,56 @@ def test_cli_inspect_exits_0_or_2_with_one_line(tmp_path_factory, mesh_files, da
         assert lines == [], err
 
 
-# ------------------------------------------------------------------ exit codes, for real
+# ------------------------------------------------------------------ exit codes
 
 
 @pytest.mark.parametrize(
-    "text, code, needle",
+    "text, code, needle, real",
     [
         (
             '[mesh]\ngenerator = "box"\nsize = [1.0, 1.0, 1.0]\ndivisions = [1, 1, 1]\n'
             '[material]\nlaw = "linear"\nE = nan\nnu = 0.3\n',
             2,
             "material.E: must be finite",
+            False,
         ),
-        ("\xff\xfe garbage", 2, "not valid TOML"),
+        ("\xff\xfe garbage", 2, "not valid TOML", True),
         (
             'name = "ok"\n[mesh]\ngenerator = "box"\nsize = [1.0, 1.0, 1.0]\n'
             "divisions = [1, 1, 1]\n"
             '[material]\nlaw = "linear"\nE = 1.0\nnu = 0.3\n',
             0,
             "",
+            False,
         ),
     ],
+    ids=["nan", "bytes", "ok"],
 )
-def test_console_script_exit_codes(tmp_path, text, code, needle):
-    """The real process: exit code and a single stderr line, no traceback."""
+def test_console_script_exit_codes(tmp_path, capfd, text, code, needle, real):
+    """Exit code and a single stderr line, no traceback. Undecodable bytes go through a real
+    process (its stderr encoding); the others through ``main`` in-process (a process costs
+    about a second; the real process's exit 2 and 0 are also checked by
+    tests/studies/test_cli.py and test_reliability_determinism.py)."""
     path = tmp_path / "s.toml"
     path.write_text(text, encoding="utf-8")
-    proc = subprocess.run(
-        [sys.executable, "-m", "studies.cli", "inspect", str(path)],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=120,
-    )
-    assert proc.returncode == code, proc.stderr
-    if code:
-        assert proc.stderr.count("\n") == 1 and needle in proc.stderr
-        assert "Traceback" not in proc.stderr
+    if real:
+        proc = subprocess.run(
+            [sys.executable, "-m", "studies.cli", "inspect", str(path)],
+            capture_output=True,
+            text=True,
+            cwd=ROOT,
+            timeout=120,
+        )
+        returncode, stderr = proc.returncode, proc.stderr
     else:
-        assert proc.stderr == ""
+        returncode = main(["inspect", str(path)])
+        stderr = capfd.readouterr().err
+    assert returncode == code, stderr
+    if code:
+        assert stderr.count("\n") == 1 and needle in stderr
+        assert "Traceback" not in stderr
+    else:
+        assert stderr == ""
 
 
 def test_scene_error_is_an_input_error():

@@ -68,11 +68,12 @@ def test_newton_converges_quadratically_on_neo_hookean(fem):
 
 
 def test_failed_step_is_cut_back_and_reaches_the_same_equilibrium(fem):
-    """With 2 iterations allowed the full load step fails; halved steps converge, and the
-    answer is the one-step equilibrium (both at tolerance 1e-11, FD-tangent floor 1e-9)."""
+    """With 3 iterations allowed the full load step (4 iterations) fails; halved steps
+    converge, and the answer is the one-step equilibrium (both at tolerance 1e-11, FD-tangent
+    floor 1e-9). (2 iterations also work but need ~260 cut-backs: 1.7 s instead of 0.1 s.)"""
     _, system = fem
     ref = static(system, tol=1e-11)
-    cut = static(system, tol=1e-11, max_iter=2, fallback=False)
+    cut = static(system, tol=1e-11, max_iter=3, fallback=False)
     assert cut.converged and cut.cutbacks >= 1 and len(cut.load_steps) >= 2
     assert cut.load_steps[-1] == 1.0 and all(np.diff(cut.load_steps) > 0)
     u = ref.x - system.x0
