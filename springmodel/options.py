@@ -23,7 +23,7 @@ from springfem.scene import Scene, TableReader, register_section
 from springfem.volumetric import VOLUMETRIC_ENERGIES, Volumetric
 
 AxialLaw = Literal["linear", "quadratic", "cubic", "stress-scaled"]
-TorsionLaw = Literal["off", "angle", "cosine", "cubic", "energy"]
+TorsionLaw = Literal["off", "angle", "cosine", "cubic", "energy", "shear"]
 LMSRule = Literal["spec", "abs"]
 Calibration = Literal["analytic", "analytic-lsq", "nnls", "exact"]
 SolverKind = Literal["static", "linear", "explicit", "implicit"]
