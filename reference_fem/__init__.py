@@ -7,15 +7,18 @@ AMG-preconditioned Krylov solves.
 
 Modules, one idea each:
 
-- ``materials``: Voigt matrices, transverse compliance, rotation to element frames.
-- ``hyperelastic``: neo-Hookean energy, stress and tangent.
+- ``materials``: per-element Voigt matrices grouped by frame.
+- ``hyperelastic``: neo-Hookean energy, stress and tangent; ``laws/``: the tissue laws.
 - ``space``: P1/P2 shape-function gradients and quadrature on the scene mesh.
 - ``assembly``: einsum element arrays and 3x3-block sparse assembly.
 - ``loads``: consistent load vectors, follower pressure and its stiffness.
 - ``constraints``: prescribed displacements, reactions, the rigid-motion check.
-- ``linsolve``: SuperLU / AMG-CG / AMG-GMRES with failure detection.
-- ``newton``: Newton, line search, adaptive load stepping.
-- ``solver``: :class:`FemProblem` and :func:`solve` (scene in, Result out).
+- ``newton``: the adapter to the core Newton (line search, adaptive load stepping).
+- ``law_names``: law names and :func:`~reference_fem.law_names.parse_law`.
+- ``problem``: :class:`FemProblem` (residual, tangent, energy, post-processing);
+  ``mixed``: the Taylor–Hood u-p problem.
+- ``solver``: :func:`solve` (scene in, Result out).
+- ``explicit``, ``explicit_kernels``, ``dynamics``: explicit P1 FEM and time integration.
 - ``scenes``: verification scenes built in code; ``bench``: the speed benchmark.
 
 Public API
@@ -38,7 +41,8 @@ from .assembly import element_stiffness_p1
 from .bench import bench
 from .hyperelastic import NeoHookean
 from .materials import material_matrix
-from .solver import FemProblem, FemSolution, solve
+from .problem import FemProblem
+from .solver import FemSolution, solve
 
 __all__ = [
     "FemProblem",

@@ -90,7 +90,8 @@ def bench(
     from .constraints import dirichlet
     from .loads import ExternalLoads
     from .materials import material_groups
-    from .solver import FemProblem, solve
+    from .problem import FemProblem
+    from .solver import solve
     from .space import Space
 
     scene = bench_scene(n_tets)

@@ -46,7 +46,7 @@ from .assembly import CHUNK, _gradient_products, displacement_gradient
 from .hyperelastic import _det
 from .laws import TissueLaw
 from .options import FemOptions
-from .solver import FemProblem
+from .problem import FemProblem
 
 #: The pressure unknowns are ``q = p / (P_SCALE mu)`` and the constraint rows are scaled by
 #: the same factor (a symmetric scaling), so both residual blocks are forces of similar size
@@ -60,7 +60,7 @@ class MixedProblem(FemProblem):
     Parameters
     ----------
     scene, order, law, intorder
-        As for :class:`~reference_fem.solver.FemProblem`; ``order`` must be 2.
+        As for :class:`~reference_fem.problem.FemProblem`; ``order`` must be 2.
     """
 
     mixed = True

@@ -36,7 +36,7 @@ _FLAGS = {"error_model": "numpy", "fastmath": {"contract"}}
 
 
 def block_layout(tets: np.ndarray, columns: np.ndarray, dtype) -> tuple[np.ndarray, np.ndarray]:
-    """Blocked connectivity ``(nb, 4, B)`` int32 and constants ``(nb, ncol, B)`` of ``dtype``.
+    """Blocked connectivity ``(nb, 4 B)`` int32 and constants ``(nb, ncol B)`` of ``dtype``.
 
     Parameters
     ----------
@@ -49,7 +49,9 @@ def block_layout(tets: np.ndarray, columns: np.ndarray, dtype) -> tuple[np.ndarr
 
     Returns
     -------
-    tuple of ndarray
+    T, K
+        ``T[b, i B + j]`` is vertex ``i`` of lane ``j`` of block ``b``; ``K[b, c B + j]``
+        its constant ``c``. The last block is padded with copies of the last element.
     """
     tets = np.asarray(tets)
     m = tets.shape[0]
@@ -62,7 +64,29 @@ def block_layout(tets: np.ndarray, columns: np.ndarray, dtype) -> tuple[np.ndarr
 
 
 def set_column(K: np.ndarray, col: int, values: np.ndarray) -> None:
-    """Overwrite constant ``col`` of every element (``values`` in element order)."""
+    """Overwrite constant ``col`` of every element, padded lanes included, in place.
+
+    Parameters
+    ----------
+    K
+        Blocked constants ``(nb, ncol B)`` (:func:`block_layout`).
+    col
+        The constant's column.
+    values
+        One value per element ``(m,)``, in element order; the padded lanes of the last
+        block get the last element's value.
+
+    Returns
+    -------
+    None
+
+    Examples
+    --------
+    >>> T, K = block_layout(np.array([[0, 1, 2, 3]] * 2), np.zeros((1, 2)), np.float64)
+    >>> set_column(K, 0, np.array([1.0, 2.0]))
+    >>> K[0, :4].tolist()  # element 0, element 1, then padding copies of element 1
+    [1.0, 2.0, 2.0, 2.0]
+    """
     m = values.shape[0]
     nb = K.shape[0]
     idx = np.minimum(np.arange(nb * BLOCK), m - 1)
@@ -70,7 +94,26 @@ def set_column(K: np.ndarray, col: int, values: np.ndarray) -> None:
 
 
 def chunks(n_blocks: int, n_threads: int | None = None) -> np.ndarray:
-    """Static contiguous block ranges ``ptr`` (one per thread)."""
+    """Static contiguous block ranges, one per thread.
+
+    Parameters
+    ----------
+    n_blocks
+        Number of element blocks.
+    n_threads
+        Threads to split over (default: numba's thread count); at most ``n_blocks`` chunks.
+
+    Returns
+    -------
+    ndarray
+        ``ptr`` ``(n_chunks + 1,)`` int64: chunk ``c`` runs over blocks
+        ``ptr[c]:ptr[c+1]``.
+
+    Examples
+    --------
+    >>> chunks(10, 3).tolist()
+    [0, 3, 7, 10]
+    """
     n = max(1, min(n_threads or numba.get_num_threads(), n_blocks))
     return np.linspace(0, n_blocks, n + 1).round().astype(np.int64)
 

@@ -40,12 +40,50 @@ def _cap_volume(r_short: float, r_long: float, base_z: float) -> float:
 
 
 def wall_volume(endo=ENDO, epi=EPI, base_z: float = BASE_Z) -> float:
-    """Exact volume of the truncated ellipsoidal wall (epicardial minus endocardial cap)."""
+    """Exact volume of the truncated ellipsoidal wall (epicardial minus endocardial cap).
+
+    Parameters
+    ----------
+    endo, epi
+        ``(r_short, r_long)`` of the endocardial and epicardial ellipsoids (mm).
+    base_z
+        Height of the base plane (mm).
+
+    Returns
+    -------
+    float
+        Volume (mm^3).
+
+    Examples
+    --------
+    >>> import math
+    >>> math.isclose(wall_volume((1.0, 1.0), (2.0, 2.0), 2.0), 4 / 3 * math.pi * 7)
+    True
+    """
     return _cap_volume(*epi, base_z) - _cap_volume(*endo, base_z)
 
 
 def cavity_volume(endo=ENDO, base_z: float = BASE_Z) -> float:
-    """Exact volume enclosed by the endocardium and the base plane."""
+    """Exact volume enclosed by the endocardium and the base plane.
+
+    Parameters
+    ----------
+    endo
+        ``(r_short, r_long)`` of the endocardial ellipsoid (mm).
+    base_z
+        Height of the base plane (mm).
+
+    Returns
+    -------
+    float
+        Volume (mm^3).
+
+    Examples
+    --------
+    >>> import math
+    >>> math.isclose(cavity_volume((1.0, 1.0), 0.0), 2 / 3 * math.pi)  # half a unit ball
+    True
+    """
     return _cap_volume(*endo, base_z)
 
 

@@ -71,6 +71,10 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
         a part; a failed write leaves the old content.
     text
         UTF-8 text.
+
+    Returns
+    -------
+    None
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -43,6 +43,16 @@ REST_TOL = 1e-6  # ... kinetic energy below this fraction of the run's largest
 def pvd_text(entries: list[tuple[float, str]]) -> str:
     """A ParaView collection file listing ``(time, file)`` datasets.
 
+    Parameters
+    ----------
+    entries
+        ``(time, file name)`` pairs (s, relative to the ``.pvd`` file), in time order.
+
+    Returns
+    -------
+    str
+        The ``.pvd`` XML text.
+
     Examples
     --------
     >>> print(pvd_text([(0.0, "f_0.vtu")]))  # doctest: +NORMALIZE_WHITESPACE
@@ -259,7 +269,21 @@ def _next_after(t: float, interval: float, eps: float) -> float:
 
 
 def history_figure(hist, path: Path) -> Path:
-    """Probe displacements, energies and volume change against time (one panel each)."""
+    """Probe displacements, energies and volume change against time (one panel each).
+
+    Parameters
+    ----------
+    hist
+        The history table (pandas DataFrame): column ``t`` (s) and any of ``probe:*``
+        (m), ``kinetic``/``potential``/``total`` (J), ``volume_change``.
+    path
+        The PNG to write (atomically).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

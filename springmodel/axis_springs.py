@@ -29,7 +29,7 @@ import numpy as np
 
 from springfem.volumetric import volumetric_energy
 
-from .calibration import TORSION_PAIRS
+from .rest_geometry import TORSION_PAIRS
 
 
 def volume_ratio(zeta: np.ndarray, det0: np.ndarray) -> np.ndarray:

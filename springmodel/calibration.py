@@ -1,24 +1,11 @@
 """Material parameters -> spring constants (DESIGN §4).
 
-Under the affine deformation of a linear tet (gradient ``F``) every axis vector and every
-radial vector maps exactly, ``zeta_l = F zeta_l^0`` and ``xi_j = F xi_j^0``, so the energy of
-a spring element is a function of ``F`` alone (:func:`element_energy_from_F`)::
-
-    W_k(F) = sum_l k_l/2 (|F zeta_l^0| - l_l^0)^2                 axial springs (2.35)
-           + sum_lm k_lm/2 (c_lm(F) - c_lm^0)^2                     torsion (energy form)
-           + k_s/2 (sum_j |F xi_j^0| - L^0)^2                       volume springs (2.76)
-
-Linearising at ``F = I`` every term is ``k_a/2 (a_a : eps)^2`` with a symmetric "strain
-tensor" ``a_a`` of the rest geometry (:func:`spring_strain_tensors`):
-
-* axial ``a_l = zeta_l zeta_l^T / l_l`` (``d|zeta_l| = zeta_hat . eps . zeta``),
-* torsion ``a_lm = 2 sym(zh_l zh_m^T) - c0 (zh_l zh_l^T + zh_m zh_m^T)`` (``dc_lm = a_lm : eps``),
-* volume ``R = sum_j xi_j xi_j^T / |xi_j|`` (``dL = R : eps``),
-
-so the element is a P1 element with the effective Voigt matrix
-``D_k = (1/V) sum_a k_a v_a v_a^T`` (:func:`effective_matrix`), ``v_a`` the Voigt vector of
-``a_a``. Calibration chooses the seven constants so that ``D_k`` matches the material
-matrix ``C``:
+A spring element's energy is a function of its deformation gradient ``F`` alone and, at
+small strain, that of a P1 element with the effective Voigt matrix
+``D_k = (1/V) sum_a k_a v_a v_a^T`` (:mod:`springmodel.element_energy`; the Voigt vectors
+``v_a`` of the strain tensors ``a_a`` of the rest geometry,
+:mod:`springmodel.rest_geometry`). Calibration chooses the seven constants so that ``D_k``
+matches the material matrix ``C``:
 
 ``analytic`` (orthonormal axes, ``c0 = 0``). In the element frame the axial springs carry
 the normal strains, the torsion springs the three shears (``dc_lm = gamma_lm``), and the
@@ -57,8 +44,17 @@ matrices of the energy forms.
 Examples
 --------
 >>> import numpy as np
->>> rest_cosines(np.eye(3)[None]).tolist()  # orthonormal axes: every c_lm^0 = 0
-[[0.0, 0.0, 0.0]]
+>>> from springfem.materials import material_matrix
+>>> from springfem.scene import Material
+>>> from springmodel.element_energy import effective_matrix
+>>> from springmodel.rest_geometry import RestGeometry
+>>> X = np.array([[1.0, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]])  # regular: R = rho I
+>>> g = RestGeometry(np.eye(3)[None], X[None], np.array([8 / 3]))
+>>> C = material_matrix(Material("linear", 1.0e4, 0.3))[None]
+>>> ka, kt, ks = analytic_constants(g, C)
+>>> D = effective_matrix(g, ka, kt, ks)  # exact for isotropic material on a regular tet
+>>> bool(calibration_mismatch(D, C)[0] < 1e-12)
+True
 """
 
 from __future__ import annotations
@@ -67,35 +63,9 @@ from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
-from springfem.materials import (
-    is_transverse,
-    material_matrix,
-    to_mandel,
-    voigt_vector,
-)
+from springfem.materials import is_transverse, material_matrix, to_mandel
 
-# Voigt order xx, yy, zz, yz, xz, xy (engineering shear strains).
-# Torsion spring pairs (l, m) and the Voigt index of the shear they carry.
-TORSION_PAIRS = ((0, 1), (0, 2), (1, 2))
-TORSION_VOIGT = (5, 4, 3)
-
-
-class RestGeometry(NamedTuple):
-    """What calibration needs from an element's rest state.
-
-    Attributes
-    ----------
-    zeta0
-        Rest axis vectors, ``(m, 3, 3)``, ``zeta0[k, l]`` for axis ``l``.
-    xi0
-        Rest radial vectors barycenter -> vertex, ``(m, 4, 3)``.
-    V0
-        Rest volumes, ``(m,)``.
-    """
-
-    zeta0: np.ndarray
-    xi0: np.ndarray
-    V0: np.ndarray
+from .rest_geometry import TORSION_VOIGT, RestGeometry, radial_tensor
 
 
 class Calibrated(NamedTuple):
@@ -115,92 +85,6 @@ class Calibrated(NamedTuple):
     mismatch: np.ndarray  # (m,)   relative Frobenius (Mandel) ||A_k - C|| / ||C||
     k_axis_volume: np.ndarray | None = None  # (m,) Pa  axis-volume spring V0 U(J)
     k_coupling: np.ndarray | None = None  # (m, 3) J  Poisson coupling c_lm s_l s_m
-
-
-# --------------------------------------------------------------------------- tensors
-
-
-# --------------------------------------------------------------------------- spring element
-
-
-def rest_geometry(points: np.ndarray, tets: np.ndarray, G: np.ndarray) -> RestGeometry:
-    """Rest axis vectors (``zeta_l = sum_i G[k,i,l] x_i``), radial vectors and volumes."""
-    X = np.asarray(points, float)[tets]
-    zeta0 = G.transpose(0, 2, 1) @ X
-    xi0 = X - X.mean(axis=1, keepdims=True)
-    e = X[:, 1:] - X[:, :1]
-    V0 = np.linalg.det(e) / 6.0
-    return RestGeometry(zeta0, xi0, V0)
-
-
-def rest_cosines(zeta0: np.ndarray) -> np.ndarray:
-    """Rest cosines ``c_lm^0`` for the pairs (0,1), (0,2), (1,2), ``(m, 3)``."""
-    u = zeta0 / np.linalg.norm(zeta0, axis=-1, keepdims=True)
-    return np.stack([(u[:, a] * u[:, b]).sum(-1) for a, b in TORSION_PAIRS], axis=1)
-
-
-def radial_tensor(xi0: np.ndarray) -> np.ndarray:
-    """``R = sum_j xi_j xi_j^T / |xi_j|``, ``(m, 3, 3)``: ``dL = R : eps`` at small strain."""
-    r = np.linalg.norm(xi0, axis=-1)
-    return (xi0 / r[..., None]).transpose(0, 2, 1) @ xi0
-
-
-def spring_strain_tensors(zeta0: np.ndarray, xi0: np.ndarray) -> np.ndarray:
-    """Tensors ``a_a`` with ``d(measure_a) = a_a : eps`` at rest, ``(m, 7, 3, 3)``.
-
-    Order: axial 0, 1, 2 (measure ``|zeta_l|``), torsion (0,1), (0,2), (1,2) (measure
-    ``c_lm``), volume (measure ``L = sum_j |xi_j|``).
-    """
-    m = zeta0.shape[0]
-    l0 = np.linalg.norm(zeta0, axis=-1)
-    u = zeta0 / l0[..., None]
-    c0 = rest_cosines(zeta0)
-    a = np.empty((m, 7, 3, 3))
-    a[:, :3] = u[..., :, None] * zeta0[..., None, :]
-    for p, (l, n) in enumerate(TORSION_PAIRS):
-        ul, un = u[:, l, :, None], u[:, n, :, None]
-        outer = ul * un.transpose(0, 2, 1)
-        a[:, 3 + p] = (outer + outer.transpose(0, 2, 1)) - c0[:, p, None, None] * (
-            ul * ul.transpose(0, 2, 1) + un * un.transpose(0, 2, 1)
-        )
-    a[:, 6] = radial_tensor(xi0)
-    return a
-
-
-def _stack_constants(k_axial, k_torsion, k_volume, m: int) -> np.ndarray:
-    k = np.empty((m, 7))
-    k[:, :3] = np.broadcast_to(np.asarray(k_axial, float), (m, 3))
-    k[:, 3:6] = np.broadcast_to(np.asarray(k_torsion, float), (m, 3))
-    k[:, 6] = np.broadcast_to(np.asarray(k_volume, float), (m,))
-    return k
-
-
-def effective_matrix(geometry: Any, k_axial, k_torsion, k_volume) -> np.ndarray:
-    """Small-strain effective Voigt matrix ``D_k`` of the spring elements, ``(m, 6, 6)``.
-
-    ``D_k = (1/V) sum_a k_a v_a v_a^T`` with ``v_a`` the Voigt vectors of
-    :func:`spring_strain_tensors`: the element energy is ``V/2 g^T D_k g`` to second order in
-    the engineering strain ``g``. Valid for the energy forms (axial linear/polynomial,
-    torsion ``energy``, volume ``gradient``); the torsion force laws ``angle``/``cosine``/
-    ``cubic`` linearise to non-symmetric stiffnesses that share its symmetric shear part only
-    on the pure-shear modes.
-
-    Parameters
-    ----------
-    geometry
-        Anything with ``zeta0 (m,3,3)``, ``xi0 (m,4,3)``, ``V0 (m,)`` (e.g.
-        :class:`RestGeometry` or :class:`~springmodel.elements.SpringElements`).
-    k_axial, k_torsion, k_volume
-        ``(m, 3)``, ``(m, 3)``, ``(m,)`` or broadcastable; torsion in energy units.
-
-    Returns
-    -------
-    ndarray
-        ``D_k`` ``(m, 6, 6)`` (Pa), engineering-shear Voigt.
-    """
-    v = voigt_vector(spring_strain_tensors(geometry.zeta0, geometry.xi0))  # (m, 7, 6)
-    k = _stack_constants(k_axial, k_torsion, k_volume, v.shape[0])
-    return (v * (k / geometry.V0[:, None])[..., None]).transpose(0, 2, 1) @ v
 
 
 def calibration_mismatch(
@@ -354,7 +238,23 @@ def calibrate(
 
 
 def constants_of(k: dict[str, np.ndarray], options: Any) -> np.ndarray:
-    """Constants ``(m, nb)`` of the switched-on parts in the order of the tangent basis."""
+    """The constants of the switched-on parts, in the order of the tangent basis.
+
+    Parameters
+    ----------
+    k
+        Constants by name: ``k_axial`` ``(m, 3)``, ``k_torsion`` ``(m, 3)``, ``k_volume``
+        ``(m,)``, ``k_axis_volume`` ``(m,)``, ``k_coupling`` ``(m, 3)``; only those of the
+        switched-on parts are read.
+    options
+        :class:`~springmodel.options.SpringOptions` (``torsion``, ``volume``, ``coupling``).
+
+    Returns
+    -------
+    ndarray
+        ``(m, nb)``: axial, then torsion unless ``off``, then the barycentric or axis-volume
+        constant, then coupling (:func:`springmodel.tangent.basis_names`).
+    """
     cols = [k["k_axial"]]
     if options.torsion != "off":
         cols.append(k["k_torsion"])
@@ -365,36 +265,3 @@ def constants_of(k: dict[str, np.ndarray], options: Any) -> np.ndarray:
     if options.coupling:
         cols.append(k["k_coupling"])
     return np.concatenate(cols, axis=1)
-
-
-# --------------------------------------------------------------------------- W_k(F)
-
-
-def element_energy_from_F(
-    F: np.ndarray,
-    geometry: Any,
-    k_axial,
-    k_torsion,
-    k_volume,
-    axial_coefficients: tuple[float, float] = (0.0, 0.0),
-) -> np.ndarray:
-    """Energy ``W_k(F)`` of each spring element from its deformation gradient alone, ``(m,)``.
-
-    Energy forms only: axial polynomial ``k (d^2/2 + b2 d^3/(3 l0) + b3 d^4/(4 l0^2))``
-    (``b2 = b3 = 0`` is linear), torsion ``k/2 (c - c0)^2``, volume ``k_s/2 dL^2``. Nothing
-    here uses intersection points: ``zeta_l = F zeta_l^0`` and ``xi_j = F xi_j^0``.
-    """
-    m = geometry.V0.shape[0]
-    k = _stack_constants(k_axial, k_torsion, k_volume, m)
-    b2, b3 = axial_coefficients
-    zeta = geometry.zeta0 @ F.transpose(0, 2, 1)
-    l0 = np.linalg.norm(geometry.zeta0, axis=-1)
-    L = np.linalg.norm(zeta, axis=-1)
-    d = L - l0
-    W = np.sum(k[:, :3] * (d**2 / 2 + b2 * d**3 / (3 * l0) + b3 * d**4 / (4 * l0**2)), axis=1)
-    c = rest_cosines(zeta)
-    W += np.sum(0.5 * k[:, 3:6] * (c - rest_cosines(geometry.zeta0)) ** 2, axis=1)
-    xi = geometry.xi0 @ F.transpose(0, 2, 1)
-    dL = np.linalg.norm(xi, axis=-1).sum(1) - np.linalg.norm(geometry.xi0, axis=-1).sum(1)
-    W += 0.5 * k[:, 6] * dL**2
-    return W

@@ -25,9 +25,12 @@ from typing import Any
 
 import numpy as np
 
-from . import calibration as cal
+from springfem.materials import material_matrix
+
+from .calibration import calibrate, constants_of
 from .intersections import intersection_coefficients
 from .options import SpringOptions
+from .rest_geometry import TORSION_PAIRS, rest_cosines, rest_geometry
 from .tangent import element_mismatch
 
 
@@ -118,7 +121,7 @@ class SpringElements:
         work on the pure shear of the pair (``dc = gamma_lm``), which is the mode the torsion
         springs are calibrated for; with equal axis lengths the two laws linearise alike.
         """
-        pairs = cal.TORSION_PAIRS
+        pairs = TORSION_PAIRS
         lsum = np.stack([self.l0[:, a] + self.l0[:, b] for a, b in pairs], axis=1)
         return 2.0 * self.k_torsion / lsum
 
@@ -161,7 +164,7 @@ def build_spring_elements(
         ``calibration`` picks ``analytic`` or ``nnls``; ``k_axial``, ``k_torsion``,
         ``k_volume`` (scalars) override the calibrated constants.
     material
-        See :func:`springmodel.calibration.material_matrix`; may be ``None`` only when all
+        See :func:`springfem.materials.material_matrix`; may be ``None`` only when all
         three constants are given explicitly.
     C
         Precomputed intersection coefficients (otherwise ray-cast here).
@@ -184,9 +187,9 @@ def build_spring_elements(
         C = intersection_coefficients(points, tets, frames)
     C = np.ascontiguousarray(C, dtype=float)
     G = np.ascontiguousarray(axis_gradients_from(C))
-    geom = cal.rest_geometry(points, tets, G)
+    geom = rest_geometry(points, tets, G)
     l0 = np.linalg.norm(geom.zeta0, axis=-1)
-    c0 = cal.rest_cosines(geom.zeta0)
+    c0 = rest_cosines(geom.zeta0)
     r0 = np.linalg.norm(geom.xi0, axis=-1)
     m = tets.shape[0]
 
@@ -196,7 +199,7 @@ def build_spring_elements(
     calib = None
     kj, kc = np.zeros(m), np.zeros((m, 3))
     if material is not None and any(v is None for v in overrides):
-        calib = cal.calibrate(geom, frames, material, options.calibration, options)
+        calib = calibrate(geom, frames, material, options.calibration, options)
         ka, kt, kv = calib.k_axial, calib.k_torsion, calib.k_volume
         kj, kc = calib.k_axis_volume, calib.k_coupling
     else:
@@ -214,8 +217,8 @@ def build_spring_elements(
     elif material is not None:
         k = {"k_axial": ka, "k_torsion": kt, "k_volume": kv, "k_axis_volume": kj}
         k["k_coupling"] = kc
-        C_global = cal.material_matrix(material, frames)
-        mismatch = element_mismatch(geom, cal.constants_of(k, options), C_global, options)
+        C_global = material_matrix(material, frames)
+        mismatch = element_mismatch(geom, constants_of(k, options), C_global, options)
     else:
         mismatch = np.full(m, np.nan)
 

@@ -28,7 +28,7 @@ Examples
 --------
 >>> import numpy as np
 >>> from springfem.materials import isotropic_matrix
->>> from springmodel.calibration import RestGeometry
+>>> from springmodel.rest_geometry import RestGeometry
 >>> g = RestGeometry(np.eye(3)[None] * 0.5, np.zeros((1, 4, 3)), np.array([1.0]))
 >>> k = exact_constants(g, isotropic_matrix(1.0, 0.25)[None], "axes", coupling=True)
 >>> round(float(k["k_axis_volume"][0]), 12), bool(np.abs(k["k_coupling"]).max() < 1e-15)
@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from .calibration import TORSION_PAIRS, TORSION_VOIGT, radial_tensor
+from .rest_geometry import TORSION_PAIRS, TORSION_VOIGT, radial_tensor
 
 
 def exact_constants(

@@ -46,7 +46,6 @@ from typing import Literal
 import numpy as np
 import scipy.sparse as sp
 
-from .calibration import TORSION_PAIRS
 from .elements import SpringElements
 from .hessian_numba import _element_matrices_numba, _element_matrices_serial, _scatter_add
 from .hessian_numpy import (
@@ -58,6 +57,7 @@ from .hessian_numpy import (
 )
 from .hessian_pattern import csr_pattern
 from .options import SpringOptions
+from .rest_geometry import TORSION_PAIRS
 from .springs import is_conservative
 
 #: ``parallel=None`` runs the element matrices on all threads from this many elements up

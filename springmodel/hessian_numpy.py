@@ -23,8 +23,8 @@ import numpy as np
 from springfem.volumetric import volumetric_energy
 
 from .axis_springs import volume_ratio, volume_ratio_gradient
-from .calibration import TORSION_PAIRS
 from .options import SpringOptions
+from .rest_geometry import TORSION_PAIRS
 
 
 def polynomial_coefficients(options: SpringOptions) -> tuple[float, float]:

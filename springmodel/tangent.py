@@ -24,7 +24,7 @@ Examples
 --------
 >>> import numpy as np
 >>> from springfem.materials import material_matrix
->>> from springmodel.calibration import RestGeometry
+>>> from springmodel.rest_geometry import RestGeometry
 >>> X = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
 >>> zeta0 = np.eye(3)[None] * 0.5
 >>> g = RestGeometry(zeta0, (X - X.mean(0))[None], np.array([1 / 6]))
@@ -41,7 +41,7 @@ import numpy as np
 
 from springfem.materials import voigt_to_tensor
 
-from .calibration import TORSION_PAIRS, radial_tensor, spring_strain_tensors
+from .rest_geometry import TORSION_PAIRS, radial_tensor, spring_strain_tensors
 
 #: Elements per block when tangents are formed (bounds memory to ~100 MB).
 CHUNK = 8192

@@ -65,6 +65,11 @@ def solve_limits(max_time: float | None = None, max_steps: int | None = None) ->
         Time steps per solve (``None``: no cap; Newton iterations are capped by
         ``max_iter``).
 
+    Yields
+    ------
+    None
+        The block runs with the caps set; the previous caps come back after it.
+
     Examples
     --------
     >>> with solve_limits(max_time=5.0):
@@ -86,6 +91,13 @@ class Deadline:
 
     The FEM's Newton iterates on its own DOF vector; it starts one of these with the solve
     and checks it once per Newton iteration.
+
+    Attributes
+    ----------
+    max_time
+        The cap in seconds (``None``: none), read from :data:`LIMITS` when created.
+    start
+        ``time.monotonic()`` when created.
 
     Examples
     --------

@@ -73,12 +73,28 @@ STALL_RATIO = 0.5
 
 
 class RejectedState(Exception):
-    """Raised by :meth:`NewtonProblem.residual` for a state the problem cannot accept
-    (e.g. inverted elements); the message says why."""
+    """Raised by :meth:`NewtonProblem.residual` for a state the problem cannot accept.
+
+    A rejected trial state is backtracked by the line search; a rejected start fails the
+    Newton solve (and load stepping cuts the step back).
+
+    Parameters
+    ----------
+    message
+        Why the state is rejected (e.g. which elements are inverted).
+    """
 
 
 class NewtonProblem(Protocol):
-    """What :func:`newton` needs of a problem. ``state`` is whatever the problem iterates on."""
+    """What :func:`newton` needs of a problem. ``state`` is whatever the problem iterates on.
+
+    Attributes
+    ----------
+    residual, correction, trial, energy, constrained, locate
+        The methods below: residual and its norm, the Newton correction with a re-solve
+        for the same tangent, a trial state, the energy, whether the prescribed values are
+        met, and where the largest residual is.
+    """
 
     def residual(self, state: Any) -> tuple[np.ndarray, float]:
         """Residual ``R`` (energy-gradient sign) and its relative norm; may raise

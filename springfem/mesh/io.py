@@ -218,6 +218,12 @@ def write_vtu(
         Name -> per-node array (first axis ``n``).
     cell_data
         Name -> per-tet array (first axis ``m``).
+
+    Returns
+    -------
+    None
+        The file is written; named regions are added as the ``region`` cell field, with
+        their names in its FieldData.
     """
     import meshio
 

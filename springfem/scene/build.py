@@ -52,6 +52,15 @@ def register_section(name: str, parse: Callable[[TableReader], Any]) -> None:
     parse
         Takes a :class:`TableReader` over the section's table, returns the options object
         and raises :class:`SceneError` (via ``reader.fail``) on bad input.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is not a model section.
     """
     if name not in MODEL_SECTIONS:
         raise ValueError(f"unknown model section {name!r}; valid: {', '.join(MODEL_SECTIONS)}")

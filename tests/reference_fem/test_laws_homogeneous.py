@@ -13,7 +13,7 @@ import pytest
 from scipy.optimize import brentq, fsolve
 
 from reference_fem import solve
-from reference_fem.solver import FemProblem
+from reference_fem.problem import FemProblem
 from springfem.regions import resolve_region
 from springfem.scene import scene_from_dict
 

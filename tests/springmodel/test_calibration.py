@@ -13,8 +13,8 @@ from scipy.spatial.transform import Rotation
 
 from springfem import materials
 from springfem.mesh import box_mesh
-from springmodel import calibration as cal
-from springmodel import springs
+from springmodel import rest_geometry, springs
+from springmodel.element_energy import effective_matrix, element_energy_from_F
 from springmodel.elements import build_spring_elements
 from springmodel.options import SpringOptions
 
@@ -167,11 +167,11 @@ def test_effective_matrix_is_the_energy_hessian():
     ka = rng.uniform(1, 2, (3, 3))
     kt = rng.uniform(1, 2, (3, 3))
     kv = rng.uniform(1, 2, 3)
-    D = cal.effective_matrix(el, ka, kt, kv)
+    D = effective_matrix(el, ka, kt, kv)
 
     def W(g):
         F = np.eye(3) + materials.strain_tensor(g)
-        return cal.element_energy_from_F(np.broadcast_to(F, (3, 3, 3)), el, ka, kt, kv) / el.V0
+        return element_energy_from_F(np.broadcast_to(F, (3, 3, 3)), el, ka, kt, kv) / el.V0
 
     h = 1e-4
     H = np.zeros((3, 6, 6))
@@ -208,7 +208,7 @@ def test_analytic_calibration_reproduces_p1_stiffness_on_regular_tet(nu):
         mu = 1e3 / (2 * (1 + nu))
         lam = 1e3 * nu / ((1 + nu) * (1 - 2 * nu))
         V, l0 = el.V0[0], el.l0[0]
-        rho = np.trace(cal.radial_tensor(el.xi0)[0]) / 3
+        rho = np.trace(rest_geometry.radial_tensor(el.xi0)[0]) / 3
         np.testing.assert_allclose(el.k_axial[0], 2 * mu * V / l0**2, rtol=1e-12)
         np.testing.assert_allclose(el.k_torsion[0], mu * V, rtol=1e-12)
         np.testing.assert_allclose(el.k_volume[0], lam * V / rho**2, rtol=1e-12, atol=1e-12)

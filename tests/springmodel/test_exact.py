@@ -13,10 +13,10 @@ from scipy.spatial.transform import Rotation
 
 from springfem import materials
 from springfem.mesh import box_mesh
-from springmodel.calibration import RestGeometry
 from springmodel.elements import build_spring_elements
 from springmodel.hessian import SpringHessian
 from springmodel.options import SpringOptions
+from springmodel.rest_geometry import RestGeometry
 from springmodel.springs import internal_forces, spring_energy
 from springmodel.tangent import spring_tangent, tangent_basis
 

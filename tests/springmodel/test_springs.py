@@ -16,7 +16,7 @@ from scipy.spatial.transform import Rotation
 
 from springfem.mesh import box_mesh
 from springmodel import springs
-from springmodel.calibration import element_energy_from_F
+from springmodel.element_energy import element_energy_from_F
 from springmodel.elements import build_spring_elements
 from springmodel.options import LMSOptions, SpringOptions
 

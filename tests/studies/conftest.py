@@ -61,7 +61,7 @@ def dk_p1_displacement(scene, options=None):
     import scipy.sparse.linalg as spla
 
     from reference_fem import element_stiffness_p1
-    from springmodel.calibration import effective_matrix
+    from springmodel.element_energy import effective_matrix
     from springmodel.model import SpringModel
 
     model = SpringModel(scene, options, parallel=False)
