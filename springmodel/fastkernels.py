@@ -51,11 +51,11 @@ from numba import njit
 
 from springfem.blocks import BLOCK, block_drivers, compile_named, variant_id
 
+from .springs.shear import SHEAR_FLOOR
+
 PRECISIONS = ("float64", "mixed", "float32")
 _PAIRS = ((0, 1), (0, 2), (1, 2))
 _FLAGS = {"error_model": "numpy", "fastmath": {"contract"}}
-#: Floor of ``1 - c^2`` in the shear torsion law (axes parallel to round-off).
-SHEAR_FLOOR = 1e-12
 
 
 @dataclass(frozen=True)
@@ -199,7 +199,7 @@ def _axial(law, lam, k, jac, b2, b3, one):
 
 @njit(cache=True, **_FLAGS)
 def _shear_slope(c, c0, one):
-    """``dU/dc / k`` of the shear torsion energy ``U = k/2 delta^2`` (see :mod:`.shear`)."""
+    """``dU/dc / k`` of the shear torsion energy (:mod:`springmodel.springs.shear`)."""
     g = max(one - c * c, SHEAR_FLOOR)
     g0 = one - c0 * c0
     s03 = g0 * math.sqrt(g0)
