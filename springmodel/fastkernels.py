@@ -67,7 +67,7 @@ class Variant:
     axial
         ``linear``, ``quadratic``, ``cubic`` or ``stress-scaled``.
     torsion
-        ``off``, ``angle``, ``cosine``, ``cubic`` or ``energy``.
+        ``off``, ``angle``, ``cosine``, ``cubic``, ``energy`` or ``shear``.
     volume
         ``off``, ``gradient``, ``spec`` (barycentric) or ``axes`` (axis volume).
     volumetric
