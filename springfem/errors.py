@@ -107,10 +107,14 @@ class SolverError(SpringFemError, RuntimeError):
         What failed, where and when (step, iteration, element).
     state
         The last good state, if any (e.g. a displacement array), so callers can write it.
+    load_factor
+        The load factor of ``state`` when the solve stepped the load and stopped part way
+        (a partial result at that load), else ``None``.
     """
 
     exit_code = 3
 
-    def __init__(self, message: str, state: object | None = None):
+    def __init__(self, message: str, state: object | None = None, load_factor: float | None = None):
         super().__init__(message)
         self.state = state
+        self.load_factor = load_factor

@@ -19,7 +19,8 @@ Isotropic material: ``kappa = lambda``, ``k_l = 2 mu V / l_l^2``, ``c_lm = 0``, 
 (no coupling needed). Transversely isotropic / orthotropic: the off-diagonals differ and the
 couplings take the differences from ``kappa``; the axis-volume term is kept so that the volume
 is held at finite strain (coupling alone lets it drift, DESIGN §4b). Exactness needs
-``volume = "axes"``, ``torsion = "energy"`` and (anisotropic) ``coupling = true``; with other
+``volume = "axes"``, ``torsion = "energy"`` (or ``"shear"``: the same small-strain tangent)
+and (anisotropic) ``coupling = true``; with other
 parts the same formulas are used (barycentric volume: ``k_s = kappa V / rho^2`` as in the
 ``analytic`` calibration; no volume: ``kappa = 0``) and the mismatch they leave is reported
 (:mod:`springmodel.tangent`). A negative ``C_ll - kappa`` is clipped to zero.

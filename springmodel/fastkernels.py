@@ -51,6 +51,8 @@ from numba import njit
 
 from springfem.blocks import BLOCK, block_drivers, compile_named, variant_id
 
+from .springs.shear import SHEAR_FLOOR
+
 PRECISIONS = ("float64", "mixed", "float32")
 _PAIRS = ((0, 1), (0, 2), (1, 2))
 _FLAGS = {"error_model": "numpy", "fastmath": {"contract"}}
@@ -65,7 +67,7 @@ class Variant:
     axial
         ``linear``, ``quadratic``, ``cubic`` or ``stress-scaled``.
     torsion
-        ``off``, ``angle``, ``cosine``, ``cubic`` or ``energy``.
+        ``off``, ``angle``, ``cosine``, ``cubic``, ``energy`` or ``shear``.
     volume
         ``off``, ``gradient``, ``spec`` (barycentric) or ``axes`` (axis volume).
     volumetric
@@ -103,7 +105,7 @@ class Variant:
             cols.append("inv6v0")
         if self.damp_axial:
             cols += [f"ca{l}" for l in range(3)]
-        if self.torsion == "energy":
+        if self.torsion in ENERGY_TORSION:
             cols += [f"kt{p}" for p in range(3)]
         elif self.torsion != "off":
             cols += [f"kf{p}{s}" for p in range(3) for s in "lm"]
@@ -128,7 +130,9 @@ class Variant:
 
 
 _AXIAL = {"linear": 0, "quadratic": 1, "cubic": 1, "stress-scaled": 2}
-_TORSION = {"off": 0, "angle": 1, "cosine": 2, "cubic": 3, "energy": 4}
+_TORSION = {"off": 0, "angle": 1, "cosine": 2, "cubic": 3, "energy": 4, "shear": 5}
+#: Torsion laws that are energies of the cosine (read ``k`` only).
+ENERGY_TORSION = ("energy", "shear")
 _VOLUMETRIC = {"quadratic": 0, "log": 1, "simo-taylor": 2}
 
 
@@ -194,11 +198,24 @@ def _axial(law, lam, k, jac, b2, b3, one):
 
 
 @njit(cache=True, **_FLAGS)
+def _shear_slope(c, c0, one):
+    """``dU/dc / k`` of the shear torsion energy (:mod:`springmodel.springs.shear`)."""
+    g = max(one - c * c, SHEAR_FLOOR)
+    g0 = one - c0 * c0
+    s03 = g0 * math.sqrt(g0)
+    delta = s03 * (c / math.sqrt(g) - c0 / math.sqrt(g0))
+    return delta * s03 / (g * math.sqrt(g))
+
+
+@njit(cache=True, **_FLAGS)
 def _pair(law, ul, um, lam_l, lam_m, k_l, k_m, t0, bt, one):
     """Forces on the + ends of axes ``l`` and ``m`` of one torsion spring, times ``l0``."""
     c = ul[0] * um[0] + ul[1] * um[1] + ul[2] * um[2]  # eq. 2.32
-    if law == 4:  # energy: k_l = k_m = k
-        dc = c - t0
+    if law >= 4:  # energy (4) or shear (5): k_l = k_m = k, dc = dU/dc / k
+        if law == 4:
+            dc = c - t0
+        else:
+            dc = _shear_slope(c, t0, one)
         sl, sm = -k_l * dc / lam_l, -k_l * dc / lam_m
         return (
             (sl * (um[0] - c * ul[0]), sl * (um[1] - c * ul[1]), sl * (um[2] - c * ul[2])),
@@ -237,7 +254,7 @@ def _block_run(v: Variant):
     coupling = v.coupling
     has_c0 = "c00" in cols or "a00" in cols
     AX, TO = _AXIAL[v.axial], _TORSION[v.torsion]
-    energy = v.torsion == "energy"
+    energy = v.torsion in ENERGY_TORSION
     spec = v.volume == "spec"
     stress = v.axial == "stress-scaled"
     vol_on = v.volume in ("gradient", "spec")

@@ -1,8 +1,9 @@
 """Analytic tangent stiffness ``K = d^2 U / dx^2`` of the conservative spring variants.
 
-For the energy forms (axial ``linear``/``quadratic``/``cubic``, torsion ``off``/``energy``,
-volume ``gradient``; see :func:`springmodel.springs.spring_energy`) the spring forces are
-``-grad U`` and ``K = -d forces / dx`` is the Hessian of
+For the energy forms (axial ``linear``/``quadratic``/``cubic``, torsion
+``off``/``energy``/``shear``, volume ``gradient``; see
+:func:`springmodel.springs.spring_energy`) the spring forces are ``-grad U`` and
+``K = -d forces / dx`` is the Hessian of
 
     U = sum_k [ sum_l f_l(|zeta_l|) + sum_(l,m) k_lm/2 (c_lm - c0_lm)^2 + k_s/2 (L - L0)^2 ],
 
@@ -14,7 +15,9 @@ axial, ``a = zeta_l``, ``f'(L) = k (d + b2 d^2/l0 + b3 d^3/l0^2)`` (eq. 2.36)
 torsion, ``a = zeta_l``, ``b = zeta_m``, ``A = |a|``, ``B = |b|``
     ``dc/da = (bh - c ah)/A``, ``d^2c/da^2 = -(ah g_a^T + g_a ah^T)/A - c (I - ah ah^T)/A^2``,
     ``d^2c/da db = (I - ah ah^T - bh bh^T + c ah bh^T)/(A B)``;
-    ``U'' = k (grad c grad c^T + (c - c0) grad^2 c)``.
+    ``U'' = k (grad c grad c^T + (c - c0) grad^2 c)``; for the ``shear`` law
+    ``U = k phi(c)`` (:mod:`springmodel.springs.shear`)
+    ``U'' = k (phi'' grad c grad c^T + phi' grad^2 c)``.
 volume, ``r_j = |xi_j|``, ``xi_j = x_j - x_b``, ``d xi_j / d x_i = (delta_ij - 1/4) I``
     ``grad_i L = xh_i - mean_j xh_j``; with ``H_j = (I - xh_j xh_j^T)/r_j``,
     ``grad^2_ik L = delta_ik H_i - (H_i + H_k)/4 + sum_j H_j / 16``;
@@ -65,6 +68,8 @@ from .springs import is_conservative
 PARALLEL_MIN_ELEMENTS = 20_000
 #: Axis-volume codes of :mod:`springmodel.hessian_numba` by volumetric energy.
 AXIS_VOLUME_CODES = {"quadratic": 3, "log": 4, "simo-taylor": 5}
+#: Torsion codes of :mod:`springmodel.hessian_numba` by (conservative) torsion law.
+TORSION_CODES = {"off": 0, "energy": 1, "shear": 2}
 
 __all__ = [
     "SpringHessian",
@@ -89,7 +94,7 @@ class SpringHessian:
         Spring rest data; ``k_volume`` is read at every call (LMS may change it).
     options
         Must be conservative (:func:`springmodel.springs.is_conservative`): axial
-        ``linear``/``quadratic``/``cubic``, torsion ``off``/``energy``, volume off,
+        ``linear``/``quadratic``/``cubic``, torsion ``off``/``energy``/``shear``, volume off,
         ``gradient`` or ``"axes"``, coupling on or off. Damping and LMS do not enter ``K``
         (they make the options non-conservative and are refused).
     backend
@@ -126,7 +131,7 @@ class SpringHessian:
         if not is_conservative(options):
             raise ValueError(
                 "SpringHessian needs conservative options (axial linear/quadratic/cubic, "
-                "torsion off/energy, volume off/gradient, no damping, no LMS), got "
+                "torsion off/energy/shear, volume off/gradient, no damping, no LMS), got "
                 f"axial={options.axial}, torsion={options.torsion}, "
                 f"volume={options.volume}, volume_form={options.volume_form}"
             )
@@ -197,7 +202,7 @@ class SpringHessian:
         axes = AXIS_VOLUME_CODES[opts.volumetric] if opts.axis_volume else 0
         kernel = _element_matrices_numba if self.parallel else _element_matrices_serial
         kernel(
-            x, tets, G, l0, ka, kt, c0, kv, el.L0[sl], b2, b3, opts.torsion == "energy",
+            x, tets, G, l0, ka, kt, c0, kv, el.L0[sl], b2, b3, TORSION_CODES[opts.torsion],
             opts.barycentric_volume, _PAIR_L, _PAIR_M, bool(opts.coupling), axes, *parts, out,
         )  # fmt: skip
         return out

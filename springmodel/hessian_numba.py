@@ -1,6 +1,7 @@
 """Element Hessians of the conservative spring energies, compiled (numba, parallel).
 
-One pass per element: the 9x9 Hessian in the axis vectors (axial, energy torsion, Poisson
+One pass per element: the 9x9 Hessian in the axis vectors (axial, energy or shear torsion
+(``torsion`` code 0 off, 1 energy, 2 shear), Poisson
 coupling, axis volume), mapped to the 12 vertex DOFs with ``G``, plus the barycentric volume
 spring on the vertices. Formulas in :mod:`springmodel.hessian`; checked against the numpy
 reference (:mod:`springmodel.hessian_numpy`) in the tests.
@@ -23,6 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit, prange
+
+from .springs.shear import SHEAR_FLOOR
 
 
 @njit(cache=True, parallel=True, fastmath=False)
@@ -82,7 +85,8 @@ def _element_matrix(
                 if a == b:
                     v += s
                 H[3 * l + a, 3 * l + b] += v
-    # torsion (energy law): k (grad c grad c^T + (c - c0) grad^2 c)
+    # torsion, U = k phi(c): k (phi'' grad c grad c^T + phi' grad^2 c); code 1 energy
+    # (phi' = c - c0, phi'' = 1), 2 shear (springmodel.springs.shear)
     if torsion:
         ga = np.empty(3)
         gb = np.empty(3)
@@ -92,8 +96,19 @@ def _element_matrix(
             A = Ls[l]
             B = Ls[q]
             c = U[l, 0] * U[q, 0] + U[l, 1] * U[q, 1] + U[l, 2] * U[q, 2]
-            dc = c - c0[k, p]
+            if torsion == 2:
+                g = max(1.0 - c * c, SHEAR_FLOOR)
+                g0 = 1.0 - c0[k, p] * c0[k, p]
+                s03 = g0 * np.sqrt(g0)
+                delta = s03 * (c / np.sqrt(g) - c0[k, p] / np.sqrt(g0))
+                e1 = s03 / (g * np.sqrt(g))
+                dc = delta * e1
+                d2 = e1 * e1 + delta * 3.0 * c * e1 / g
+            else:
+                dc = c - c0[k, p]
+                d2 = 1.0
             kk = kt[k, p]
+            kg = kk * d2
             for a in range(3):
                 ga[a] = (U[q, a] - c * U[l, a]) / A
                 gb[a] = (U[l, a] - c * U[q, a]) / B
@@ -105,9 +120,9 @@ def _element_matrix(
                     haa = -(U[l, a] * ga[b] + ga[a] * U[l, b]) / A - c * pa / (A * A)
                     hbb = -(U[q, a] * gb[b] + gb[a] * U[q, b]) / B - c * pb / (B * B)
                     hab = (pa - U[q, a] * U[q, b] + c * U[l, a] * U[q, b]) / (A * B)
-                    H[3 * l + a, 3 * l + b] += kk * (ga[a] * ga[b] + dc * haa)
-                    H[3 * q + a, 3 * q + b] += kk * (gb[a] * gb[b] + dc * hbb)
-                    v = kk * (ga[a] * gb[b] + dc * hab)
+                    H[3 * l + a, 3 * l + b] += kg * ga[a] * ga[b] + kk * dc * haa
+                    H[3 * q + a, 3 * q + b] += kg * gb[a] * gb[b] + kk * dc * hbb
+                    v = kg * ga[a] * gb[b] + kk * dc * hab
                     H[3 * l + a, 3 * q + b] += v
                     H[3 * q + b, 3 * l + a] += v
     # Poisson coupling c s_l s_m

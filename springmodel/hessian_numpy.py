@@ -25,6 +25,7 @@ from springfem.volumetric import volumetric_energy
 from .axis_springs import volume_ratio, volume_ratio_gradient
 from .options import SpringOptions
 from .rest_geometry import TORSION_PAIRS
+from .springs.shear import shear_derivatives
 
 
 def polynomial_coefficients(options: SpringOptions) -> tuple[float, float]:
@@ -68,7 +69,8 @@ def axis_hessian(
         Rest lengths ``(m, 3)``, axial (N/m) and torsion (J) constants ``(m, 3)``, rest
         cosines ``(m, 3)``.
     options
-        Spring options (axial law and coefficients, torsion on or off).
+        Spring options (axial law and coefficients, torsion law ``off``, ``energy`` or
+        ``shear``).
 
     Returns
     -------
@@ -92,14 +94,20 @@ def axis_hessian(
         s = (f1[:, l] / L[:, l])[:, None, None]
         H[:, l, :, l, :] = f2[:, l, None, None] * uu[:, l] + s * (eye - uu[:, l])
 
-    # torsion (energy law): k (grad c grad c^T + (c - c0) grad^2 c)
-    if options.torsion == "energy":
+    # torsion, U = k phi(c): k (phi'' grad c grad c^T + phi' grad^2 c); energy law
+    # phi = (c - c0)^2 / 2, shear law phi = delta^2 / 2 (springmodel.springs.shear)
+    if options.torsion in ("energy", "shear"):
         for p, (l, q) in enumerate(TORSION_PAIRS):
             A, B = L[:, l, None], L[:, q, None]
             ua, ub = u[:, l], u[:, q]
             c = np.einsum("kc,kc->k", ua, ub)
-            dc = (c - c0[:, p])[:, None, None]
+            if options.torsion == "shear":
+                d1, d2 = shear_derivatives(c, c0[:, p])
+            else:
+                d1, d2 = c - c0[:, p], np.ones_like(c)
+            dc = d1[:, None, None]
             kt = k_torsion[:, p, None, None]
+            kg = kt * d2[:, None, None]
             cc = c[:, None, None]
             ga = (ub - c[:, None] * ua) / A  # dc/da
             gb = (ua - c[:, None] * ub) / B  # dc/db
@@ -108,9 +116,9 @@ def axis_hessian(
             haa = -(_outer(ua, ga) + _outer(ga, ua)) / A2 - cc * Pa / A2**2
             hbb = -(_outer(ub, gb) + _outer(gb, ub)) / B2 - cc * Pb / B2**2
             hab = (Pa - uu[:, q] + cc * _outer(ua, ub)) / (A2 * B2)
-            H[:, l, :, l, :] += kt * (_outer(ga, ga) + dc * haa)
-            H[:, q, :, q, :] += kt * (_outer(gb, gb) + dc * hbb)
-            Kab = kt * (_outer(ga, gb) + dc * hab)
+            H[:, l, :, l, :] += kg * _outer(ga, ga) + kt * dc * haa
+            H[:, q, :, q, :] += kg * _outer(gb, gb) + kt * dc * hbb
+            Kab = kg * _outer(ga, gb) + kt * dc * hab
             H[:, l, :, q, :] += Kab
             H[:, q, :, l, :] += Kab.transpose(0, 2, 1)
     return H

@@ -35,6 +35,7 @@ from .elements import SpringElements, build_spring_elements
 from .options import SpringOptions
 from .spring_kernel import SpringKernel
 from .springs import is_conservative, lms_update, volume_measures
+from .stop_reason import stopped_error
 from .tangent import MISMATCH_NORM
 
 
@@ -228,7 +229,8 @@ def solve_spring(
     Raises
     ------
     SolverError
-        Blow-up or divergence; ``state`` holds the last good displacement ``(n, 3)``.
+        Blow-up or divergence; ``state`` holds the last good displacement ``(n, 3)`` and
+        ``load_factor`` its load factor when a static solve stopped part way.
     """
     from .solve import solve_with_options
 
@@ -238,13 +240,17 @@ def solve_spring(
     writer = dynamic_series(scene, model, opts, series_dir)
     try:
         info = solve_with_options(model, opts, progress=verbose, callback=writer)
-    except (SolverError, SolveStopped) as exc:
+    except SolveStopped as exc:
         state = exc.state
         if state is not None:
             state = np.asarray(state).reshape(-1, 3) - model.x0
         if writer is not None:
             writer.close(plot=False)  # the frames reached stay a valid series
-        raise type(exc)(str(exc), state=state) from None
+        raise SolveStopped(str(exc), state=state) from None
+    except SolverError as exc:
+        if writer is not None:
+            writer.close(plot=False)
+        raise stopped_error(exc, model.x0, model.elements, opts) from None
     wall = time.perf_counter() - t0
     x = info.x
     u = x - model.x0

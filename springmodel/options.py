@@ -23,7 +23,7 @@ from springfem.scene import Scene, TableReader, register_section
 from springfem.volumetric import VOLUMETRIC_ENERGIES, Volumetric
 
 AxialLaw = Literal["linear", "quadratic", "cubic", "stress-scaled"]
-TorsionLaw = Literal["off", "angle", "cosine", "cubic", "energy"]
+TorsionLaw = Literal["off", "angle", "cosine", "cubic", "energy", "shear"]
 LMSRule = Literal["spec", "abs"]
 Calibration = Literal["analytic", "analytic-lsq", "nnls", "exact"]
 SolverKind = Literal["static", "linear", "explicit", "implicit"]
@@ -74,8 +74,10 @@ class SpringOptions:
         ``-k (d + b2 d^2 / l0 + b3 d^3 / l0^2)`` with ``d = |zeta| - |zeta0|``.
     torsion
         Torsion spring law: ``off``, ``angle`` (2.40–2.41), ``cosine`` (2.44–2.45, the
-        spec's default), ``cubic`` (2.47–2.50) or ``energy`` (exact gradient of
-        ``U = k/2 (c - c0)^2``).
+        spec's default), ``cubic`` (2.47–2.50), ``energy`` (exact gradient of
+        ``U = k/2 (c - c0)^2``) or ``shear`` (``U = k/2 (s0^3 (cot theta - cot theta0))^2``,
+        the same small-strain tangent as ``energy`` and convex past 45 deg of shear, where
+        ``energy`` loses its shear stiffness; :mod:`springmodel.springs.shear`).
     torsion_cubic
         Dimensionless cubic coefficient of the ``cubic`` torsion law.
     volume

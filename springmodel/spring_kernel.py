@@ -145,9 +145,10 @@ def variant_of(elements, options, precision: str = "float64", velocity: bool = T
         raise ValueError(
             f"axial law {options.axial!r} is not one of linear, quadratic, cubic, stress-scaled"
         )
-    if options.torsion not in ("off", "angle", "cosine", "cubic", "energy"):
+    if options.torsion not in ("off", "angle", "cosine", "cubic", "energy", "shear"):
         raise ValueError(
-            f"torsion law {options.torsion!r} is not one of off, angle, cosine, cubic, energy"
+            f"torsion law {options.torsion!r} is not one of off, angle, cosine, cubic, energy, "
+            "shear"
         )
     if precision not in PRECISIONS:
         raise ValueError(f"precision {precision!r} is not one of {', '.join(PRECISIONS)}")
@@ -168,7 +169,7 @@ def variant_of(elements, options, precision: str = "float64", velocity: bool = T
         b2=b2 if poly else 0.0,
         b3=b3 if options.axial == "cubic" else 0.0,
         bt=float(options.torsion_cubic) if options.torsion == "cubic" else 0.0,
-        c0=options.torsion in ("energy", "cosine", "cubic") and needs_c0(elements),
+        c0=options.torsion in ("energy", "shear", "cosine", "cubic") and needs_c0(elements),
         precision=precision,
     )
 

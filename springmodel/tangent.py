@@ -106,7 +106,7 @@ def tangent_basis(geometry: Any, torsion: str, volume: Any, coupling: bool) -> n
         u = zeta0 / l0[..., None]
         for p, (l, n) in enumerate(TORSION_PAIRS):
             S = a[:, 3 + p]
-            if torsion == "energy":
+            if torsion in ("energy", "shear"):  # the same small-strain tangent
                 out.append(_dyad(S, S) * iv)
                 continue
             ul, un = u[:, l], u[:, n]

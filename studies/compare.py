@@ -29,6 +29,7 @@ from springfem.errors import InputError, SolverError
 from springfem.scene import Scene
 
 from . import metrics
+from .partial import partial_row, partial_solution
 from .solve import Solution
 
 MODELS = ("spring", "P1", "P2", "P1-NH", "P2-NH")
@@ -58,6 +59,10 @@ class Comparison:
         Model name -> error message of models that failed.
     notes
         Sentences about the choices made (why neo-Hookean was or was not run).
+    partial
+        Model name -> the state a failed model stopped at part way along its load
+        (:func:`studies.solve.partial_solution`): reported in the table at its load
+        factor, never ranked against the reference.
     """
 
     scene: Scene
@@ -67,6 +72,7 @@ class Comparison:
     strain: float = float("nan")
     failures: dict[str, str] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    partial: dict[str, Solution] = field(default_factory=dict)
 
     @property
     def same_mesh_p1(self) -> str | None:
@@ -229,6 +235,7 @@ def compare_scene(
     solutions: dict[str, Solution] = {}
     failures: dict[str, str] = {}
     notes: list[str] = []
+    partial: dict[str, Solution] = {}
 
     def run(name: str) -> None:
         t0 = time.perf_counter()
@@ -236,6 +243,10 @@ def compare_scene(
             solutions[name] = solve_model(scene, name)
         except SolverError as exc:
             failures[name] = str(exc)
+            kind = "spring" if name == "spring" else "fem"
+            stopped = partial_solution(scene, kind, exc, time.perf_counter() - t0)
+            if stopped is not None:
+                partial[name] = stopped
             say(f"  {name:<6} FAILED: {exc}")
             return
         say(f"  {name:<6} done in {time.perf_counter() - t0:.2f} s")
@@ -285,6 +296,7 @@ def compare_scene(
         strain=strain,
         failures=failures,
         notes=notes,
+        partial=partial,
     )
     cmp.table = comparison_table(cmp, list(models))
     return cmp
@@ -341,7 +353,12 @@ def choose_reference(
 
 
 def comparison_table(cmp: Comparison, models: Sequence[str]) -> pd.DataFrame:
-    """One row per model: probes, errors against the reference, volume, reactions, time."""
+    """One row per model: probes, errors against the reference, volume, reactions, time.
+
+    A model that stopped part way along its load (``cmp.partial``) is reported at the load
+    it reached: status ``partial``, its ``load factor`` (1 for the finished models), probes
+    and volume, no errors (a state at a lower load is not compared with the reference).
+    """
     ref_sol = cmp.solutions.get(cmp.reference) or next(iter(cmp.solutions.values()))
     ref = ref_sol.result
     main = {name: int(np.argmax(np.abs(u))) for name, u in ref.probes.items()}
@@ -350,11 +367,15 @@ def comparison_table(cmp: Comparison, models: Sequence[str]) -> pd.DataFrame:
     for name in models:
         row: dict[str, object] = {"model": name}
         sol = cmp.solutions.get(name)
+        if sol is None and name in cmp.partial:
+            rows.append(partial_row(row, cmp.partial[name].result, main))
+            continue
         if sol is None:
             row.update({"status": "FAILED", "element": "", "law": "", "converged": False})
             rows.append(row)
             continue
         row["status"] = "ok"
+        row["load factor"] = 1.0
         r = sol.result
         row["element"] = r.element
         row["law"] = r.law

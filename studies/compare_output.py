@@ -287,6 +287,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
             cell_data=sol.cell_data,
             point_data={"error": cmp.error_field(name)} if cmp.reference else None,
         )
+    for name, sol in cmp.partial.items():  # the state a failed model stopped at
+        write_result(out / name, sol.result, scene.mesh, sol.u, stem="partial")
     png = None
     try:
         if cmp.reference:

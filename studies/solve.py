@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from reference_fem.options import FemOptions
+from springfem.cardiac import cavity_summary, is_ventricle
 from springfem.errors import InputError, SolverError
 from springfem.files import safe_filename
 from springfem.mechanics.limits import SolveStopped, solve_limits
@@ -189,6 +190,11 @@ def write_last_good_state(
         info={"error": str(exc), "state": "initial" if initial else "last good"},
         status=str(exc) if stopped else "failed",
     )
+    load_factor = getattr(exc, "load_factor", None)
+    if load_factor is not None and finite:
+        res.info["load_factor"] = float(load_factor)  # the load of this state
+        if is_ventricle(scene.mesh):
+            res.info["cavity"] = cavity_summary(scene.mesh, u)
     try:
         write_result(out, res, scene.mesh, u, stem="last_good_state")
     except OSError as err:
@@ -227,8 +233,10 @@ def cmd_solve(args: argparse.Namespace) -> int:
             sol = solve_scene(scene, args.model, args.order, args.law, args.verbose, out / "series")
     except (SolverError, SolveStopped) as exc:
         written = write_last_good_state(out, scene, args.model, exc)
-        text = f"{exc}; {written}" if isinstance(exc, SolveStopped) else f"{exc} ({written})"
-        raise type(exc)(text, state=exc.state) from None
+        if isinstance(exc, SolveStopped):
+            raise SolveStopped(f"{exc}; {written}", state=exc.state) from None
+        text = f"{exc} ({written})"
+        raise SolverError(text, state=exc.state, load_factor=exc.load_factor) from None
     for line in guards.solution_warnings(scene, sol.result.law, sol.u):
         warn(line)
     js, vtu = _write(out, sol.result, scene.mesh, sol.u, cell_data=sol.cell_data)

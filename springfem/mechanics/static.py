@@ -266,11 +266,10 @@ def static(
     dt = None
     message = "; ".join(notes)
     if not converged:
-        message = (
-            f"{message + '; ' if message else ''}Newton failed at load factor "
-            f"{path.failed_at * target:.4g} after {cutbacks} cut-backs "
-            f"({last_reason}); last converged load factor {s_conv:.4g}"
+        newton_message = stopped_message(
+            s_conv, target, path.failed_at * target, cutbacks, last_reason
         )
+        message = f"{message + '; ' if message else ''}{newton_message}"
         if fallback:
             try:
                 dr = explicit_static(
@@ -278,8 +277,8 @@ def static(
                     raise_on_failure=False,
                 )  # fmt: skip
             except SolverError as err:
-                dr = None
-                message += f"; dynamic relaxation blew up: {err}"
+                dr = None  # its first clause only: the Newton stop is the message
+                message += f"; dynamic relaxation from there blew up ({first_clause(err)})"
             if dr is not None:
                 ctx.n_evals += dr.force_evaluations
                 hist.extend(dr.residual_history)
@@ -290,9 +289,11 @@ def static(
                     steps_done.append(target)
                     message += f"; dynamic relaxation converged in {dr.steps} steps"
                 else:
-                    message += f"; {dr.message}"
+                    message += f"; dynamic relaxation from there: {first_clause(dr.message)}"
         if not converged and raise_on_failure:
-            raise SolverError(f"static solve did not converge: {message}", state=x_conv)
+            raise SolverError(
+                f"static solve did not converge: {message}", state=x_conv, load_factor=s_conv
+            )
     return SolveInfo(
         x=x_final,
         converged=converged,
@@ -310,3 +311,52 @@ def static(
         force_evaluations=ctx.n_evals,
         message=message,
     )
+
+
+def stopped_message(reached: float, target: float, failed: float, cutbacks: int, why: str) -> str:
+    """``stopped at load factor R of T (Newton at F: why, after N cut-backs)``.
+
+    Parameters
+    ----------
+    reached, target
+        The last converged load factor and the one asked for.
+    failed
+        The load factor whose Newton solve failed last.
+    cutbacks
+        Halvings of the load increment in a row before giving up.
+    why
+        Newton's reason.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> stopped_message(0.5, 1.0, 0.5039, 9, "line search failed at iteration 5")
+    'stopped at load factor 0.5 of 1 (Newton at 0.5039: line search failed at iteration 5, after 9 cut-backs)'
+    """  # noqa: E501 - the doctest's output is one line
+    return (
+        f"stopped at load factor {reached:.4g} of {target:.4g} (Newton at {failed:.4g}: "
+        f"{why}, after {cutbacks} cut-backs)"
+    )
+
+
+def first_clause(err: object) -> str:
+    """The text of ``err`` up to its first ``": "`` (where a long explanation starts).
+
+    Parameters
+    ----------
+    err
+        An exception or a message.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> first_clause("explicit integration blew up at step 20 (t = 63 s): kinetic energy grew")
+    'explicit integration blew up at step 20 (t = 63 s)'
+    """
+    return str(err).split(": ", 1)[0]

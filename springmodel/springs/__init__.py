@@ -35,6 +35,10 @@ torsion, for each pair ``(l, m)`` in (0,1), (0,2), (1,2), with ``c = zh_l . zh_m
     * ``energy``: the exact ``-dU/dx`` of ``U = k/2 (c - c0)^2``: on ``q_{2l}``
       ``-k (c - c0) (zh_m - c zh_l) / |zeta_l|``, on ``q_{2m}`` the same with ``l, m``
       swapped, minus on the odd points. Net force and net torque zero.
+    * ``shear``: the same with ``c - c0`` replaced by ``dU/dc / k`` of
+      ``U = k/2 delta^2``, ``delta = s0^3 (cot(theta) - cot(theta0))``
+      (:mod:`springmodel.springs.shear`): ``k/2 tan^2(g)`` in a shear by ``g``, convex at
+      every angle, where ``energy`` is ``k/2 sin^2(g)`` and softens past 45 deg.
     * ``cosine`` (2.44–2.45): ``s = -k_f (c - c0)``; ``s zh_m`` on ``q_{2l}``, ``s zh_l`` on
       ``q_{2m}``, minus on the odd points. Not a gradient; net force zero, net torque
       ``s (|zeta_l| - |zeta_m|) zh_l x zh_m`` (nonzero when the axis segments differ).

@@ -24,6 +24,7 @@ from ..elements import SpringElements
 from ..options import SpringOptions
 from ..rest_geometry import TORSION_PAIRS
 from .points import axis_vectors, intersection_points
+from .shear import shear_energy
 
 
 def spring_energy(
@@ -31,7 +32,8 @@ def spring_energy(
 ) -> tuple[np.ndarray, float]:
     """Spring energy per element and in total.
 
-    Exact potential of the energy forms (axial linear/polynomial, torsion ``energy``, volume
+    Exact potential of the energy forms (axial linear/polynomial, torsion ``energy`` and
+    ``shear``, volume
     ``gradient``). For the non-gradient laws it reports the nominal energy each law is
     derived from (``stress-scaled``: ``k d^2/2``; ``cosine``: ``k/2 dc^2``; ``cubic``:
     ``k (dc^2/2 + b dc^4/4)``; ``angle``: ``k/2 (alpha - alpha0)^2``, all with the energy
@@ -70,6 +72,8 @@ def spring_energy(
             if options.torsion == "angle":
                 da = np.arccos(np.clip(c, -1.0, 1.0)) - elements.alpha0[:, p]
                 W += 0.5 * kt * da**2
+            elif options.torsion == "shear":
+                W += kt * shear_energy(c, elements.c0[:, p])
             elif options.torsion == "cubic":
                 W += kt * (dc**2 / 2 + options.torsion_cubic * dc**4 / 4)
             else:

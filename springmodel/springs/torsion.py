@@ -1,7 +1,8 @@
 """Torsion springs between each pair of axes (eqs. 2.40–2.50, and the energy form).
 
 For the pairs ``(l, m)`` in (0,1), (0,2), (1,2), ``c = zeta_hat_l . zeta_hat_m``; the laws
-``energy``, ``cosine``, ``cubic`` and ``angle`` and their signs are described in
+``energy``, ``shear`` (:mod:`springmodel.springs.shear`), ``cosine``, ``cubic`` and
+``angle`` and their signs are described in
 :mod:`springmodel.springs`.
 
 Examples
@@ -22,6 +23,7 @@ from ..elements import SpringElements
 from ..options import SpringOptions
 from ..rest_geometry import TORSION_PAIRS
 from .points import add_pair_forces, axis_vectors, distribute, intersection_points, scatter
+from .shear import shear_derivatives
 
 
 def torsion_forces(x: np.ndarray, elements: SpringElements, options: SpringOptions) -> np.ndarray:
@@ -33,22 +35,23 @@ def torsion_forces(x: np.ndarray, elements: SpringElements, options: SpringOptio
         Node positions ``(n, 3)`` (m).
     elements
         Rest data: cosines ``c0`` and angles ``alpha0`` ``(n_tets, 3)``, ``k_torsion`` (J,
-        energy law) and ``k_torsion_force`` (N, the other laws).
+        energy and shear laws) and ``k_torsion_force`` (N, the other laws).
     options
-        ``options.torsion`` (``off``, ``angle``, ``cosine``, ``cubic``, ``energy``) and
+        ``options.torsion`` (``off``, ``angle``, ``cosine``, ``cubic``, ``energy``,
+        ``shear``) and
         ``options.torsion_cubic`` (the ``cubic`` law's ``b``).
 
     Returns
     -------
     ndarray
         Nodal forces ``(n, 3)`` (N); zeros for ``off``. Net force is zero for every law;
-        net torque is zero for ``energy``, and for the other laws only when the two axes
-        of each pair are equally long.
+        net torque is zero for ``energy`` and ``shear``, and for the other laws only when
+        the two axes of each pair are equally long.
 
     Raises
     ------
     ValueError
-        If ``options.torsion`` is not one of off, angle, cosine, cubic, energy.
+        If ``options.torsion`` is not one of off, angle, cosine, cubic, energy, shear.
     """
     law = options.torsion
     if law == "off":
@@ -61,7 +64,9 @@ def torsion_forces(x: np.ndarray, elements: SpringElements, options: SpringOptio
         ul, um = u[:, l], u[:, m]
         c = np.einsum("kc,kc->k", ul, um)  # eq. 2.32
         dc = c - elements.c0[:, p]
-        if law == "energy":
+        if law in ("energy", "shear"):  # -dU/dx, U = k phi(c): dc is phi'(c)
+            if law == "shear":
+                dc, _ = shear_derivatives(c, elements.c0[:, p])
             k = elements.k_torsion[:, p]
             add_pair_forces(fq, -k * dc / L[:, l], l, um - c[:, None] * ul)
             add_pair_forces(fq, -k * dc / L[:, m], m, ul - c[:, None] * um)
@@ -74,7 +79,9 @@ def torsion_forces(x: np.ndarray, elements: SpringElements, options: SpringOptio
             alpha = np.arccos(np.clip(c, -1.0, 1.0))
             s = kf[:, p] * (alpha - elements.alpha0[:, p])  # eqs. 2.40–2.41, restoring sign
         else:
-            raise ValueError(f"torsion law {law!r} is not one of off, angle, cosine, cubic, energy")
+            raise ValueError(
+                f"torsion law {law!r} is not one of off, angle, cosine, cubic, energy, shear"
+            )
         add_pair_forces(fq, s, l, um)  # f_{l->m} on the ends of axis l
         add_pair_forces(fq, s, m, ul)  # f_{m->l} on the ends of axis m
     return scatter(distribute(fq, elements), elements.tets, x.shape[0])

@@ -72,13 +72,13 @@ def is_conservative(options: SpringOptions, volume_form: VolumeForm | None = Non
     Returns
     -------
     bool
-        True for axial ``linear``/``quadratic``/``cubic``, torsion ``off``/``energy``,
+        True for axial ``linear``/``quadratic``/``cubic``, torsion ``off``/``energy``/``shear``,
         barycentric volume (if on) in ``gradient`` form, no damping and no LMS on the
         barycentric volume springs.
     """
     return (
         options.axial in ("linear", "quadratic", "cubic")
-        and options.torsion in ("off", "energy")
+        and options.torsion in ("off", "energy", "shear")
         and (
             not options.barycentric_volume
             or resolve_volume_form(options, volume_form) == "gradient"

@@ -11,12 +11,15 @@ from __future__ import annotations
 
 import copy
 import math
+import time
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 from springfem.errors import SolverError
 from springfem.scene import Scene, scene_from_dict
+
+from ..partial import partial_solution
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
@@ -130,9 +133,10 @@ def stretch_data(direction: str, stretch: float, n: int) -> dict:
     return data
 
 
-def _solve(data: dict, path: Path | None, model: str, variant: str | None):
+def _solve(data: dict, path: Path | None, model: str, variant: str | None, partial: bool = False):
     """Build the scene of ``data`` (with the spring ``variant``) and solve it: ``(Solution,
-    None)``, or ``(None, message)`` for a solver failure."""
+    None)``, or ``(None, message)`` for a solver failure; with ``partial``, a solve that
+    stopped part way along its load gives ``(its partial Solution, message)``."""
     from ..solve import solve_scene
 
     if model == "spring":
@@ -141,10 +145,12 @@ def _solve(data: dict, path: Path | None, model: str, variant: str | None):
         own = {k: v for k, v in data.get("spring", {}).items() if k not in ELEMENT_KEYS}
         data = {**data, "spring": {**own, **VARIANTS[variant or "exact"]}}
     scene = scene_from_dict(data, path)
+    t0 = time.perf_counter()
     try:
         return solve_scene(scene, model), None
     except SolverError as exc:
-        return None, str(exc).splitlines()[0][:200]
+        stopped = partial_solution(scene, model, exc, time.perf_counter() - t0)
+        return (stopped if partial else None), str(exc).splitlines()[0][:200]
 
 
 def stretch_case(case: dict) -> dict:
@@ -213,23 +219,30 @@ def ventricle_case(case: dict) -> dict:
     -------
     dict
         ``endo_apex_z``, ``epi_apex_z``, ``cavity`` (initial/final, FEM: the
-        pressure-volume rows), ``wall_time`` and ``error``.
+        pressure-volume rows), ``wall_time``, ``load_factor`` (below 1: the values at the
+        load a failed solve reached, with its ``error``) and ``error``.
     """
 
     def edit(d):
         d["mesh"]["size"] = case["size"]
         d["fem"]["load_steps"] = case["steps"]
 
-    sol, err = _solve(*_scene_file(case["scene"], edit), case["model"], case.get("variant"))
+    data, path = _scene_file(case["scene"], edit)
+    sol, err = _solve(data, path, case["model"], case.get("variant"), partial=True)
     if sol is None:
         nan = math.nan
         return {"endo_apex_z": nan, "epi_apex_z": nan, "cavity": {}, "wall_time": nan,
-                "error": err}  # fmt: skip
+                "load_factor": nan, "error": err}  # fmt: skip
+    return {**_ventricle_values(sol), "error": err or ""}
+
+
+def _ventricle_values(sol) -> dict:
+    """Apex z, cavity, wall time and load factor (1, or where a partial solve stopped)."""
     p = sol.result.probes
     return {
         "endo_apex_z": -17.0 + p["endo_apex"][2],
         "epi_apex_z": -20.0 + p["epi_apex"][2],
         "cavity": sol.result.info.get("cavity", {}),
         "wall_time": sol.result.wall_time,
-        "error": "",
+        "load_factor": float(sol.result.info.get("load_factor", 1.0)),
     }

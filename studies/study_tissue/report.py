@@ -57,12 +57,14 @@ def ventricle_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
         rows.append({"model": _label(c), "endo_apex_z": r["endo_apex_z"],
                      "epi_apex_z": r["epi_apex_z"], "cavity_initial": cav.get("initial"),
                      "cavity_final": cav.get("final"), "wall_time": r["wall_time"],
-                     "error": r["error"]})  # fmt: skip
+                     "load_factor": r.get("load_factor", 1.0), "error": r["error"]})  # fmt: skip
     df = pd.DataFrame(rows)
-    for col in ("endo_apex_z", "epi_apex_z", "cavity_initial", "cavity_final", "wall_time"):
+    for col in ("endo_apex_z", "epi_apex_z", "cavity_initial", "cavity_final", "wall_time",
+                "load_factor"):  # fmt: skip
         df[col] = pd.to_numeric(df[col])  # a failed case's NaN comes back from JSON as None
     fem = float(df.loc[df.model == "fem", "endo_apex_z"].iloc[0])
     df["rel_error"] = [_rel(z + 17.0, fem + 17.0) for z in df.endo_apex_z]
+    df.loc[~(df.load_factor >= 1.0), "rel_error"] = float("nan")  # partial: another load
     return df
 
 
@@ -76,7 +78,8 @@ def tables(ctx: StudyContext, sdf, bdf, vdf, settings) -> list[Table]:
          f"(10, 0.5, 1) mm (published {BEAM_RANGE[0]}-{BEAM_RANGE[1]}); rel_error of the "
          "deflection against the FEM (P2 mixed)."),
         (vdf, "ventricle", f"{settings.lv_scene} (size {settings.lv_size} mm): apex z "
-         "(mm) and cavity volume (mm^3); rel_error of the endocardial apex motion vs the FEM."),
+         "(mm) and cavity volume (mm^3); rel_error of the endocardial apex motion vs the FEM "
+         "(none for a partial row: its values are at the load_factor it reached)."),
     ):  # fmt: skip
         out.append(Table(write_table(df, ctx.path(stem)), caption))
     return out
@@ -133,6 +136,9 @@ def findings(sdf, bdf, vdf) -> tuple[list[str], dict[str, float]]:
     for _, row in vdf.iterrows():
         what = (f"failed: {row.error}" if row.error else
                 f"endo apex z = {row.endo_apex_z:.4g} mm, epi {row.epi_apex_z:.4g} mm")  # fmt: skip
+        if row.error and row.load_factor == row.load_factor:  # partial (not NaN)
+            what = (f"partial, stopped at load factor {row.load_factor:.3g}: endo apex z = "
+                    f"{row.endo_apex_z:.4g} mm, epi {row.epi_apex_z:.4g} mm")  # fmt: skip
         text.append(f"Land ventricle, {row.model}: {what}.")
         if row.model != "fem":
             head[f"ventricle_error_{row.model}"] = float(row.rel_error)
