@@ -42,7 +42,6 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
-from springfem.cardiac import pressure_volume
 from springfem.errors import InputError, SolverError
 from springfem.materials import voigt_to_tensor
 from springfem.mechanics import LinearSolver, rigid_body_modes
@@ -55,6 +54,7 @@ from .assembly import (
     hyperelastic_element_arrays,
     linear_element_blocks,
 )
+from .cavity import cavity_recorder
 from .constraints import check_rigid_motions, dirichlet
 from .hyperelastic import NeoHookean, _det
 from .laws import TISSUE_LAWS, TissueLaw, tissue_law
@@ -356,11 +356,11 @@ def _solve(problem: FemProblem, verbose: bool, t0: float) -> FemSolution:
         if problem.loads.pressures:
             info["pressure"] = "reference surface (small-strain law)"
     else:
-        fem, pv = FemOptions.of(scene), pressure_volume(scene, problem.state)
+        fem, pv = FemOptions.of(scene), cavity_recorder(problem)  # P2: the quadratic facets
         opts = NewtonOptions(fem.tol, fem.max_iter, fem.load_steps, verbose=verbose, on_step=pv)
         u, report = solve_nonlinear(problem, opts)
         if pv is not None:
-            info["cavity"] = pv.summary(problem.state(u))
+            info["cavity"] = pv.summary(problem.state(u), u)
         iterations = report.iterations
         info["newton"] = report.steps
         info["load_steps"] = len(report.steps)
