@@ -56,6 +56,9 @@ class Settings:
     lv_variants
         The spring variants run on the ventricle (the seed's fails slowly: the quick preset
         leaves it out).
+    conv_scenes, conv_sizes, conv_steps
+        The apex mesh-convergence study (P2/P1 mixed FEM): the ventricle scenes, their
+        element sizes (mm, coarse to fine) and load steps.
     """
 
     n: int = 3
@@ -65,6 +68,9 @@ class Settings:
     lv_size: float = 4.0
     lv_steps: int = 10
     lv_variants: tuple[str, ...] = tuple(VARIANTS)
+    conv_scenes: tuple[str, ...] = ("land-ventricle", "land-ventricle-fibres")
+    conv_sizes: tuple[float, ...] = (4.0, 3.0, 2.5, 2.0)
+    conv_steps: int = 10
 
     @classmethod
     def full(cls) -> Settings:
@@ -76,7 +82,8 @@ class Settings:
         """A few seconds: a coarse cube, beam and ventricle."""
         return cls(n=1, stretches=(1.1, 1.3), beam_divisions=(10, 1, 1),
                    lv_scene="land-ventricle-fibres", lv_size=6.0, lv_steps=3,
-                   lv_variants=("exact",))  # fmt: skip
+                   lv_variants=("exact",), conv_scenes=("land-ventricle-fibres",),
+                   conv_sizes=(6.0, 5.0), conv_steps=3)  # fmt: skip
 
 
 def stretch_scene(direction: str, stretch: float, n: int) -> Scene:
@@ -212,8 +219,9 @@ def ventricle_case(case: dict) -> dict:
     Returns
     -------
     dict
-        ``endo_apex_z``, ``epi_apex_z``, ``cavity`` (initial/final, FEM: the
-        pressure-volume rows), ``wall_time`` and ``error``.
+        ``endo_apex_z``, ``epi_apex_z`` (the probes at the rest apexes (0, 0, -17) and
+        (0, 0, -20), mesh vertices of the gmsh ellipsoid), ``cavity`` (initial/final, FEM:
+        the pressure-volume rows), ``wall_time``, ``dofs``, ``tets`` and ``error``.
     """
 
     def edit(d):
@@ -224,12 +232,14 @@ def ventricle_case(case: dict) -> dict:
     if sol is None:
         nan = math.nan
         return {"endo_apex_z": nan, "epi_apex_z": nan, "cavity": {}, "wall_time": nan,
-                "error": err}  # fmt: skip
+                "dofs": nan, "tets": nan, "error": err}  # fmt: skip
     p = sol.result.probes
     return {
         "endo_apex_z": -17.0 + p["endo_apex"][2],
         "epi_apex_z": -20.0 + p["epi_apex"][2],
         "cavity": sol.result.info.get("cavity", {}),
         "wall_time": sol.result.wall_time,
+        "dofs": sol.result.counts["dofs"],
+        "tets": sol.result.counts["tets"],
         "error": "",
     }
