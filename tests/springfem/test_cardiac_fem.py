@@ -109,3 +109,18 @@ def test_a_scene_without_endo_pressure_records_no_curve():
 
     S.mesh = mesh
     assert pressure_volume(S, lambda u: u) is None
+
+
+def test_the_apex_probes_are_the_apex_vertices(solved):
+    # Land's apex: the lowest point of the rest endo / epi surface on the axis x = y = 0; the
+    # gmsh ellipsoid has a vertex there (the scaled spheres' poles), so the probes read the
+    # vertex's own displacement (no interpolation)
+    scene, sol, _ = solved
+    mesh = scene.mesh
+    for name, z in (("endo_apex", -17.0), ("epi_apex", -20.0)):
+        d = np.linalg.norm(mesh.points - [0.0, 0.0, z], axis=1)
+        node = int(np.argmin(d))
+        assert d[node] < 1e-9
+        surface = np.unique(mesh.facet_sets[name.split("_")[0]])
+        assert mesh.points[surface, 2].min() == pytest.approx(z, abs=1e-12)
+        np.testing.assert_allclose(sol.result.probes[name], sol.u_vertices[node], atol=1e-9)
