@@ -43,6 +43,7 @@ def test_four_meshes_on_a_power_law_are_asymptotic_and_compared_to_the_published
     assert rich.loc["endo", "order"] == pytest.approx(2.0, rel=1e-9)
     assert rich.loc["endo", "asymptotic"] == "yes"
     assert rich.loc["endo", "extrapolated"] == pytest.approx(-26.53, abs=1e-9)
+    assert rich.loc["endo", "fit_order_2"] == pytest.approx(-26.53, abs=1e-9)
     assert rich.loc["epi", "extrapolated_minus_published"] == pytest.approx(
         -28.18 - PUBLISHED["land-ventricle"]["epi"], abs=1e-9)  # fmt: skip
     text = convergence_findings(richardson_frame(df))
