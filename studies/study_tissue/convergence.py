@@ -184,9 +184,9 @@ def convergence_figure(ctx, df: pd.DataFrame, rich: pd.DataFrame):
                   "against the element size; stars at h = 0: Richardson extrapolation from "
                   "the three finest meshes (hollow: the order is not shown to be in the "
                   "asymptotic range); dashed: the least-squares f0 + C h^2 fit; dotted lines "
-                  "and shaded bands: the published problem-2 values (FEniCS-pulse) +/- 0.5 % (Land et al. 2015's typical "
-                  "spread between codes). Problem 3 is the passive inflation (no "
-                  "published value).")  # fmt: skip
+                  "and shaded bands: the published problem-2 values (FEniCS-pulse) +/- 0.5 % "
+                  "(Land et al. 2015's typical spread between codes). Problem 3 is the "
+                  "passive inflation (no published value).")  # fmt: skip
 
 
 def convergence_findings(rich: pd.DataFrame) -> list[str]:
