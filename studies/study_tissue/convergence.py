@@ -102,6 +102,8 @@ def convergence_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
     df = pd.DataFrame(rows)
     for col in ("h", "tets", "dofs", "endo_apex_z", "epi_apex_z", "wall_time"):
         df[col] = pd.to_numeric(df[col])
+    for col in ("tets", "dofs"):  # counts print as integers (a failed case's as <NA>)
+        df[col] = df[col].round().astype("Int64")
     return df
 
 
