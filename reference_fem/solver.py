@@ -40,11 +40,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from springfem.cardiac import pressure_volume
 from springfem.errors import SolverError
 from springfem.result import Result, frame_cell_data, volume_summary
 from springfem.scene import Scene
 
+from .cavity import cavity_recorder
 from .constraints import check_rigid_motions
 from .newton import NewtonOptions, solve_nonlinear
 from .options import FemOptions
@@ -186,11 +186,11 @@ def _solve(problem: FemProblem, verbose: bool, t0: float) -> FemSolution:
         if problem.loads.pressures:
             info["pressure"] = "reference surface (small-strain law)"
     else:
-        fem, pv = FemOptions.of(scene), pressure_volume(scene, problem.state)
+        fem, pv = FemOptions.of(scene), cavity_recorder(problem)  # P2: the quadratic facets
         opts = NewtonOptions(fem.tol, fem.max_iter, fem.load_steps, verbose=verbose, on_step=pv)
         u, report = solve_nonlinear(problem, opts)
         if pv is not None:
-            info["cavity"] = pv.summary(problem.state(u))
+            info["cavity"] = pv.summary(problem.state(u), u)
         iterations = report.iterations
         info["newton"] = report.steps
         info["load_steps"] = len(report.steps)

@@ -1,14 +1,27 @@
 """Cardiac outputs: the cavity volume enclosed by the ``endo`` surface and the base plane.
 
-By the divergence theorem the volume enclosed by a closed triangulated surface is
-``V = sum_T det(x1 - c, x2 - c, x3 - c) / 6`` for any point ``c``, with the triangles
-oriented outwards. The cavity's surface is the endocardium closed by a cap over its rim
-(the boundary loop of the ``endo`` facets, on the base plane at rest). Taking ``c`` at the
-centroid of the rim's vertices, the cap (a fan of triangles from ``c`` to the rim's edges)
-contributes nothing, so the sum over the endocardial facets alone is the volume closed by
-that fan cap: exact for any planar rim, and a flat-cap closure of a rim the deformation has
-bent. Each facet is oriented by the tet it bounds (its normal away from the tet points into
-the cavity), so the facets' vertex order does not matter.
+By the divergence theorem the volume enclosed by a closed, outward-oriented surface ``S`` is
+``V = 1/3 int_S (x - c) . n dA`` for any point ``c``. The cavity's surface is the
+endocardium closed by a cap over its rim (the boundary loop of the ``endo`` facets, on the
+base plane at rest). Taking for the cap the cone from ``c`` (the centroid of the rim's
+vertices) to the rim, ``x - c`` is tangent to the cap, so the cap contributes nothing and the
+integral over the endocardial facets alone is the volume: exact for any planar rim with ``c``
+in its plane (the cone is then the flat base-plane cap), and a cone-cap closure of a rim the
+deformation has bent.
+
+- **Flat facets** (the vertex positions only, a P1 field): the integral over a triangle is
+  ``det(x1 - c, x2 - c, x3 - c) / 6``.
+- **Quadratic facets** (a P2 field, or the displacement block of the mixed P2/P1 one): each
+  facet is the 6-node triangle ``x(xi, eta) = sum_k N_k x_k`` through its three vertices and
+  its three edge (midside) nodes, so the volume is the one the field itself encloses. The
+  integrand ``(x - c) . (x_xi x x_eta)`` is a polynomial of degree 2 + 1 + 1 = 4 in the
+  reference coordinates; :func:`triangle_rule` (Radon's 7 points, exact to degree 5)
+  integrates it exactly. The rest mesh's midside nodes are the edge midpoints (the gmsh
+  ventricle is a linear mesh: its P2 geometry is straight-sided), so at rest both methods
+  give the same volume.
+
+Each facet is oriented by the tet it bounds (its normal away from the tet points into the
+cavity), so the facets' vertex order does not matter.
 
 Examples
 --------
@@ -29,6 +42,7 @@ import numpy as np
 from .errors import InputError
 from .files import atomic_write_text
 from .mesh import TetMesh
+from .quadratic_facets import quadratic_facet_integral, straight_facet_nodes
 
 #: The tet's faces as (its three vertices, the opposite vertex), local indices.
 _FACES = ((1, 2, 3, 0), (0, 2, 3, 1), (0, 1, 3, 2), (0, 1, 2, 3))
@@ -86,17 +100,27 @@ def oriented_facets(mesh: TetMesh, name: str = "endo") -> tuple[np.ndarray, np.n
     return tris, np.unique(uniq[count == 1])
 
 
-def cavity_volume(mesh: TetMesh, x: np.ndarray, name: str = "endo") -> float:
-    """Volume enclosed by the facet set ``name`` and the flat cap over its rim.
+#: Method names reported beside the cavity volume.
+FLAT, QUADRATIC = "flat facets (vertices)", "quadratic facets (P2 nodes, 7-point rule)"
+
+
+def cavity_volume(
+    mesh: TetMesh, x: np.ndarray, name: str = "endo", facet_nodes: np.ndarray | None = None
+) -> float:
+    """Volume enclosed by the facet set ``name`` and the cone cap over its rim.
 
     Parameters
     ----------
     mesh
         The mesh at rest (facet orientation and rim).
     x
-        ``(n, 3)`` node positions, rest or deformed.
+        ``(n, 3)`` vertex positions, rest or deformed.
     name
         The endocardial facet set.
+    facet_nodes
+        ``(k, 6, 3)`` positions of the 6 nodes of each facet of ``oriented_facets(mesh,
+        name)`` (a P2 field: vertices, then the midside nodes of edges (0,1), (1,2), (2,0)),
+        for the quadratic facets' volume; ``None``: flat facets through the vertices.
 
     Returns
     -------
@@ -106,16 +130,25 @@ def cavity_volume(mesh: TetMesh, x: np.ndarray, name: str = "endo") -> float:
     """
     tris, rim = oriented_facets(mesh, name)
     x = np.asarray(x, dtype=float).reshape(-1, 3)
-    total = _signed_volume(x, tris, rim)
+    c = _apex(x, tris, rim)
+    if facet_nodes is None:
+        total = float(np.linalg.det(x[tris] - c).sum() / 6.0)
+    else:
+        facet_nodes = np.asarray(facet_nodes, dtype=float)
+        if facet_nodes.shape != (len(tris), 6, 3):
+            raise InputError(
+                f"cavity volume: facet_nodes must be ({len(tris)}, 6, 3), got {facet_nodes.shape}"
+            )
+        total = quadratic_facet_integral(facet_nodes, c)
     # the facets' normals point out of the wall: into an endocardial cavity, out of the
     # volume an epicardium encloses; the sign at rest says which
-    return total if _signed_volume(mesh.points, tris, rim) > 0 else -total
+    rest = mesh.points[tris] - _apex(mesh.points, tris, rim)
+    return total if np.linalg.det(rest).sum() > 0 else -total
 
 
-def _signed_volume(x: np.ndarray, tris: np.ndarray, rim: np.ndarray) -> float:
-    """``sum det(x1 - c, x2 - c, x3 - c) / 6`` with ``c`` the rim's centroid."""
-    c = x[rim].mean(axis=0) if rim.size else x[tris].reshape(-1, 3).mean(axis=0)
-    return float(np.linalg.det(x[tris] - c).sum() / 6.0)
+def _apex(x: np.ndarray, tris: np.ndarray, rim: np.ndarray) -> np.ndarray:
+    """The closure's cone apex: the centroid of the rim's vertices (of all, without a rim)."""
+    return x[rim].mean(axis=0) if rim.size else x[tris].reshape(-1, 3).mean(axis=0)
 
 
 def is_ventricle(mesh: TetMesh) -> bool:
@@ -144,37 +177,60 @@ class PressureVolume:
         The endocardial pressure at load factor 1.
     to_vertices
         Maps a model's state vector to ``(n, 3)`` vertex displacements.
+    to_facet_nodes
+        Optional ``(state, tris) -> (k, 6, 3)``: the deformed positions of the 6 nodes of
+        each facet ``tris`` (``oriented_facets``' order; vertices, then the midside nodes of
+        edges (0,1), (1,2), (2,0)) of a P2 field; with it the volumes are the quadratic
+        facets'.
     """
 
-    def __init__(self, mesh: TetMesh, pressure: float, to_vertices):
+    def __init__(self, mesh: TetMesh, pressure: float, to_vertices, to_facet_nodes=None):
         self.mesh, self.pressure, self.to_vertices = mesh, float(pressure), to_vertices
-        self.rows: list[tuple[float, float, float]] = [(0.0, 0.0, cavity_volume(mesh, mesh.points))]
+        self.to_facet_nodes = to_facet_nodes
+        self.tris = oriented_facets(mesh)[0]
+        self.rows: list[tuple[float, float, float]] = [(0.0, 0.0, self._rest())]
+
+    def _rest(self) -> float:
+        nodes = None if self.to_facet_nodes is None else straight_facet_nodes(
+            self.mesh.points, self.tris)  # fmt: skip
+        return cavity_volume(self.mesh, self.mesh.points, facet_nodes=nodes)
+
+    def volume(self, state: np.ndarray) -> float:
+        """The cavity volume of a model state (quadratic facets when the model gives them)."""
+        u = np.asarray(self.to_vertices(state)).reshape(-1, 3)
+        nodes = None if self.to_facet_nodes is None else self.to_facet_nodes(state, self.tris)
+        return cavity_volume(self.mesh, self.mesh.points + u, facet_nodes=nodes)
 
     def __call__(self, load: float, state: np.ndarray) -> None:
         """Record the state converged at load factor ``load``."""
-        u = np.asarray(self.to_vertices(state)).reshape(-1, 3)
-        v = cavity_volume(self.mesh, self.mesh.points + u)
-        self.rows.append((float(load), float(load) * self.pressure, v))
+        self.rows.append((float(load), float(load) * self.pressure, self.volume(state)))
 
-    def summary(self, u: np.ndarray) -> dict:
-        """``initial``, ``final``, ``relative_change`` and the curve's rows.
+    def summary(self, u: np.ndarray, state: np.ndarray | None = None) -> dict:
+        """``initial``, ``final``, ``relative_change``, ``method`` and the curve's rows.
 
         Parameters
         ----------
         u
             ``(n, 3)`` final vertex displacement.
+        state
+            The final model state; with ``to_facet_nodes`` the volumes are the quadratic
+            facets' (``final_flat`` is then the flat-facet volume through the vertices).
 
         Returns
         -------
         dict
         """
         out = cavity_summary(self.mesh, u)
+        if state is not None and self.to_facet_nodes is not None:
+            v0, v1 = self._rest(), self.volume(state)
+            out = {"initial": v0, "final": v1, "relative_change": (v1 - v0) / v0,
+                   "method": QUADRATIC, "final_flat": out["final"]}  # fmt: skip
         out["pressure_volume"] = [list(r) for r in self.rows]
         return out
 
 
 def cavity_summary(mesh: TetMesh, u: np.ndarray) -> dict:
-    """Cavity volume at rest and deformed by ``u``.
+    """Cavity volume at rest and deformed by ``u`` (flat facets through the vertices).
 
     Parameters
     ----------
@@ -186,14 +242,14 @@ def cavity_summary(mesh: TetMesh, u: np.ndarray) -> dict:
     Returns
     -------
     dict
-        ``initial``, ``final`` and ``relative_change``.
+        ``initial``, ``final``, ``relative_change`` and ``method``.
     """
     v0 = cavity_volume(mesh, mesh.points)
     v1 = cavity_volume(mesh, mesh.points + np.asarray(u).reshape(-1, 3))
-    return {"initial": v0, "final": v1, "relative_change": (v1 - v0) / v0}
+    return {"initial": v0, "final": v1, "relative_change": (v1 - v0) / v0, "method": FLAT}
 
 
-def pressure_volume(scene, to_vertices) -> PressureVolume | None:
+def pressure_volume(scene, to_vertices, to_facet_nodes=None) -> PressureVolume | None:
     """A :class:`PressureVolume` recorder for a ventricle scene loaded on ``endo``, else None.
 
     Parameters
@@ -202,13 +258,15 @@ def pressure_volume(scene, to_vertices) -> PressureVolume | None:
         A :class:`~springfem.scene.Scene`.
     to_vertices
         Maps a model's state vector to vertex displacements.
+    to_facet_nodes
+        See :class:`PressureVolume` (a P2 model's facet nodes), or ``None``.
 
     Returns
     -------
     PressureVolume or None
     """
     p = endo_pressure(scene)
-    return None if p is None else PressureVolume(scene.mesh, p, to_vertices)
+    return None if p is None else PressureVolume(scene.mesh, p, to_vertices, to_facet_nodes)
 
 
 def endo_pressure(scene) -> float | None:

@@ -78,8 +78,9 @@ def tables(ctx: StudyContext, sdf, bdf, vdf, settings) -> list[Table]:
          f"(10, 0.5, 1) mm (published {BEAM_RANGE[0]}-{BEAM_RANGE[1]}); rel_error of the "
          "deflection against the FEM (P2 mixed)."),
         (vdf, "ventricle", f"{settings.lv_scene} (size {settings.lv_size} mm): apex z "
-         "(mm) and cavity volume (mm^3); rel_error of the endocardial apex motion vs the FEM "
-         "(none for a partial row: its values are at the load_factor it reached)."),
+         "(mm) and cavity volume (mm^3, each model's own field: the P2 FEM's quadratic "
+         "facets, the spring model's flat ones); rel_error of the endocardial apex motion "
+         "vs the FEM (none for a partial row: its values are at the load_factor it reached)."),
     ):  # fmt: skip
         out.append(Table(write_table(df, ctx.path(stem)), caption))
     return out

@@ -39,7 +39,13 @@ def output(tmp_path_factory):
 
 def test_quick_outputs(output):
     ctx, out = output
-    assert [t.path.name for t in out.tables] == ["stress_stretch.md", "beam.md", "ventricle.md"]
+    assert [t.path.name for t in out.tables] == [
+        "stress_stretch.md",
+        "beam.md",
+        "ventricle.md",
+        "apex_convergence.md",
+        "apex_richardson.md",
+    ]
     assert out.figures[0].path.stat().st_size > 0
     s = pd.read_csv(ctx.out / "stress_stretch.csv")
     fem = s[s.model == "fem"].set_index(["direction", "stretch"]).stress
@@ -58,3 +64,16 @@ def test_quick_outputs(output):
     assert lv.loc["fem", "cavity_final"] > lv.loc["fem", "cavity_initial"]
     assert any("Land beam" in f for f in out.findings)
     assert "stress_error_along_spring (exact)" in out.headline
+
+
+def test_quick_apex_convergence(output):
+    ctx, out = output
+    conv = pd.read_csv(ctx.out / "apex_convergence.csv")
+    # the quick preset's two coarse meshes of problem 3 (passive): both converge, the finer
+    # one has more DOFs, and the epicardial apex lies below the endocardial one (the wall
+    # stays ~3 mm thick at the apex under inflation: incompressible)
+    assert list(conv["size"]) == [6.0, 5.0] and (conv.error.isna() | (conv.error == "")).all()
+    assert conv.dofs.iloc[1] > conv.dofs.iloc[0]
+    assert (conv.epi_apex_z < conv.endo_apex_z - 1.0).all()
+    assert (ctx.out / "apex_convergence.png").stat().st_size > 0
+    assert any("Land problem 3 (passive)" in f for f in out.findings)
