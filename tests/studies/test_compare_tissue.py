@@ -23,8 +23,7 @@ from studies.cli import main
 from studies.compare import bundled_scene, compare_scene, model_settings
 
 DIVISIONS = (6, 1, 1)  # 36 tets: every model solves in about a second
-#: The Land beam's 0.004 kPa at 1e-3: tip deflection ~3e-3 mm on a 10 mm beam, strains
-#: ~1e-4, so finite-strain terms are O(1e-4) relative.
+#: The Land beam's 0.004 kPa at 1e-3: P1 tip deflection ~1.5e-4 mm on a 10 mm beam.
 SMALL = 1e-3
 EXACT = {"volume": "axes", "torsion": "energy", "calibration": "exact", "coupling": True}
 PARAMS = {"C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0}  # land-beam's Guccione constants
@@ -88,11 +87,13 @@ def test_p1_is_displacement_formulation_with_the_stated_penalty(small_beam):
 
 def test_spring_exact_element_is_p1_of_the_law_at_small_strain(small_beam):
     """DESIGN §4b: the exact element is P1 with the law's small-strain tangent (the same
-    penalty). At strains ~1e-4 both models' finite-strain terms are O(1e-4) relative; the
-    spring solve stops at its own residual tolerance. Tolerance 1e-3: ten times the strain."""
+    penalty). Both models' finite-strain terms are O(strain) relative to their common
+    linearisation: tolerance ten times the largest P1 Green–Lagrange strain (about 1e-5
+    at this load; at the full load the same comparison gives 0.4%)."""
     _, cmp = small_beam
+    assert cmp.strain < 1e-4  # the small-strain regime the claim is about
     e = cmp.errors("spring", "P1")
-    assert e["rel_l2"] < 1e-3, e
+    assert e["rel_l2"] < 10 * cmp.strain, (e, cmp.strain)
 
 
 def test_cli_compare_on_a_tissue_scene_exits_0(tmp_path, monkeypatch, capsys):
