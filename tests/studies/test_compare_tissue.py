@@ -142,3 +142,6 @@ def test_a_spring_stop_is_a_partial_row_not_ranked(monkeypatch):
     assert t.at["spring", "status"] == "partial" and t.at["spring", "load factor"] == 0.4
     assert np.isnan(t.at["spring", "rel L2 err"]) and cmp.reference == "P2"
     assert "spring" not in cmp.solutions and t.at["P1", "status"] == "ok"
+    lines = compare_output.summary_lines(cmp)
+    assert any(line.startswith("spring: partial, stopped at load factor 0.4 ") for line in lines)
+    assert not any("spring vs" in line for line in lines)  # not ranked
