@@ -6,13 +6,16 @@ the reference, volume change, reactions, wall time and convergence.
 Its output (sentences, figures, the ``springfem compare`` command) is in
 :mod:`studies.compare_output`.
 
-Models (names used in tables and figures)
------------------------------------------
+Models (names used in tables and figures; :mod:`studies.compare_models`)
+-----------------------------------------------------------------------
 ``spring``  the spring model with the scene's ``[spring]`` options;
 ``P1``, ``P2``  linear (small-strain) FEM with the scene's linear law (``linear`` or
-``transverse-linear``; ``linear`` with ``E, nu`` for a neo-Hookean scene);
+``transverse-linear``; ``linear`` with ``E, nu`` for a neo-Hookean scene); for a
+finite-strain tissue law (Guccione, Holzapfel–Ogden) the scene's own law: P2 with the
+scene's formulation (mixed Taylor–Hood when incompressible), P1 in the displacement
+formulation with the scene's ``kappa`` or the spring model's incompressible penalty;
 ``P1-NH``, ``P2-NH``  neo-Hookean FEM (the scene's formulation), run when the scene's law is
-neo-Hookean or its strains are large (:data:`LARGE_STRAIN`).
+neo-Hookean or its strains are large (:data:`LARGE_STRAIN`); never for a tissue law.
 """
 
 from __future__ import annotations
@@ -29,13 +32,22 @@ from springfem.errors import InputError, SolverError
 from springfem.scene import Scene
 
 from . import metrics
+from .compare_models import (  # noqa: F401 - re-exported: compare's model names and solve
+    MODELS,
+    SPRING_PARALLEL_MIN_TETS,
+    is_tissue,
+    linear_law,
+    model_scene,
+    model_settings,
+    p1_penalty,
+    solve_model,
+    tissue_note,
+)
 from .partial import partial_row, partial_solution
 from .solve import Solution
 
-MODELS = ("spring", "P1", "P2", "P1-NH", "P2-NH")
 REFERENCE_PREFERENCE = ("P2-NH", "P2", "P1-NH", "P1")
 LARGE_STRAIN = 0.05  # max |principal Green-Lagrange strain| of the P1 linear solution
-SPRING_PARALLEL_MIN_TETS = 200_000  # below this the serial spring kernel is faster
 COMPONENTS = "xyz"
 
 
@@ -142,42 +154,6 @@ def bundled_scene(name: str, divisions: Sequence[int] | None = None) -> dict:
     return data
 
 
-def linear_law(scene: Scene) -> str:
-    """The small-strain law of the scene's material."""
-    return "transverse-linear" if scene.material.law == "transverse-linear" else "linear"
-
-
-def model_settings(scene: Scene, name: str) -> tuple[str, int | None, str | None]:
-    """``(model, order, law)`` of a model name for :func:`solve_model`."""
-    if name == "spring":
-        return "spring", None, None
-    if name in ("P1", "P2"):
-        return "fem", int(name[1]), linear_law(scene)
-    if name in ("P1-NH", "P2-NH"):
-        if scene.material.law == "transverse-linear":
-            raise InputError(
-                f"model {name}: reference_fem has no anisotropic hyperelastic law for the "
-                "transverse-linear material"
-            )
-        return "fem", int(name[1]), "neo-hookean"
-    raise InputError(f"unknown model {name!r}; valid models: {', '.join(MODELS)}")
-
-
-def solve_model(scene: Scene, name: str) -> Solution:
-    """Solve ``scene`` with one of :data:`MODELS`."""
-    model, order, law = model_settings(scene, name)
-    if model == "spring":
-        from springmodel.model import solve_spring
-
-        parallel = scene.mesh.n_tets >= SPRING_PARALLEL_MIN_TETS
-        sol = solve_spring(scene, parallel=parallel)
-        return Solution(sol.result, sol.u, dict(sol.cell_data))
-    import reference_fem
-
-    sol = reference_fem.solve(scene, order=order, law=law)
-    return Solution(sol.result, sol.u_vertices, dict(sol.cell_data))
-
-
 def max_principal_strain(scene: Scene, u: np.ndarray) -> float:
     """Max |principal Green–Lagrange strain| over the P1 elements for vertex field ``u``.
 
@@ -258,7 +234,10 @@ def compare_scene(
             strain = max_principal_strain(scene, solutions["P1"].u)
         large = bool(strain > strain_limit)
         nh = scene.material.law == "neo-hookean" or large
-        if large and scene.material.law == "transverse-linear":
+        if is_tissue(scene):
+            nh = False
+            notes.append(tissue_note(scene))
+        elif large and scene.material.law == "transverse-linear":
             nh = False
             notes.append(
                 f"the P1 strain reaches {strain:.1%} (> {strain_limit:.0%}) but reference_fem "

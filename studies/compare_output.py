@@ -84,6 +84,12 @@ def summary_lines(cmp: Comparison) -> list[str]:
             f"total error (spring vs {cmp.reference}): rel L2 {percent(e['rel_l2'])}, "
             f"rel max {percent(e['rel_max'])}"
         )
+    if "spring" in cmp.partial:
+        lf = cmp.partial["spring"].result.info.get("load_factor", float("nan"))
+        lines.append(
+            f"spring: partial, stopped at load factor {lf:.4g} of 1; not ranked against "
+            f"{cmp.reference} (a state at a lower load)"
+        )
     if p1 is not None and p1 != cmp.reference:
         e = cmp.errors(p1)
         lines.append(
