@@ -64,11 +64,8 @@ class SpringModel:
         self.elements: SpringElements = build_spring_elements(
             mesh.points, mesh.tets, scene.frames, self.options, scene.material
         )
-        self.nodal = None  # volume_average = "nodal": the volume term on nodal volumes
-        kernel_elements = self.elements
-        if self.options.nodal_volume:
-            self.nodal = NodalPart(mesh.points, mesh.tets, self.elements, self.options.volumetric)
-            kernel_elements = self.nodal.kernel_elements(self.elements)
+        # volume_average = "nodal": (part of) the volume term on nodal volumes, else None
+        self.nodal, kernel_elements = NodalPart.split(mesh, self.elements, self.options)
         self.kernel = SpringKernel(
             kernel_elements,
             self.options,

@@ -196,8 +196,9 @@ class NodalVolume:
 class NodalPart:
     """The nodal volume term of a :class:`~springmodel.model.SpringModel`.
 
-    It replaces the per-tet axis-volume energy: the spring kernel and Hessian get the
-    elements with ``k_axis_volume = 0`` (:meth:`kernel_elements`) and the model adds this
+    It replaces the per-tet axis-volume energy (all of it, or the share ``fraction``): the
+    spring kernel and Hessian get the elements with the rest of ``k_axis_volume``
+    (:meth:`kernel_elements`) and the model adds this
     part's forces, energy and tangent.
 
     Parameters
@@ -208,17 +209,45 @@ class NodalPart:
         The calibrated spring elements (their ``k_axis_volume`` is the elements' ``kappa``).
     kind
         ``U(J)`` (the options' ``volumetric``).
+    fraction
+        Share of ``kappa`` on the nodal volumes (the options' ``nodal_fraction``); the rest
+        stays on the tets in the spring kernel.
     """
 
-    def __init__(self, X: np.ndarray, tets: np.ndarray, elements, kind: str):
-        self.term = NodalVolume(X, tets, elements.k_axis_volume, kind)
+    def __init__(self, X: np.ndarray, tets: np.ndarray, elements, kind: str, fraction=1.0):
+        self.fraction = float(fraction)
+        self.term = NodalVolume(X, tets, self.fraction * elements.k_axis_volume, kind)
         self._coloured = None
 
+    @classmethod
+    def split(cls, mesh, elements, options) -> tuple[NodalPart | None, object]:
+        """The nodal part of a model (None when off) and the elements for its kernel.
+
+        Parameters
+        ----------
+        mesh
+            The scene's mesh (``points``, ``tets``).
+        elements
+            The calibrated :class:`~springmodel.elements.SpringElements`.
+        options
+            :class:`~springmodel.options.SpringOptions` (``nodal_volume``,
+            ``volumetric``, ``nodal_fraction``).
+
+        Returns
+        -------
+        tuple
+            ``(NodalPart or None, elements for the spring kernel and Hessian)``.
+        """
+        if not options.nodal_volume:
+            return None, elements
+        part = cls(mesh.points, mesh.tets, elements, options.volumetric, options.nodal_fraction)
+        return part, part.kernel_elements(elements)
+
     def kernel_elements(self, elements):
-        """A copy of ``elements`` without the per-tet axis-volume stiffness."""
+        """A copy of ``elements`` with the per-tet share ``1 - fraction`` of ``kappa``."""
         from dataclasses import replace
 
-        return replace(elements, k_axis_volume=np.zeros_like(elements.k_axis_volume))
+        return replace(elements, k_axis_volume=(1.0 - self.fraction) * elements.k_axis_volume)
 
     def stiffness(self, x: np.ndarray, hessian, force_fn) -> sp.csr_matrix:
         """Tangent of the whole model: the springs' part plus :meth:`NodalVolume.tangent`.

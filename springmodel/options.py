@@ -93,6 +93,10 @@ class SpringOptions:
         ``V_a = sum_{e ni a} V_e / 4``, energy ``sum_a V_a0 U(J_a)`` in place of the per-tet
         term (it does not lock like P1 on nearly incompressible scenes;
         :mod:`springmodel.nodal_volume`). The calibration is unchanged (the same ``kappa``).
+    nodal_fraction
+        With ``volume_average = "nodal"``: the share ``f`` of each element's ``kappa`` put
+        on the nodal volumes; ``1 - f`` stays on the tet (``f < 1`` stiffens the element
+        volume modes that nodal volumes leave free, at the price of some locking).
     volumetric
         ``U(J)`` of the axis-volume spring: ``quadratic``, ``log`` or ``simo-taylor``
         (:mod:`springfem.volumetric`, the FEM's choices).
@@ -139,6 +143,7 @@ class SpringOptions:
     torsion_cubic: float = 0.0
     volume: VolumeKind = True
     volume_average: VolumeAverage = "element"
+    nodal_fraction: float = 1.0
     volumetric: Volumetric = "quadratic"
     coupling: bool = False
     volume_form: VolumeForm = "gradient"
@@ -167,6 +172,8 @@ class SpringOptions:
             raise ValueError(f"volume_average {self.volume_average!r} is not element or nodal")
         if self.volume_average == "nodal" and self.volume != "axes":
             raise ValueError('volume_average = "nodal" needs volume = "axes"')
+        if not 0.0 <= self.nodal_fraction <= 1.0:
+            raise ValueError(f"nodal_fraction {self.nodal_fraction} is not in [0, 1]")
         if self.volumetric not in VOLUMETRIC_ENERGIES:
             raise ValueError(
                 f"volumetric {self.volumetric!r} is not one of {', '.join(VOLUMETRIC_ENERGIES)}"
@@ -239,6 +246,10 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
         kw["volume_average"] = r.get("volume_average", "str", choices=S.choices("volume_average"))
         if kw["volume_average"] == "nodal" and kw.get("volume") != "axes":
             raise r.fail("volume_average", '"nodal" needs volume = "axes"')
+    if r.has("nodal_fraction"):
+        kw["nodal_fraction"] = f = r.get("nodal_fraction", "float", nonneg=True)
+        if f > 1.0:
+            raise r.fail("nodal_fraction", f"{f} is larger than 1")
     if r.has("volumetric"):
         kw["volumetric"] = r.get("volumetric", "str", choices=VOLUMETRIC_ENERGIES)
     if r.has("coupling"):

@@ -148,11 +148,13 @@ def nodal_scene(follower: bool) -> dict:
     }  # fmt: skip
 
 
-@pytest.mark.parametrize("follower", [False, True])
-def test_model_tangent_matches_fd_of_its_forces(follower):
+@pytest.mark.parametrize("follower, fraction", [(False, 1.0), (True, 1.0), (True, 0.5)])
+def test_model_tangent_matches_fd_of_its_forces(follower, fraction):
     from springmodel.model import SpringModel
 
-    model = SpringModel(scene_from_dict(nodal_scene(follower)))
+    d = nodal_scene(follower)
+    d["spring"]["nodal_fraction"] = fraction
+    model = SpringModel(scene_from_dict(d))
     assert model.nodal is not None and (model._hessian is None) == follower
     rng = np.random.default_rng(0)
     x = model.x0 + 0.05 * rng.standard_normal(model.x0.shape)
@@ -162,6 +164,23 @@ def test_model_tangent_matches_fd_of_its_forces(follower):
     # differences (relative error ~1e-9, see fd_jacobian.default_step) on top of the
     # analytic nodal tangent: a wrong colouring of the patch coupling would give O(1) errors
     assert np.abs(K - Kfd).max() < 1e-6 * np.abs(K).max()
+
+
+def test_model_dilation_energy_is_the_element_models_for_every_fraction():
+    """Under a uniform dilation every ``J_a = J_e``: moving ``kappa`` between the tets and
+    the nodes changes nothing, and equals the per-tet (``element``) model's energy."""
+    from springmodel.model import SpringModel
+
+    d = nodal_scene(False)
+    x = None
+    energies = []
+    for average, fraction in (("element", 1.0), ("nodal", 0.0), ("nodal", 0.5), ("nodal", 1.0)):
+        d["spring"].update(volume_average=average, nodal_fraction=fraction)
+        model = SpringModel(scene_from_dict(d))
+        x = 1.02 * model.x0 if x is None else x
+        energies.append(model.energy(x, scale=0.0))
+    assert energies[0] > 0  # the volume energy dominates: kappa = 1000 mu
+    assert np.allclose(energies, energies[0], rtol=1e-12, atol=0)
 
 
 def test_option_needs_the_axis_volume():
