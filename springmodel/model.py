@@ -115,7 +115,8 @@ class SpringModel:
 
     def stiffness(self, x: np.ndarray, scale: float = 1.0) -> sp.csr_matrix | None:
         if self.nodal is not None:
-            return self.nodal.stiffness(x, self._hessian, lambda y: self.forces(y, None, scale))
+            rest = lambda y: self.kernel.forces(y, None) + self.external(y, scale)  # noqa: E731
+            return self.nodal.stiffness(x, self._hessian, rest)
         if self._hessian is None:
             return None
         return self._hessian.matrix(x)
@@ -191,7 +192,9 @@ def variant_label(options: SpringOptions) -> str:
     """
     parts = [f"axial={options.axial}", f"torsion={options.torsion}"]
     if options.axis_volume:
-        parts.append(f"volume=axes/{options.volumetric}" + "/nodal" * options.nodal_volume)
+        f = options.nodal_fraction
+        nodal = ("/nodal" + (f"{f:g}" if f < 1 else "")) * options.nodal_volume
+        parts.append(f"volume=axes/{options.volumetric}{nodal}")
     else:
         parts.append(f"volume={options.volume_form}" if options.volume else "volume=off")
     if options.coupling:

@@ -156,9 +156,9 @@ class NodalVolume:
         """Nodal forces ``-dW/dx`` ``(n, 3)`` (N)."""
         dV, _, dU, _ = self._state(x)
         pbar = dU[self.tets].mean(axis=1)
-        f = np.zeros((self.n, 3))
-        np.add.at(f, self.tets, -pbar[:, None, None] * dV)
-        return f
+        fe = (-pbar[:, None, None] * dV).reshape(-1, 3)
+        idx = self._node
+        return np.stack([np.bincount(idx, fe[:, c], minlength=self.n) for c in range(3)], 1)
 
     def tangent(self, x: np.ndarray) -> sp.csr_matrix:
         """Tangent ``d^2W/dx^2`` ``(3n, 3n)`` (CSR, symmetric).
@@ -249,12 +249,12 @@ class NodalPart:
 
         return replace(elements, k_axis_volume=(1.0 - self.fraction) * elements.k_axis_volume)
 
-    def stiffness(self, x: np.ndarray, hessian, force_fn) -> sp.csr_matrix:
+    def stiffness(self, x: np.ndarray, hessian, rest_fn) -> sp.csr_matrix:
         """Tangent of the whole model: the springs' part plus :meth:`NodalVolume.tangent`.
 
         The springs' part is their analytic Hessian (``hessian.matrix``) or, when there is
         none (follower loads, non-conservative laws), the coloured finite-difference
-        Jacobian of ``force_fn`` minus this term's forces: that remainder couples only the
+        Jacobian of ``rest_fn``, the model's forces without this term: they couple only the
         nodes of one element, which the element colouring assumes; the nodal term's wider
         patch coupling is added analytically.
 
@@ -264,8 +264,8 @@ class NodalPart:
             Node positions ``(n, 3)``.
         hessian
             :class:`~springmodel.hessian.SpringHessian` or None.
-        force_fn
-            ``x -> total forces (n, 3)`` of the model (with the nodal term and the loads).
+        rest_fn
+            ``x -> forces (n, 3)`` of the springs and loads (without this term).
 
         Returns
         -------
@@ -279,5 +279,5 @@ class NodalPart:
 
             if self._coloured is None:
                 self._coloured = ColoredJacobian(self.term.tets, self.term.n)
-            K = self._coloured(lambda y: force_fn(y) - self.term.forces(y), x)
+            K = self._coloured(rest_fn, x)
         return (sp.csr_matrix(K) + self.term.tangent(x)).tocsr()

@@ -105,17 +105,18 @@ def stop_reason(
         f"axis strains {m['strain_min']:+.0%} to {m['strain_max']:+.0%}, shear angle up to "
         f"{m['shear_deg']:.0f} deg, volume ratio {m['J_min']:.3g} to {m['J_max']:.3g}"
     )
+    if options.nodal_volume:  # the pressures live on the nodes (springmodel.nodal_volume)
+        from .nodal_volume import NodalVolume
+
+        k = options.nodal_fraction * np.asarray(elements.k_axis_volume)
+        term = NodalVolume(x0, elements.tets, k, options.volumetric)
+        Ja = term.ratios(x)
+        text += f", nodal volume ratio {Ja.min():.3g} to {Ja.max():.3g}"
     if options.torsion == "energy" and m["shear_deg"] >= ENERGY_TORSION_LIMIT_DEG:
         text += (
             "; the energy torsion law's moment peaks at 45 deg of shear, beyond which the "
             'element loses its shear stiffness (torsion = "shear" keeps it)'
         )
-    if options.nodal_volume:  # the pressures live on the nodes (springmodel.nodal_volume)
-        from .nodal_volume import NodalVolume
-
-        term = NodalVolume(x0, elements.tets, elements.k_axis_volume, options.volumetric)
-        Ja = term.ratios(x)
-        text += f", nodal volume ratio {Ja.min():.3g} to {Ja.max():.3g}"
     if options.axis_volume:
         mu = np.median(elements.k_torsion / elements.V0[:, None])
         if options.nodal_volume:
