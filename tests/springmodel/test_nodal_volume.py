@@ -192,3 +192,13 @@ def test_option_needs_the_axis_volume():
     with pytest.raises(SceneError, match="volume_average"):
         SpringOptions.of(scene_from_dict(d))
     assert SpringOptions().volume_average == "element"  # default unchanged
+
+
+def test_stop_reason_reads_the_nodal_ratios():
+    """A uniform dilation by 1.1: every nodal ratio is 1.331 (= 1.1^3) in the message."""
+    from springmodel.model import SpringModel
+    from springmodel.stop_reason import stop_reason
+
+    model = SpringModel(scene_from_dict(nodal_scene(False)))
+    text = stop_reason(1.1 * model.x0, model.x0, model.elements, model.options)
+    assert "nodal volume ratio 1.33 to 1.33" in text and "nodal pressures" in text
