@@ -32,6 +32,7 @@ from springfem.scene import Scene, model_precision
 
 from .advice import scene_warnings
 from .elements import SpringElements, build_spring_elements
+from .nodal_volume import NodalPart
 from .options import SpringOptions
 from .spring_kernel import SpringKernel
 from .springs import is_conservative, lms_update, volume_measures
@@ -63,8 +64,10 @@ class SpringModel:
         self.elements: SpringElements = build_spring_elements(
             mesh.points, mesh.tets, scene.frames, self.options, scene.material
         )
+        # volume_average = "nodal": (part of) the volume term on nodal volumes, else None
+        self.nodal, kernel_elements = NodalPart.split(mesh, self.elements, self.options)
         self.kernel = SpringKernel(
-            self.elements,
+            kernel_elements,
             self.options,
             parallel=parallel,
             precision=model_precision(scene, "spring", self.options.precision),
@@ -80,7 +83,7 @@ class SpringModel:
             try:
                 from .hessian import SpringHessian
 
-                self._hessian = SpringHessian(self.elements, self.options)
+                self._hessian = SpringHessian(kernel_elements, self.options)
             except ImportError:
                 self._hessian = None
 
@@ -96,19 +99,24 @@ class SpringModel:
         return external_forces(self.scene, x=x, scale=scale)
 
     def internal(self, x: np.ndarray, v: np.ndarray | None = None) -> np.ndarray:
-        """Spring forces ``(n, 3)`` (fused kernel)."""
-        return self.kernel.forces(x, v)
+        """Spring forces ``(n, 3)`` (fused kernel, plus the nodal volume term when on)."""
+        f = self.kernel.forces(x, v)
+        return f if self.nodal is None else f + self.nodal.term.forces(x)
 
     def forces(self, x: np.ndarray, v: np.ndarray | None = None, scale: float = 1.0) -> np.ndarray:
-        return self.kernel.forces(x, v) + self.external(x, scale)
+        return self.internal(x, v) + self.external(x, scale)
 
     def energy(self, x: np.ndarray, scale: float = 1.0) -> float | None:
         if not self._conservative:
             return None
         work = float(np.sum(self._f_dead * (x - self.x0))) * scale
-        return self.kernel.energy(x) - work
+        nodal = 0.0 if self.nodal is None else self.nodal.term.energy(x)
+        return self.kernel.energy(x) + nodal - work
 
     def stiffness(self, x: np.ndarray, scale: float = 1.0) -> sp.csr_matrix | None:
+        if self.nodal is not None:
+            rest = lambda y: self.kernel.forces(y, None) + self.external(y, scale)  # noqa: E731
+            return self.nodal.stiffness(x, self._hessian, rest)
         if self._hessian is None:
             return None
         return self._hessian.matrix(x)
@@ -184,7 +192,9 @@ def variant_label(options: SpringOptions) -> str:
     """
     parts = [f"axial={options.axial}", f"torsion={options.torsion}"]
     if options.axis_volume:
-        parts.append(f"volume=axes/{options.volumetric}")
+        f = options.nodal_fraction
+        nodal = ("/nodal" + (f"{f:g}" if f < 1 else "")) * options.nodal_volume
+        parts.append(f"volume=axes/{options.volumetric}{nodal}")
     else:
         parts.append(f"volume={options.volume_form}" if options.volume else "volume=off")
     if options.coupling:

@@ -32,6 +32,8 @@ VolumeForm = Literal["gradient", "spec"]
 Precision = Literal["float64", "mixed", "float32"]
 #: ``True``: the seed's barycentric volume springs; ``"axes"``: the axis-volume spring.
 VolumeKind = bool | Literal["axes"]
+#: ``element``: the axis-volume spring per tet; ``nodal``: on nodal volumes (Bonet & Burton).
+VolumeAverage = Literal["element", "nodal"]
 
 
 @dataclass(frozen=True)
@@ -84,6 +86,17 @@ class SpringOptions:
         ``True``: the seed's barycentric volume springs (2.76–2.77); ``False``: off;
         ``"axes"``: the axis-volume spring, energy ``V0 U(J)`` with the exact volume ratio
         ``J = det[zeta_1 zeta_2 zeta_3] / det[zeta_1^0 zeta_2^0 zeta_3^0]`` (DESIGN §4b).
+    volume_average
+        Where the axis-volume energy measures ``J`` (only with ``volume = "axes"``):
+        ``element`` (default), ``J`` of each tet; ``nodal``, the average nodal pressure
+        tetrahedron of Bonet & Burton (1998): ``J_a = V_a / V_a0`` of the nodal volumes
+        ``V_a = sum_{e ni a} V_e / 4``, energy ``sum_a V_a0 U(J_a)`` in place of the per-tet
+        term (it does not lock like P1 on nearly incompressible scenes;
+        :mod:`springmodel.nodal_volume`). The calibration is unchanged (the same ``kappa``).
+    nodal_fraction
+        With ``volume_average = "nodal"``: the share ``f`` of each element's ``kappa`` put
+        on the nodal volumes; ``1 - f`` stays on the tet (``f < 1`` stiffens the element
+        volume modes that nodal volumes leave free, at the price of some locking).
     volumetric
         ``U(J)`` of the axis-volume spring: ``quadratic``, ``log`` or ``simo-taylor``
         (:mod:`springfem.volumetric`, the FEM's choices).
@@ -129,6 +142,8 @@ class SpringOptions:
     torsion: TorsionLaw = "cosine"
     torsion_cubic: float = 0.0
     volume: VolumeKind = True
+    volume_average: VolumeAverage = "element"
+    nodal_fraction: float = 1.0
     volumetric: Volumetric = "quadratic"
     coupling: bool = False
     volume_form: VolumeForm = "gradient"
@@ -153,6 +168,12 @@ class SpringOptions:
     def __post_init__(self):
         if self.volume not in (True, False, "axes"):
             raise ValueError(f"volume {self.volume!r} is not one of True, False, 'axes'")
+        if self.volume_average not in get_args(VolumeAverage):
+            raise ValueError(f"volume_average {self.volume_average!r} is not element or nodal")
+        if self.volume_average == "nodal" and self.volume != "axes":
+            raise ValueError('volume_average = "nodal" needs volume = "axes"')
+        if not 0.0 <= self.nodal_fraction <= 1.0:
+            raise ValueError(f"nodal_fraction {self.nodal_fraction} is not in [0, 1]")
         if self.volumetric not in VOLUMETRIC_ENERGIES:
             raise ValueError(
                 f"volumetric {self.volumetric!r} is not one of {', '.join(VOLUMETRIC_ENERGIES)}"
@@ -168,6 +189,11 @@ class SpringOptions:
         """The axis-volume spring is on (``volume = "axes"``)."""
         return self.volume == "axes"
 
+    @property
+    def nodal_volume(self) -> bool:
+        """The axis-volume energy is on nodal volumes (``volume_average = "nodal"``)."""
+        return self.volume_average == "nodal"
+
     @classmethod
     def choices(cls, name: str) -> tuple[str, ...]:
         """Valid string values of the option ``name`` (empty for non-string options)."""
@@ -180,6 +206,7 @@ class SpringOptions:
             "volume_form": VolumeForm,
             "precision": Precision,
             "volumetric": Volumetric,
+            "volume_average": VolumeAverage,
         }
         return get_args(hints[name]) if name in hints else ()
 
@@ -215,6 +242,14 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
         kw["volume_form"] = r.get("volume_form", "str", choices=S.choices("volume_form"))
     if r.has("volume"):
         kw["volume"] = _volume_kind(r)
+    if r.has("volume_average"):
+        kw["volume_average"] = r.get("volume_average", "str", choices=S.choices("volume_average"))
+        if kw["volume_average"] == "nodal" and kw.get("volume") != "axes":
+            raise r.fail("volume_average", '"nodal" needs volume = "axes"')
+    if r.has("nodal_fraction"):
+        kw["nodal_fraction"] = f = r.get("nodal_fraction", "float", nonneg=True)
+        if f > 1.0:
+            raise r.fail("nodal_fraction", f"{f} is larger than 1")
     if r.has("volumetric"):
         kw["volumetric"] = r.get("volumetric", "str", choices=VOLUMETRIC_ENERGIES)
     if r.has("coupling"):

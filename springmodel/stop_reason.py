@@ -10,7 +10,9 @@ element volume ratios ``J``. Two readings are attached when they apply:
   (``torsion = "shear"`` keeps it, :mod:`springmodel.springs.shear`);
 * the axis-volume spring's element pressures ``kappa (J - 1)`` larger than the element's
   shear modulus: nearly incompressible P1-type elements lock, and the geometric stiffness
-  of those alternating pressures can make the tangent indefinite.
+  of those alternating pressures can make the tangent indefinite. With
+  ``volume_average = "nodal"`` the nodal volume ratios ``J_a`` are added and the reading is
+  on the nodal pressures ``kappa_a (J_a - 1)`` (:mod:`springmodel.nodal_volume`).
 
 Examples
 --------
@@ -103,6 +105,13 @@ def stop_reason(
         f"axis strains {m['strain_min']:+.0%} to {m['strain_max']:+.0%}, shear angle up to "
         f"{m['shear_deg']:.0f} deg, volume ratio {m['J_min']:.3g} to {m['J_max']:.3g}"
     )
+    if options.nodal_volume:  # the pressures live on the nodes (springmodel.nodal_volume)
+        from .nodal_volume import NodalVolume
+
+        k = options.nodal_fraction * np.asarray(elements.k_axis_volume)
+        term = NodalVolume(x0, elements.tets, k, options.volumetric)
+        Ja = term.ratios(x)
+        text += f", nodal volume ratio {Ja.min():.3g} to {Ja.max():.3g}"
     if options.torsion == "energy" and m["shear_deg"] >= ENERGY_TORSION_LIMIT_DEG:
         text += (
             "; the energy torsion law's moment peaks at 45 deg of shear, beyond which the "
@@ -110,8 +119,13 @@ def stop_reason(
         )
     if options.axis_volume:
         mu = np.median(elements.k_torsion / elements.V0[:, None])
-        p = np.abs(np.asarray(elements.k_axis_volume) * (m["J"] - 1.0)).max()
-        if mu > 0 and p > mu:
+        if options.nodal_volume:
+            p = np.abs(term.kappa * (Ja - 1.0)).max()
+        else:
+            p = np.abs(np.asarray(elements.k_axis_volume) * (m["J"] - 1.0)).max()
+        if mu > 0 and p > mu and options.nodal_volume:
+            text += f"; nodal pressures kappa |J_a - 1| up to {p / mu:.3g} x the shear modulus"
+        elif mu > 0 and p > mu:
             text += (
                 f"; volume-spring pressures kappa |J - 1| up to {p / mu:.3g} x the shear "
                 "modulus: a nearly incompressible P1-type element locks and their geometric "
