@@ -6,13 +6,16 @@ export PYVISTA_OFF_SCREEN := true
 export MPLBACKEND := Agg
 export OPENBLAS_NUM_THREADS ?= 1
 export OMP_WAIT_POLICY ?= passive
-# pytest-xdist workers of `make test` (0: one process, the default). Two workers were slower
-# than one on the shared, loaded 2-core machine (issue 9: 151 s vs 130 s wall for tests/studies
-# + tests/reliability, warm numba cache); on an idle machine try `make test TEST_WORKERS=2`.
+# pytest-xdist workers of `make test` (0: one process). Two by default: the default selection
+# (1,115 tests, warm numba cache, reports/quick/ present as in CI) measured in interleaved pairs
+# on the shared 2-core machine, serial vs two workers, wall (CPU): load 4: 183 s (114 s) vs
+# 181 s (156 s); load 2: 125 s (125 s) vs 75 s (138 s); idle: 108 s (104 s) vs 71 s (111 s).
+# Two workers win every pair, by 1 % at load 4, where they cost a third more CPU: on a busy
+# machine `make test TEST_WORKERS=0` is the kinder choice.
 # Test files are kept whole on one worker (--dist loadfile): a module's shared fixtures are
 # built once; numba's on-disk kernel cache is safe to fill from two processes (it writes
 # through a temporary file and an atomic rename).
-TEST_WORKERS ?= 0
+TEST_WORKERS ?= 2
 XDIST = $(if $(filter-out 0,$(TEST_WORKERS)),-n $(TEST_WORKERS) --dist loadfile)
 
 .PHONY: demo test test-slow lint report quick-report bench clean

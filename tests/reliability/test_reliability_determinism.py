@@ -1,8 +1,9 @@
 """Reliability: the same scene solved twice gives bit-identical results.
 
-* ``springfem solve --model spring`` and ``--model fem`` run twice each, in separate
+* ``springfem solve --model spring`` and ``--model fem`` run in each of two separate
   processes with different ``PYTHONHASHSEED`` (so no result may depend on set or dict
-  order of strings) and two numba threads: ``result.json`` must be identical apart from
+  order of strings) and two numba threads (one process runs both models: one interpreter
+  start per seed): ``result.json`` must be identical apart from
   timings, and the VTU's displacement and cell arrays bit for bit.
 * The spring model with its parallel force kernel forced on (the CLI only picks it from
   ``PARALLEL_MIN_ELEMENTS`` tets up): two in-process solves must agree bit for bit.
@@ -99,20 +100,17 @@ def test_timing_filter_keeps_simulated_times():
     assert without_timings(d) == {"info": {"dt": 1e-3, "t_end": 2.0}}
 
 
-def run_solve(scene: Path, model: str, out: Path, seed: int) -> None:
+MODELS = ("spring", "fem")
+
+
+def run_solves(scene: Path, out: Path, seed: int) -> None:
+    """``springfem solve`` of ``scene`` with each model into ``out/<model>``, in one fresh
+    process (one interpreter start for both models) with the given hash seed."""
+    calls = [["solve", str(scene), "--model", m, "--out", str(out / m)] for m in MODELS]
+    code = f"import sys; from studies.cli import main; sys.exit(max(main(a) for a in {calls!r}))"
     env = dict(os.environ, PYTHONHASHSEED=str(seed), NUMBA_NUM_THREADS="2")
     proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "studies.cli",
-            "solve",
-            str(scene),
-            "--model",
-            model,
-            "--out",
-            str(out),
-        ],
+        [sys.executable, "-c", code],
         cwd=ROOT,
         env=env,
         capture_output=True,
@@ -122,13 +120,21 @@ def run_solve(scene: Path, model: str, out: Path, seed: int) -> None:
     assert proc.returncode == 0, proc.stderr
 
 
-@pytest.mark.parametrize("model", ["spring", "fem"])
-def test_cli_solve_twice_is_bit_identical(tmp_path, model):
-    scene = tmp_path / "det.toml"
+@pytest.fixture(scope="module")
+def solved_twice(tmp_path_factory):
+    """Both models solved in two processes with different ``PYTHONHASHSEED``."""
+    tmp = tmp_path_factory.mktemp("det")
+    scene = tmp / "det.toml"
     scene.write_text(SCENE)
-    a, b = tmp_path / "a", tmp_path / "b"
-    run_solve(scene, model, a, seed=1)
-    run_solve(scene, model, b, seed=2)
+    a, b = tmp / "a", tmp / "b"
+    run_solves(scene, a, seed=1)
+    run_solves(scene, b, seed=2)
+    return a, b
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_cli_solve_twice_is_bit_identical(solved_twice, model):
+    a, b = (run / model for run in solved_twice)
     ja = json.loads((a / "result.json").read_text())
     jb = json.loads((b / "result.json").read_text())
     # a real solve, not an empty one (the spring run is timed: it ends, it does not converge)

@@ -1,6 +1,7 @@
 """Reliability: fuzzed scene files and meshes never crash, hang or print more than one line.
 
-Property-based tests (hypothesis) over more than 1000 generated malformed inputs in all:
+Property-based tests (hypothesis) over more than 1000 generated malformed inputs in all
+(``-m slow``; the default run draws a fifth of each budget, :data:`QUICK_SHARE`):
 
 * scenes: a valid scene (random law, axes, regions, loads, probes, solver options) with
   one to four random mutations: keys deleted, unknown keys added, values replaced by wrong
@@ -468,6 +469,40 @@ def scaled(n: int) -> int:
     return max(1, round(n * float(os.environ.get("SPRINGFEM_FUZZ_SCALE", "1"))))
 
 
+#: The default run draws this fraction of each budget; ``-m slow`` draws all of it.
+QUICK_SHARE = 0.2
+
+
+def budgets(n: int):
+    """Parametrize a fuzz test over its quick share of ``n`` cases and (``-m slow``) all ``n``.
+
+    Both draw from the same derandomized (fixed-seed) search, so a failure of either
+    reproduces from its test id.
+    """
+    return pytest.mark.parametrize(
+        "n_examples",
+        [
+            pytest.param(max(1, round(QUICK_SHARE * scaled(n))), id="quick"),
+            pytest.param(scaled(n), id="full", marks=pytest.mark.slow),
+        ],
+    )
+
+
+def cases(**strategies):
+    """Attach the hypothesis strategies of a fuzz body (run by :func:`fuzz`)."""
+
+    def attach(body):
+        body.strategies = strategies
+        return body
+
+    return attach
+
+
+def fuzz(n_examples: int, body, **fixtures) -> None:
+    """Run ``body`` on ``n_examples`` cases drawn from its :func:`cases` strategies."""
+    settings(FUZZ, max_examples=n_examples)(given(**body.strategies)(body))(**fixtures)
+
+
 N_SCENES = 700
 N_TEXT = 150
 N_BYTES = 60
@@ -482,9 +517,8 @@ def test_fuzz_budget_is_at_least_1000():
     assert N_TOTAL >= 1000
 
 
-@settings(FUZZ, max_examples=scaled(N_SCENES))
-@given(data=st.data(), scene=base_scenes())
-def test_fuzzed_scenes_load_or_fail_with_one_line(mesh_files, data, scene):
+@cases(data=st.data(), scene=base_scenes())
+def _fuzzed_scenes_load_or_fail_with_one_line(mesh_files, data, scene):
     # the unmutated scene is valid: the loader must accept it (so mutations test something)
     if data.draw(st.integers(0, 20), label="keep") == 0:
         assert parse_or_refuse(to_toml(scene)) is not None
@@ -495,9 +529,13 @@ def test_fuzzed_scenes_load_or_fail_with_one_line(mesh_files, data, scene):
     parse_or_refuse(to_toml(scene))
 
 
-@settings(FUZZ, max_examples=scaled(N_TEXT))
-@given(scene=base_scenes(), data=st.data())
-def test_broken_toml_text_fails_with_one_line(scene, data):
+@budgets(N_SCENES)
+def test_fuzzed_scenes_load_or_fail_with_one_line(mesh_files, n_examples):
+    fuzz(n_examples, _fuzzed_scenes_load_or_fail_with_one_line, mesh_files=mesh_files)
+
+
+@cases(scene=base_scenes(), data=st.data())
+def _broken_toml_text_fails_with_one_line(scene, data):
     text = to_toml(scene)
     cut = data.draw(st.integers(0, len(text)), label="cut")
     how = data.draw(st.sampled_from(["truncate", "splice", "delete", "duplicate"]))
@@ -518,15 +556,19 @@ def test_broken_toml_text_fails_with_one_line(scene, data):
     parse_or_refuse(text)
 
 
-@settings(FUZZ, max_examples=scaled(N_BYTES))
-@given(
+@budgets(N_TEXT)
+def test_broken_toml_text_fails_with_one_line(n_examples):
+    fuzz(n_examples, _broken_toml_text_fails_with_one_line)
+
+
+@cases(
     payload=st.one_of(
         st.binary(max_size=200),
         st.builds(lambda b: b"\xff\xfe" + b, st.binary(max_size=50)),
         st.builds(lambda b: b'[mesh]\nfile = "x"\n' + b, st.binary(min_size=1, max_size=20)),
     )
 )
-def test_random_bytes_scene_files_fail_with_one_line(tmp_path_factory, payload):
+def _random_bytes_scene_files_fail_with_one_line(tmp_path_factory, payload):
     path = tmp_path_factory.getbasetemp() / "bytes.toml"
     path.write_bytes(payload)
     try:
@@ -536,6 +578,13 @@ def test_random_bytes_scene_files_fail_with_one_line(tmp_path_factory, payload):
         assert_one_line(str(exc), str(path))
     else:  # random bytes that happen to be a valid scene would need [mesh] and [material]
         check_scene(scene)
+
+
+@budgets(N_BYTES)
+def test_random_bytes_scene_files_fail_with_one_line(tmp_path_factory, n_examples):
+    fuzz(
+        n_examples, _random_bytes_scene_files_fail_with_one_line, tmp_path_factory=tmp_path_factory
+    )
 
 
 # ------------------------------------------------------------------ meshes
@@ -639,9 +688,8 @@ def _raw_mesh(draw) -> meshio.Mesh:
     return meshio.Mesh(pts, cells)
 
 
-@settings(FUZZ, max_examples=scaled(N_MESHES))
-@given(m=raw_meshes())
-def test_fuzzed_meshes_are_validated_or_refused_with_ids(m):
+@cases(m=raw_meshes())
+def _fuzzed_meshes_are_validated_or_refused_with_ids(m):
     try:
         with hang_alarm():
             mesh = mesh_from_meshio(m, "fuzz.vtu")
@@ -656,15 +704,19 @@ def test_fuzzed_meshes_are_validated_or_refused_with_ids(m):
         assert_one_line(note, "fuzz.vtu")
 
 
-@settings(FUZZ, max_examples=scaled(N_MESH_FILES))
-@given(
+@budgets(N_MESHES)
+def test_fuzzed_meshes_are_validated_or_refused_with_ids(n_examples):
+    fuzz(n_examples, _fuzzed_meshes_are_validated_or_refused_with_ids)
+
+
+@cases(
     ext=st.sampled_from(["vtu", "vtk", "msh", "mesh", "inp", "xdmf", "stl", "obj", "bin", ""]),
     payload=st.one_of(
         st.binary(max_size=300),
         st.sampled_from([b"", b"<VTKFile", b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n"]),
     ),
 )
-def test_broken_mesh_files_fail_with_one_line(tmp_path_factory, ext, payload):
+def _broken_mesh_files_fail_with_one_line(tmp_path_factory, ext, payload):
     path = (
         tmp_path_factory.getbasetemp() / f"broken.{ext}"
         if ext
@@ -678,9 +730,13 @@ def test_broken_mesh_files_fail_with_one_line(tmp_path_factory, ext, payload):
         assert_one_line(str(exc), str(path))
 
 
-@settings(FUZZ, max_examples=scaled(N_CLI))
-@given(data=st.data(), scene=base_scenes())
-def test_cli_inspect_exits_0_or_2_with_one_line(tmp_path_factory, mesh_files, data, scene):
+@budgets(N_MESH_FILES)
+def test_broken_mesh_files_fail_with_one_line(tmp_path_factory, n_examples):
+    fuzz(n_examples, _broken_mesh_files_fail_with_one_line, tmp_path_factory=tmp_path_factory)
+
+
+@cases(data=st.data(), scene=base_scenes())
+def _cli_inspect_exits_0_or_2_with_one_line(tmp_path_factory, mesh_files, data, scene):
     """In-process ``springfem inspect``: exit 0, or exit 2 with exactly one stderr line."""
     for _ in range(data.draw(st.integers(0, 3), label="n_mutations")):
         mutate(data, scene, mesh_files)
@@ -698,6 +754,16 @@ def test_cli_inspect_exits_0_or_2_with_one_line(tmp_path_factory, mesh_files, da
         assert_one_line(lines[0])
     else:
         assert lines == [], err
+
+
+@budgets(N_CLI)
+def test_cli_inspect_exits_0_or_2_with_one_line(tmp_path_factory, mesh_files, n_examples):
+    fuzz(
+        n_examples,
+        _cli_inspect_exits_0_or_2_with_one_line,
+        tmp_path_factory=tmp_path_factory,
+        mesh_files=mesh_files,
+    )
 
 
 # ------------------------------------------------------------------ exit codes

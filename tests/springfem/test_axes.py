@@ -68,12 +68,7 @@ def test_orthonormal_frame_by_hand():
     np.testing.assert_allclose(F, [[0, 0, 1], [1, 0, 0], [0, 1, 0]], atol=1e-15)
 
 
-@settings(max_examples=300, deadline=None)
-@given(
-    fiber=arrays(np.float64, 3, elements=st.floats(-100, 100)),
-    sheet=arrays(np.float64, 3, elements=st.floats(-100, 100)),
-)
-def test_orthonormal_frame_properties(fiber, sheet):
+def _frame_properties(fiber, sheet):
     nf, ns = np.linalg.norm(fiber), np.linalg.norm(sheet)
     assume(nf > 1e-6 and ns > 1e-6 and np.linalg.norm(np.cross(fiber, sheet)) > 1e-5 * nf * ns)
     F = orthonormal_frame(fiber, sheet)
@@ -81,6 +76,16 @@ def test_orthonormal_frame_properties(fiber, sheet):
     np.testing.assert_allclose(F[0], fiber / nf, atol=1e-15)  # fiber kept, normalised
     assert F[1] @ sheet > 0  # sheet keeps its side of the fiber ...
     assert abs(F[2] @ sheet) <= 1e-13 * ns  # ... and stays in the fiber-sheet plane
+
+
+@pytest.mark.parametrize(  # a fifth of the search by default, all of it under -m slow
+    "n_examples",
+    [pytest.param(60, id="quick"), pytest.param(300, id="full", marks=pytest.mark.slow)],
+)
+def test_orthonormal_frame_properties(n_examples):
+    vectors = arrays(np.float64, 3, elements=st.floats(-100, 100))
+    cases = given(fiber=vectors, sheet=vectors)
+    settings(max_examples=n_examples, deadline=None)(cases(_frame_properties))()
 
 
 def test_orthonormal_frame_close_to_parallel_is_still_orthonormal():

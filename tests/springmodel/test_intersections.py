@@ -514,20 +514,38 @@ def test_point_in_triangle_on_edges_and_vertices():
 unit_coord = st.floats(-10.0, 10.0, allow_nan=False, allow_infinity=False, allow_subnormal=False)
 
 
-@settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
-@example(  # found by hypothesis: all_hit once used a fixed 1e-12 bound, too tight for slivers
-    base=np.array([[1.0, 1.0, 1.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]),
-    uv=(0.0, 0.0),
-    log_h=-6.0,
-    frame_seed=np.array([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0], [1.0, 1.0, 1.0]]),
-)
-@given(
-    base=arrays(np.float64, (3, 3), elements=unit_coord),
-    uv=st.tuples(st.floats(-1.0, 2.0), st.floats(-1.0, 2.0)),
-    log_h=st.floats(-6.0, 0.0),
-    frame_seed=arrays(np.float64, (3, 3), elements=st.floats(-1.0, 1.0)),
-)
-def test_property_single_tets(base, uv, log_h, frame_seed):
+def budgets(n: int):
+    """Parametrize a property test over a fifth of its ``n`` examples and (``-m slow``) all."""
+    return pytest.mark.parametrize(
+        "n_examples",
+        [
+            pytest.param(n // 5, id="quick"),
+            pytest.param(n, id="full", marks=pytest.mark.slow),
+        ],
+    )
+
+
+def single_tet_property(n_examples: int):
+    """The single-tet property (:func:`_single_tets`), searching ``n_examples`` cases."""
+    # found by hypothesis: all_hit once used a fixed 1e-12 bound, too tight for slivers
+    found = example(
+        base=np.array([[1.0, 1.0, 1.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]),
+        uv=(0.0, 0.0),
+        log_h=-6.0,
+        frame_seed=np.array([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0], [1.0, 1.0, 1.0]]),
+    )
+    cases = given(
+        base=arrays(np.float64, (3, 3), elements=unit_coord),
+        uv=st.tuples(st.floats(-1.0, 2.0), st.floats(-1.0, 2.0)),
+        log_h=st.floats(-6.0, 0.0),
+        frame_seed=arrays(np.float64, (3, 3), elements=st.floats(-1.0, 1.0)),
+    )
+    return settings(
+        max_examples=n_examples, deadline=None, suppress_health_check=[HealthCheck.filter_too_much]
+    )(found(cases(_single_tets)))
+
+
+def _single_tets(base, uv, log_h, frame_seed):
     """Random base triangle, fourth vertex at height 10^log_h L over a point of its plane
     (inside or outside the triangle): caps, wedges, slivers, with 6V/L^3 down to ~1e-6."""
     a, b, c = base
@@ -543,12 +561,21 @@ def test_property_single_tets(base, uv, log_h, frame_seed):
     check_invariants(x, frames, tol=1e-13 / quality(x))
 
 
-@settings(max_examples=100, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), log_h=st.floats(-6.0, 0.0))
-def test_property_batches(seed, log_h):
+@budgets(250)
+def test_property_single_tets(n_examples):
+    single_tet_property(n_examples)()
+
+
+def _batches(seed, log_h):
     """Tens of thousands of tets: batches of 200 random tets, half of them near-slivers."""
     rng = np.random.default_rng(seed)
     x = np.concatenate(
         [random_tets(rng, 100), near_sliver_tets(rng, 100, 10.0 ** rng.uniform(log_h, 0, 100))]
     )
     check_invariants(x, random_frames(rng, len(x)), tol=1e-13 / quality(x))
+
+
+@budgets(100)
+def test_property_batches(n_examples):
+    cases = given(seed=st.integers(0, 2**32 - 1), log_h=st.floats(-6.0, 0.0))
+    settings(max_examples=n_examples, deadline=None)(cases(_batches))()

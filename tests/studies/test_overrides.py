@@ -125,7 +125,13 @@ def test_cli_unknown_key_exits_2_with_one_line(capsys):
     assert "material.nuu: unknown key" in err and "\n" not in err
 
 
-def test_cli_compare_accepts_set(tmp_path, capsys):
+def test_cli_compare_accepts_set(tmp_path, capsys, monkeypatch):
+    from studies import compare_output
+
+    def no_render(cmp, path):  # the figure is test_compare's; this test is about --set
+        raise RuntimeError("not rendered here")
+
+    monkeypatch.setattr(compare_output, "render_comparison", no_render)
     out = tmp_path / "cmp"
     args = ["compare", "cantilever", "--json", "--out", str(out)]
     assert main([*args, "--set", "mesh.divisions=[6,1,1]"]) == 0

@@ -209,9 +209,11 @@ def test_local_cluster_survives_a_killed_worker_and_resumes(tmp_path):
     marker = tmp_path / "marker"
     marker.mkdir()
     out = tmp_path / "out"
-    divs = [[4, 1, 1], [5, 1, 1], [6, 1, 1], [7, 1, 1]]
-    spec = parse_sweep(tiny(**{"mesh.divisions": divs}))
-    work = partial(_marked_case, str(marker), [6, 1, 1])
+    # the cheapest cases that still show it: one model, the other worker finishing two cases
+    # while the victim waits to be killed
+    divs = [[4, 1, 1], [5, 1, 1], [6, 1, 1]]
+    spec = parse_sweep(tiny(models=("fem-p1",), **{"mesh.divisions": divs}))
+    work = partial(_marked_case, str(marker), [5, 1, 1])
     stop = threading.Event()
     killer = threading.Thread(target=_kill_victim, args=(marker, stop), daemon=True)
     killer.start()
@@ -220,19 +222,18 @@ def test_local_cluster_survives_a_killed_worker_and_resumes(tmp_path):
     finally:
         stop.set()
     assert (marker / "killed").exists(), "the victim case never ran"
-    assert run.errors == {} and run.computed == 4
+    assert run.errors == {} and run.computed == 3
     calls = [json.loads(line)["mesh.divisions"] for line in (marker / "calls.log").open()]
     # the killed case ran twice (killed, then rescheduled by dask); every other case once
-    assert sorted(map(tuple, calls)) == sorted(map(tuple, divs + [[6, 1, 1]]))
-    assert set(run.table["status"]) == {"ok"} and len(case_files(out)) == 4
+    assert sorted(map(tuple, calls)) == sorted(map(tuple, divs + [[5, 1, 1]]))
+    assert set(run.table["status"]) == {"ok"} and len(case_files(out)) == 3
     # the same numbers as in-process (deterministic solves)
     local = run_sweep(spec, tmp_path / "local", progress=False, figures=False)
-    cols = ["probe:tip:uz", "rel_l2"]
-    np.testing.assert_allclose(run.table[cols], local.table[cols], rtol=1e-12)
+    np.testing.assert_allclose(run.table["probe:tip:uz"], local.table["probe:tip:uz"], rtol=1e-12)
     before = case_files(out)  # a rerun computes nothing
     again = run_sweep(spec, out, workers=2, progress=False, figures=False, work=work)
-    assert (again.computed, again.cached) == (0, 4) and case_files(out) == before
-    assert len((marker / "calls.log").read_text().splitlines()) == 5
+    assert (again.computed, again.cached) == (0, 3) and case_files(out) == before
+    assert len((marker / "calls.log").read_text().splitlines()) == 4
 
 
 def test_joins_an_existing_scheduler(tmp_path):
