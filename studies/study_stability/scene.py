@@ -33,7 +33,7 @@ from springfem.errors import SolverError
 from ..registry import StudyContext, StudyOutput, Table
 from ..tables import write_table
 from ..user_scene import body_size, case_scene, scene_case, scene_label
-from .cases import spring_options
+from .cases import _inverted, _system, measure_critical_step, spring_options
 
 VERSION = 1
 
@@ -70,49 +70,12 @@ def scene_methods(law: str) -> dict[str, tuple[str, ...]]:
     return {"dt": SPRINGS, "load": (*SPRINGS, f"fem-{law}"), "map": SPRINGS}
 
 
-def _system(scene, method: str):
-    if method.startswith("spring-"):
-        from springmodel.model import SpringModel
-
-        return SpringModel(scene, spring_options(scene, method), parallel=False)
-    from reference_fem.explicit import ExplicitFem
-
-    return ExplicitFem(scene, law=method.split("-", 1)[1])
-
-
-def _inverted(scene, u: np.ndarray) -> int:
-    return int((scene.mesh.volumes(scene.mesh.points + u.reshape(-1, 3)) <= 0).sum())
-
-
 def dt_work(case: dict) -> dict:
     """Predicted and measured critical explicit step of one method (loads off)."""
-    from springfem.mechanics import explicit, stable_time_step
-
     scene = case_scene(case, 0.0)
     system = _system(scene, case["method"])
-    dt_pred, _ = stable_time_step(system)
-    rng = np.random.default_rng(0)
-    v0 = 1e-6 * rng.standard_normal(system.x0.shape)
-    v0.ravel()[system.fixed_dofs] = 0.0
-
-    def stable(f: float) -> bool:
-        try:
-            explicit(
-                system, dt=f * dt_pred, steps=case["steps"], v_init=v0, record_every=case["steps"]
-            )
-            return True
-        except SolverError:
-            return False
-
-    lo, hi = 0.5, 2.0
-    if not stable(lo):
-        return {"dt_pred": dt_pred, "dt_measured": float("nan"), "ratio": float("nan")}
-    if stable(hi):
-        return {"dt_pred": dt_pred, "dt_measured": hi * dt_pred, "ratio": hi}
-    for _ in range(case["bisections"]):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
-    return {"dt_pred": dt_pred, "dt_measured": lo * dt_pred, "ratio": lo}
+    dt_pred, _, ratio = measure_critical_step(system, case["steps"], case["bisections"])
+    return {"dt_pred": dt_pred, "dt_measured": ratio * dt_pred, "ratio": ratio}
 
 
 def load_work(case: dict) -> dict:
