@@ -12,6 +12,7 @@ from springfem.scene import Scene, scene_from_dict
 from springmodel.options import SpringOptions
 
 from ..metrics import timoshenko_tip_deflection
+from .critical_step import measure_critical_step
 
 SPRING_VARIANTS = ("energy", "cosine")
 #: The exact spring element of issue 10 (method ``spring-exact``; DESIGN §4b).
@@ -114,52 +115,6 @@ def _inverted(scene: Scene, u: np.ndarray) -> int:
 
 
 # ----------------------------------------------------------------------- critical step
-
-
-def measure_critical_step(system, steps: int, bisections: int) -> tuple[float, float, float]:
-    """Bisect the largest stable explicit step of ``system`` (loads off) in ``[0.5, 2]`` dt_crit.
-
-    A step is stable when ``steps`` central-difference steps from a tiny random velocity do
-    not blow up (no :class:`SolverError`).
-
-    Parameters
-    ----------
-    system
-        A :class:`~springfem.mechanics.MechanicalSystem`.
-    steps
-        Steps per trial run.
-    bisections
-        Bisections of the bracket.
-
-    Returns
-    -------
-    dt_pred, omega_max, ratio
-        The predicted step ``2 / omega_max``, ``omega_max``, and the measured step over the
-        predicted one (``nan``: unstable at 0.5; ``2.0``: stable at the top of the bracket).
-    """
-    from springfem.mechanics import explicit, stable_time_step
-
-    dt_pred, omega = stable_time_step(system)
-    rng = np.random.default_rng(0)
-    v0 = 1e-6 * rng.standard_normal(system.x0.shape)
-    v0.ravel()[system.fixed_dofs] = 0.0
-
-    def stable(f: float) -> bool:
-        try:
-            explicit(system, dt=f * dt_pred, steps=steps, v_init=v0, record_every=steps)
-            return True
-        except SolverError:
-            return False
-
-    lo, hi = 0.5, 2.0
-    if not stable(lo):
-        return dt_pred, omega, float("nan")
-    if stable(hi):
-        return dt_pred, omega, hi
-    for _ in range(bisections):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
-    return dt_pred, omega, lo
 
 
 def critical_step_case(case: dict) -> dict:

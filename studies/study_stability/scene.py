@@ -33,7 +33,8 @@ from springfem.errors import SolverError
 from ..registry import StudyContext, StudyOutput, Table
 from ..tables import write_table
 from ..user_scene import body_size, case_scene, scene_case, scene_label
-from .cases import _inverted, _system, measure_critical_step, spring_options
+from .cases import _inverted, _system, spring_options
+from .critical_step import measure_critical_step
 
 VERSION = 1
 
