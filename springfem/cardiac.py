@@ -15,7 +15,7 @@ deformation has bent.
   facet is the 6-node triangle ``x(xi, eta) = sum_k N_k x_k`` through its three vertices and
   its three edge (midside) nodes, so the volume is the one the field itself encloses. The
   integrand ``(x - c) . (x_xi x x_eta)`` is a polynomial of degree 2 + 1 + 1 = 4 in the
-  reference coordinates; :func:`triangle_rule` (Radon's 7 points, exact to degree 5)
+  reference coordinates; :func:`triangle_rule` (scikit-fem's 7-point rule, exact to degree 5)
   integrates it exactly. The rest mesh's midside nodes are the edge midpoints (the gmsh
   ventricle is a linear mesh: its P2 geometry is straight-sided), so at rest both methods
   give the same volume.

@@ -23,7 +23,7 @@ FACET_EDGES = ((0, 1), (1, 2), (2, 0))
 
 
 def triangle_rule() -> tuple[np.ndarray, np.ndarray]:
-    """Radon's 7-point rule on the reference triangle ``{xi, eta >= 0, xi + eta <= 1}``.
+    """scikit-fem's degree-5 rule on the reference triangle ``{xi, eta >= 0, xi + eta <= 1}``.
 
     Returns
     -------
@@ -37,25 +37,21 @@ def triangle_rule() -> tuple[np.ndarray, np.ndarray]:
     >>> round(float(w.sum()), 15), round(float(w @ (p[:, 0] ** 2 * p[:, 1] ** 3)), 12)
     (0.5, 0.002380952381)
     """
-    r = np.sqrt(15.0)
-    a, b = (6.0 - r) / 21.0, (6.0 + r) / 21.0
-    pts = [(1 / 3, 1 / 3), (a, a), (1 - 2 * a, a), (a, 1 - 2 * a),
-           (b, b), (1 - 2 * b, b), (b, 1 - 2 * b)]  # fmt: skip
-    w = [9 / 80] + [(155.0 - r) / 2400.0] * 3 + [(155.0 + r) / 2400.0] * 3
-    return np.array(pts), np.array(w)
+    from skfem.quadrature import get_quadrature
+    from skfem.refdom import RefTri
+
+    X, W = get_quadrature(RefTri, 5)
+    return X.T, W
 
 
 def _p2_shapes(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """6-node triangle shape functions ``(q, 6)`` and their (xi, eta) derivatives ``(q, 6, 2)``."""
-    xi, eta = p[:, 0], p[:, 1]
-    lam = np.stack([1.0 - xi - eta, xi, eta], axis=1)  # barycentric coordinates
-    dlam = np.array([[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])  # d lam_i / d(xi, eta)
-    N = [lam[:, i] * (2 * lam[:, i] - 1) for i in range(3)]
-    dN = [(4 * lam[:, i] - 1)[:, None] * dlam[i] for i in range(3)]
-    for i, j in FACET_EDGES:
-        N.append(4 * lam[:, i] * lam[:, j])
-        dN.append(4 * (lam[:, j, None] * dlam[i] + lam[:, i, None] * dlam[j]))
-    return np.stack(N, axis=1), np.stack(dN, axis=1)
+    """scikit-fem's 6-node triangle (``ElementTriP2``: vertices, then the edge nodes of
+    :data:`FACET_EDGES`) shape functions ``(q, 6)`` and their derivatives ``(q, 6, 2)``."""
+    from skfem import ElementTriP2
+
+    e = ElementTriP2()
+    basis = [e.lbasis(p.T, i) for i in range(6)]
+    return np.stack([b[0] for b in basis], axis=1), np.stack([b[1].T for b in basis], axis=1)
 
 
 def straight_facet_nodes(x: np.ndarray, tris: np.ndarray) -> np.ndarray:
