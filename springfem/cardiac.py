@@ -222,7 +222,7 @@ class PressureVolume:
         """
         out = cavity_summary(self.mesh, u)
         if state is not None and self.to_facet_nodes is not None:
-            v0, v1 = self._rest(), self.volume(state)
+            v0, v1 = self.rows[0][2], self.volume(state)  # rows[0]: the rest volume
             out = {"initial": v0, "final": v1, "relative_change": (v1 - v0) / v0,
                    "method": QUADRATIC, "final_flat": out["final"]}  # fmt: skip
         out["pressure_volume"] = [list(r) for r in self.rows]
