@@ -87,7 +87,10 @@ def solve_work(case: dict) -> dict:
         else:
             import reference_fem
 
-            u = reference_fem.solve(scene, order=case["order"]).u_vertices
+            from ..compare_models import model_scene  # a tissue P1: displacement formulation
+
+            fem_scene = model_scene(scene, f"P{case['order']}")
+            u = reference_fem.solve(fem_scene, order=case["order"]).u_vertices
     except SolverError as exc:
         return {"status": "fails", "message": str(exc)[:200]}
     return {"status": "ok", "u": np.asarray(u)}

@@ -94,7 +94,11 @@ def point_work(case: dict) -> dict:
             import reference_fem
 
             order, law = fem[method]
-            u = reference_fem.solve(scene, order=order, law=law).u_vertices
+            from ..compare_models import model_scene  # a tissue P1: displacement formulation
+
+            u = reference_fem.solve(
+                model_scene(scene, f"P{order}"), order=order, law=law
+            ).u_vertices
         else:
             u, _ = _solve(scene, method, setting)
     except SolverError as exc:

@@ -91,7 +91,10 @@ def load_work(case: dict) -> dict:
         else:
             import reference_fem
 
-            u = reference_fem.solve(scene, order=1, law=method.split("-", 1)[1]).u_vertices
+            from ..compare_models import model_scene  # a tissue P1: displacement formulation
+
+            law = method.split("-", 1)[1]
+            u = reference_fem.solve(model_scene(scene, "P1"), order=1, law=law).u_vertices
     except SolverError as exc:
         return {"status": "diverged", "message": str(exc)[:160], "u/size": float("nan")}
     ratio = float(np.linalg.norm(u, axis=1).max() / body_size(scene))

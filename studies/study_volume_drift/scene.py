@@ -96,14 +96,16 @@ def static_work(case: dict) -> dict:
         else:
             import reference_fem
 
+            from ..compare_models import model_scene  # a tissue P1: displacement formulation
+
             if method == "fem-scene":
                 sol = reference_fem.solve(scene)
             elif method == "fem-p1":
                 small = scene.material.law in ("linear", "neo-hookean", "transverse-linear")
                 law = linear_law(scene) if small else None  # a tissue law: its own, at P1
-                sol = reference_fem.solve(scene, order=1, law=law)
+                sol = reference_fem.solve(model_scene(scene, "P1"), order=1, law=law)
             else:
-                sol = reference_fem.solve(scene, order=1, law="neo-hookean")
+                sol = reference_fem.solve(model_scene(scene, "P1"), order=1, law="neo-hookean")
             x = scene.mesh.points + sol.u_vertices
             extra["law"] = sol.result.law
             if "volume_p2" in sol.result.info:
