@@ -34,7 +34,10 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from springfem.mesh import tet_volumes
 from springfem.volumetric import volumetric_energy
+
+from .springs.points import scatter
 
 # a = x1 - x0, b = x2 - x0, c = x3 - x0 from the nodes: edge = _T @ nodes
 _T = np.array([[-1.0, 1, 0, 0], [-1, 0, 1, 0], [-1, 0, 0, 1]])
@@ -43,7 +46,7 @@ _EPS[0, 1, 2] = _EPS[1, 2, 0] = _EPS[2, 0, 1] = 1.0
 _EPS[0, 2, 1] = _EPS[2, 1, 0] = _EPS[1, 0, 2] = -1.0
 
 
-def tet_volumes(x: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def tet_volumes_and_gradients(x: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Signed volumes of the tets and their gradients.
 
     Parameters
@@ -78,7 +81,7 @@ def tet_volume_hessians(x: np.ndarray, tets: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     x, tets
-        As in :func:`tet_volumes`.
+        As in :func:`tet_volumes_and_gradients`.
 
     Returns
     -------
@@ -114,31 +117,32 @@ class NodalVolume:
         tets = np.array(tets, dtype=np.int64)
         self.n = int(np.asarray(X).shape[0])
         self.kind = kind
-        V0, _ = tet_volumes(np.asarray(X, float), tets)
+        V0 = tet_volumes(np.asarray(X, float), tets)
         flip = V0 < 0  # orient every tet positively (the volume measure is signed)
         tets[flip] = tets[flip][:, [0, 2, 1, 3]]
         self.tets = tets
         V0 = np.abs(V0)
-        self.V0 = V0
         self.Va0 = self._to_nodes(V0 / 4.0)
         kV = self._to_nodes(np.asarray(kappa, float) * V0 / 4.0)
         safe = np.where(self.Va0 > 0, self.Va0, 1.0)
         self.kappa = kV / safe  # (n,) nodal bulk modulus
         self.Va0_safe = safe
-        self._node = self.tets.ravel()
 
     def _to_nodes(self, per_element: np.ndarray) -> np.ndarray:
         """Sum ``per_element (m,)`` into each of the element's four nodes, ``(n,)``."""
         return np.bincount(self.tets.ravel(), np.repeat(per_element, 4), minlength=self.n)
 
-    def ratios(self, x: np.ndarray) -> np.ndarray:
-        """Nodal volume ratios ``J_a = V_a / V_a0`` ``(n,)`` (1 for nodes in no element)."""
-        V, _ = tet_volumes(np.asarray(x, float), self.tets)
+    def _ratios_of(self, V: np.ndarray) -> np.ndarray:
+        """``J_a`` from the element volumes ``V (m,)``."""
         return np.where(self.Va0 > 0, self._to_nodes(V / 4.0) / self.Va0_safe, 1.0)
 
+    def ratios(self, x: np.ndarray) -> np.ndarray:
+        """Nodal volume ratios ``J_a = V_a / V_a0`` ``(n,)`` (1 for nodes in no element)."""
+        return self._ratios_of(tet_volumes(np.asarray(x, float), self.tets))
+
     def _state(self, x):
-        V, dV = tet_volumes(np.asarray(x, float), self.tets)
-        J = np.where(self.Va0 > 0, self._to_nodes(V / 4.0) / self.Va0_safe, 1.0)
+        V, dV = tet_volumes_and_gradients(np.asarray(x, float), self.tets)
+        J = self._ratios_of(V)
         U, dU, d2U = volumetric_energy(J, self.kappa, self.kind)
         return dV, U, dU, d2U
 
@@ -147,18 +151,11 @@ class NodalVolume:
         _, U, _, _ = self._state(x)
         return float(np.dot(self.Va0, U))
 
-    def element_pressures(self, x: np.ndarray) -> np.ndarray:
-        """``pbar_e``: the mean nodal pressure ``U'(J_a)`` of each element's nodes ``(m,)``."""
-        _, _, dU, _ = self._state(x)
-        return dU[self.tets].mean(axis=1)
-
     def forces(self, x: np.ndarray) -> np.ndarray:
         """Nodal forces ``-dW/dx`` ``(n, 3)`` (N)."""
         dV, _, dU, _ = self._state(x)
         pbar = dU[self.tets].mean(axis=1)
-        fe = (-pbar[:, None, None] * dV).reshape(-1, 3)
-        idx = self._node
-        return np.stack([np.bincount(idx, fe[:, c], minlength=self.n) for c in range(3)], 1)
+        return scatter(-pbar[:, None, None] * dV, self.tets, self.n)
 
     def tangent(self, x: np.ndarray) -> sp.csr_matrix:
         """Tangent ``d^2W/dx^2`` ``(3n, 3n)`` (CSR, symmetric).

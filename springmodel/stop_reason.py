@@ -22,7 +22,7 @@ Examples
 >>> X = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
 >>> e = build_spring_elements(X, np.array([[0, 1, 2, 3]]), np.eye(3)[None],
 ...                           material=Material("linear", 1.0e4, 0.3))
->>> m = axis_measures(X @ np.diag([1.1, 1.0, 1.0]), X, e)
+>>> m = axis_measures(X @ np.diag([1.1, 1.0, 1.0]), e)
 >>> round(m["strain_max"], 6), round(m["shear_deg"], 6)
 (0.1, 0.0)
 """
@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from springfem.errors import SolverError
+from springfem.mesh import tet_volumes
 
 from .elements import SpringElements
 from .options import SpringOptions
@@ -41,20 +42,15 @@ from .rest_geometry import TORSION_PAIRS
 ENERGY_TORSION_LIMIT_DEG = 40.0
 
 
-def _triple(x: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    X = x[tets]
-    return np.linalg.det(X[:, 1:] - X[:, :1])
-
-
-def axis_measures(x: np.ndarray, x0: np.ndarray, elements: SpringElements) -> dict[str, float]:
+def axis_measures(x: np.ndarray, elements: SpringElements) -> dict[str, float]:
     """Extreme axis strains, shear angle and volume ratios at positions ``x``.
 
     Parameters
     ----------
-    x, x0
-        Node positions ``(n, 3)`` and their rest positions.
+    x
+        Node positions ``(n, 3)``.
     elements
-        Spring rest data.
+        Spring rest data (its rest volumes ``V0`` give the volume ratios).
 
     Returns
     -------
@@ -71,7 +67,7 @@ def axis_measures(x: np.ndarray, x0: np.ndarray, elements: SpringElements) -> di
         c = np.clip(np.einsum("kc,kc->k", u[:, a], u[:, b]), -1.0, 1.0)
         g = np.abs(np.arcsin(c) - np.arcsin(np.clip(elements.c0[:, p], -1.0, 1.0)))
         shear = max(shear, float(np.degrees(g).max()))
-    J = _triple(x, elements.tets) / _triple(x0, elements.tets)  # the tets' volume ratios
+    J = tet_volumes(x, elements.tets) / elements.V0  # the tets' volume ratios
     return {
         "strain_min": float(strain.min()),
         "strain_max": float(strain.max()),
@@ -100,7 +96,7 @@ def stop_reason(
         e.g. ``axis strains -37% to +53%, shear angle up to 53 deg, volume ratio 0.961 to
         1.044`` and the readings that apply.
     """
-    m = axis_measures(x, x0, elements)
+    m = axis_measures(x, elements)
     text = (
         f"axis strains {m['strain_min']:+.0%} to {m['strain_max']:+.0%}, shear angle up to "
         f"{m['shear_deg']:.0f} deg, volume ratio {m['J_min']:.3g} to {m['J_max']:.3g}"
