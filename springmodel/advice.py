@@ -59,7 +59,7 @@ def fixes(options: SpringOptions, transverse: bool) -> list[str]:
     out = []
     if not options.axis_volume:
         out.append('volume = "axes"')
-    if options.torsion not in ("energy", "shear"):
+    if not options.energy_torsion:
         out.append('torsion = "energy"')
     if options.calibration != "exact":
         out.append('calibration = "exact"')
@@ -97,7 +97,7 @@ def model_warnings(
     cause = []
     if options.barycentric_volume:
         cause.append("the barycentric volume spring depends on the element shapes")
-    if options.torsion not in ("energy", "shear", "off"):
+    if not (options.energy_torsion or options.torsion == "off"):
         cause.append(f"{options.torsion} torsion is not the gradient of an energy")
     if transverse and not options.coupling:
         cause.append("an anisotropic material needs the Poisson-coupling springs")

@@ -51,6 +51,7 @@ from numba import njit
 
 from springfem.blocks import BLOCK, block_drivers, compile_named, variant_id
 
+from .options import ENERGY_TORSION
 from .springs.shear import SHEAR_FLOOR
 
 PRECISIONS = ("float64", "mixed", "float32")
@@ -131,8 +132,6 @@ class Variant:
 
 _AXIAL = {"linear": 0, "quadratic": 1, "cubic": 1, "stress-scaled": 2}
 _TORSION = {"off": 0, "angle": 1, "cosine": 2, "cubic": 3, "energy": 4, "shear": 5}
-#: Torsion laws that are energies of the cosine (read ``k`` only).
-ENERGY_TORSION = ("energy", "shear")
 _VOLUMETRIC = {"quadratic": 0, "log": 1, "simo-taylor": 2}
 
 

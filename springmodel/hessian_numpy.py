@@ -96,7 +96,7 @@ def axis_hessian(
 
     # torsion, U = k phi(c): k (phi'' grad c grad c^T + phi' grad^2 c); energy law
     # phi = (c - c0)^2 / 2, shear law phi = delta^2 / 2 (springmodel.springs.shear)
-    if options.torsion in ("energy", "shear"):
+    if options.energy_torsion:
         for p, (l, q) in enumerate(TORSION_PAIRS):
             A, B = L[:, l, None], L[:, q, None]
             ua, ub = u[:, l], u[:, q]

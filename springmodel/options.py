@@ -24,6 +24,9 @@ from springfem.volumetric import VOLUMETRIC_ENERGIES, Volumetric
 
 AxialLaw = Literal["linear", "quadratic", "cubic", "stress-scaled"]
 TorsionLaw = Literal["off", "angle", "cosine", "cubic", "energy", "shear"]
+#: Torsion laws that are energies of the axis cosine, ``U = k phi(c)`` (conservative, with an
+#: analytic Hessian; the same small-strain tangent).
+ENERGY_TORSION = ("energy", "shear")
 LMSRule = Literal["spec", "abs"]
 Calibration = Literal["analytic", "analytic-lsq", "nnls", "exact"]
 SolverKind = Literal["static", "linear", "explicit", "implicit"]
@@ -183,6 +186,11 @@ class SpringOptions:
     def barycentric_volume(self) -> bool:
         """The seed's barycentric volume springs are on (``volume = true``)."""
         return self.volume is True
+
+    @property
+    def energy_torsion(self) -> bool:
+        """The torsion law is an energy of the axis cosine (:data:`ENERGY_TORSION`)."""
+        return self.torsion in ENERGY_TORSION
 
     @property
     def axis_volume(self) -> bool:

@@ -46,6 +46,7 @@ import numpy as np
 from springfem.blocks import BLOCK, block_layout, chunks, set_column
 
 from .fastkernels import _PAIRS, PRECISIONS, Variant, spring_kernel
+from .options import SpringOptions
 
 #: ``SpringKernel(parallel=None)`` runs serially unless this is on: two threads were never
 #: faster than one in this project's measurements on its shared 2-core machine (module
@@ -141,15 +142,10 @@ def variant_of(elements, options, precision: str = "float64", velocity: bool = T
     ValueError
         For an unknown axial or torsion law or precision.
     """
-    if options.axial not in ("linear", "quadratic", "cubic", "stress-scaled"):
-        raise ValueError(
-            f"axial law {options.axial!r} is not one of linear, quadratic, cubic, stress-scaled"
-        )
-    if options.torsion not in ("off", "angle", "cosine", "cubic", "energy", "shear"):
-        raise ValueError(
-            f"torsion law {options.torsion!r} is not one of off, angle, cosine, cubic, energy, "
-            "shear"
-        )
+    for part in ("axial", "torsion"):
+        law, valid = getattr(options, part), SpringOptions.choices(part)
+        if law not in valid:
+            raise ValueError(f"{part} law {law!r} is not one of {', '.join(valid)}")
     if precision not in PRECISIONS:
         raise ValueError(f"precision {precision!r} is not one of {', '.join(PRECISIONS)}")
     b2, b3 = (float(b) for b in options.axial_coefficients)
@@ -169,7 +165,8 @@ def variant_of(elements, options, precision: str = "float64", velocity: bool = T
         b2=b2 if poly else 0.0,
         b3=b3 if options.axial == "cubic" else 0.0,
         bt=float(options.torsion_cubic) if options.torsion == "cubic" else 0.0,
-        c0=options.torsion in ("energy", "shear", "cosine", "cubic") and needs_c0(elements),
+        c0=(options.energy_torsion or options.torsion in ("cosine", "cubic"))
+        and needs_c0(elements),
         precision=precision,
     )
 

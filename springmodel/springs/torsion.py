@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..elements import SpringElements
-from ..options import SpringOptions
+from ..options import ENERGY_TORSION, SpringOptions
 from ..rest_geometry import TORSION_PAIRS
 from .points import add_pair_forces, axis_vectors, distribute, intersection_points, scatter
 from .shear import shear_derivatives
@@ -64,7 +64,7 @@ def torsion_forces(x: np.ndarray, elements: SpringElements, options: SpringOptio
         ul, um = u[:, l], u[:, m]
         c = np.einsum("kc,kc->k", ul, um)  # eq. 2.32
         dc = c - elements.c0[:, p]
-        if law in ("energy", "shear"):  # -dU/dx, U = k phi(c): dc is phi'(c)
+        if law in ENERGY_TORSION:  # -dU/dx, U = k phi(c): dc is phi'(c)
             if law == "shear":
                 dc, _ = shear_derivatives(c, elements.c0[:, p])
             k = elements.k_torsion[:, p]

@@ -78,7 +78,7 @@ def is_conservative(options: SpringOptions, volume_form: VolumeForm | None = Non
     """
     return (
         options.axial in ("linear", "quadratic", "cubic")
-        and options.torsion in ("off", "energy", "shear")
+        and (options.torsion == "off" or options.energy_torsion)
         and (
             not options.barycentric_volume
             or resolve_volume_form(options, volume_form) == "gradient"
