@@ -127,6 +127,7 @@ class NodalVolume:
         safe = np.where(self.Va0 > 0, self.Va0, 1.0)
         self.kappa = kV / safe  # (n,) nodal bulk modulus
         self.Va0_safe = safe
+        self._pattern = None  # the tets' CSR pattern, on the first tangent
 
     def _to_nodes(self, per_element: np.ndarray) -> np.ndarray:
         """Sum ``per_element (m,)`` into each of the element's four nodes, ``(n,)``."""
@@ -184,10 +185,21 @@ class NodalVolume:
         pbar = dU[self.tets].mean(axis=1)
         He = tet_volume_hessians(x, self.tets) * pbar[:, None, None, None, None]
         He = He.transpose(0, 1, 3, 2, 4).reshape(m, 12, 12)
-        r = np.broadcast_to(cols[:, :, None], (m, 12, 12))
-        c = np.broadcast_to(cols[:, None, :], (m, 12, 12))
-        K2 = sp.csr_matrix((He.ravel(), (r.ravel(), c.ravel())), shape=(3 * self.n, 3 * self.n))
+        K2 = self._element_sum(np.ascontiguousarray(He))
         return (K1 + K2).tocsr()
+
+    def _element_sum(self, Ke: np.ndarray) -> sp.csr_matrix:
+        """``sum_e`` of ``12 x 12`` element matrices ``Ke (m, 12, 12)`` into the ``3n x 3n``
+        CSR pattern of the tets (built once, as the spring Hessian's)."""
+        from .hessian_numba import _scatter_add
+        from .hessian_pattern import csr_pattern
+
+        if self._pattern is None:
+            self._pattern = csr_pattern(self.tets, self.n)
+        indptr, indices, index_map = self._pattern
+        data = np.zeros(indices.size)
+        _scatter_add(data, index_map, Ke)
+        return sp.csr_matrix((data, indices, indptr), shape=(3 * self.n, 3 * self.n))
 
 
 class NodalPart:
