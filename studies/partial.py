@@ -27,12 +27,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from springfem.cardiac import cavity_summary, is_ventricle
 from springfem.errors import SolverError
-from springfem.result import Result, volume_summary
+from springfem.result import Result
 from springfem.scene import Scene
 
-from .solve import Solution
+from .solve import Solution, state_result
 
 #: Displacement components by index, for the table's column names.
 COMPONENTS = "xyz"
@@ -67,23 +66,7 @@ def partial_solution(
     u = np.asarray(exc.state, dtype=float).reshape(-1, 3)
     if u.shape[0] != scene.mesh.n_points or not np.isfinite(u).all():
         return None
-    res = Result(
-        scene=scene.name,
-        model=model,
-        element="partial",
-        law="",
-        counts={"nodes": scene.mesh.n_points, "tets": scene.mesh.n_tets},
-        probes=scene.probe_displacements(u),
-        volume=volume_summary(scene.mesh, u),
-        reactions={},
-        wall_time=float(wall_time),
-        converged=False,
-        iterations=0,
-        info={"error": str(exc), "load_factor": float(load_factor)},
-        status="partial",
-    )
-    if is_ventricle(scene.mesh):
-        res.info["cavity"] = cavity_summary(scene.mesh, u)
+    res = state_result(scene, model, u, exc, "partial", "partial", wall_time=wall_time)
     return Solution(res, u)
 
 

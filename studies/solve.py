@@ -163,6 +163,66 @@ def _write(out: Path, *args, **kw) -> tuple[Path, Path]:
         raise InputError(f"cannot write to {out}: {exc.strerror or exc}") from None
 
 
+def state_result(
+    scene: Scene,
+    model: str,
+    u: np.ndarray,
+    exc: Exception,
+    element: str,
+    status: str,
+    info: dict | None = None,
+    wall_time: float = float("nan"),
+) -> Result:
+    """The :class:`Result` of a displacement state a failed or stopped solve left behind.
+
+    Parameters
+    ----------
+    scene
+        The scene solved.
+    model
+        ``spring`` or ``fem``.
+    u
+        The state's nodal displacement ``(n, 3)``.
+    exc
+        The solve's error (its text goes to ``info["error"]``; a ``load_factor`` on it is
+        the load of this state).
+    element, status
+        The result's ``element`` and ``status`` labels.
+    info
+        More ``info`` entries (after ``error``).
+    wall_time
+        Seconds the solve ran.
+
+    Returns
+    -------
+    Result
+        Probes and volume change of ``u`` (none when it is not finite), ``load_factor``
+        and, on a ventricle, the cavity at that load.
+    """
+    finite = bool(np.isfinite(u).all())
+    res = Result(
+        scene=scene.name,
+        model=model,
+        element=element,
+        law="",
+        counts={"nodes": scene.mesh.n_points, "tets": scene.mesh.n_tets},
+        probes=scene.probe_displacements(u),
+        volume=volume_summary(scene.mesh, u) if finite else {},
+        reactions={},
+        wall_time=float(wall_time),
+        converged=False,
+        iterations=0,
+        info={"error": str(exc), **(info or {})},
+        status=status,
+    )
+    load_factor = getattr(exc, "load_factor", None)
+    if load_factor is not None and finite:
+        res.info["load_factor"] = float(load_factor)  # the load of this state
+        if is_ventricle(scene.mesh):
+            res.info["cavity"] = cavity_summary(scene.mesh, u)
+    return res
+
+
 def write_last_good_state(
     out: Path, scene: Scene, model: str, exc: SolverError | SolveStopped
 ) -> str:
@@ -173,28 +233,12 @@ def write_last_good_state(
     """
     initial = exc.state is None
     u = np.zeros((scene.mesh.n_points, 3)) if initial else np.asarray(exc.state).reshape(-1, 3)
-    finite = bool(np.isfinite(u).all())
     stopped = isinstance(exc, SolveStopped)
-    res = Result(
-        scene=scene.name,
-        model=model,
-        element="last-good-state",
-        law="",
-        counts={"nodes": scene.mesh.n_points, "tets": scene.mesh.n_tets},
-        probes=scene.probe_displacements(u),
-        volume=volume_summary(scene.mesh, u) if finite else {},
-        reactions={},
-        wall_time=float("nan"),
-        converged=False,
-        iterations=0,
-        info={"error": str(exc), "state": "initial" if initial else "last good"},
+    res = state_result(
+        scene, model, u, exc, element="last-good-state",
         status=str(exc) if stopped else "failed",
-    )
-    load_factor = getattr(exc, "load_factor", None)
-    if load_factor is not None and finite:
-        res.info["load_factor"] = float(load_factor)  # the load of this state
-        if is_ventricle(scene.mesh):
-            res.info["cavity"] = cavity_summary(scene.mesh, u)
+        info={"state": "initial" if initial else "last good"},
+    )  # fmt: skip
     try:
         write_result(out, res, scene.mesh, u, stem="last_good_state")
     except OSError as err:
