@@ -158,8 +158,8 @@ def _solve(data: dict, path: Path | None, model: str, variant: str | None, parti
     try:
         return solve_scene(scene, model), None
     except SolverError as exc:
-        stopped = partial_solution(scene, model, exc, time.perf_counter() - t0)
-        return (stopped if partial else None), str(exc).splitlines()[0][:200]
+        stopped = partial_solution(scene, model, exc, time.perf_counter() - t0) if partial else None
+        return stopped, str(exc).splitlines()[0][:200]
 
 
 def stretch_case(case: dict) -> dict:
