@@ -88,11 +88,43 @@ def scene_case(table: dict, path: str | None, model: str, level: int) -> dict[st
     }
 
 
-def scene_work(c: dict[str, Any]) -> dict[str, Any]:
-    """Solve one level with one model: probes and the field at the level-1 vertices."""
+def coarse_vertex_index(table: dict, path: str | None, level: int, mesh: TetMesh) -> np.ndarray:
+    """Where each level-1 vertex sits in ``mesh``, the mesh of refinement ``level``.
+
+    Uniform refinement keeps the vertices, so level-1 fields compare across levels.
+
+    Parameters
+    ----------
+    table, path
+        The scene table and its file.
+    level
+        The refinement level of ``mesh``.
+    mesh
+        That level's mesh.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n_1,)`` indices into ``mesh.points``.
+
+    Raises
+    ------
+    AssertionError
+        If a level-1 vertex is not a vertex of ``mesh``.
+    """
+    if level == 1:
+        return np.arange(mesh.n_points)
     from scipy.spatial import cKDTree
 
-    coarse = level_scene(c["table"], c["path"], 1).mesh.points
+    coarse = level_scene(table, path, 1).mesh.points
+    dist, idx = cKDTree(mesh.points).query(coarse)
+    if dist.max() > 1e-9 * float(np.ptp(coarse, axis=0).max()):
+        raise AssertionError("level-1 vertices are not vertices of the refined mesh")
+    return idx
+
+
+def scene_work(c: dict[str, Any]) -> dict[str, Any]:
+    """Solve one level with one model: probes and the field at the level-1 vertices."""
     scene = level_scene(c["table"], c["path"], c["level"])
     if c["model"] == "spring-exact":
         from springmodel.model import solve_spring
@@ -104,9 +136,7 @@ def scene_work(c: dict[str, Any]) -> dict[str, Any]:
     else:
         sol = solve_model(scene, c["model"])
         u, r = sol.u, sol.result
-    dist, idx = cKDTree(scene.mesh.points).query(coarse)
-    if dist.max() > 1e-9 * float(np.ptp(coarse, axis=0).max()):
-        raise AssertionError("level-1 vertices are not vertices of the refined mesh")
+    idx = coarse_vertex_index(c["table"], c["path"], c["level"], scene.mesh)
     return {
         "h": mean_edge(scene.mesh),
         "tets": scene.mesh.n_tets,

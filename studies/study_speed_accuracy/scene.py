@@ -80,9 +80,8 @@ def _scene(table: dict, path: str | None, level: int):
 
 def point_work(case: dict) -> dict:
     """One timed solve of one method on one level: seconds and the level-1 field."""
-    from scipy.spatial import cKDTree
+    from ..study_convergence.scene import coarse_vertex_index
 
-    coarse = _scene(case["table"], case["path"], 1).mesh.points
     scene = _scene(case["table"], case["path"], case["level"])
     method, setting = case["method"], case["setting"]
     fem = fem_methods(scene.material.law)
@@ -104,7 +103,7 @@ def point_work(case: dict) -> dict:
     except SolverError as exc:
         return {"status": "failed", "seconds": time.perf_counter() - t0, "message": str(exc)[:200]}
     seconds = time.perf_counter() - t0
-    _, idx = cKDTree(scene.mesh.points).query(coarse)
+    idx = coarse_vertex_index(case["table"], case["path"], case["level"], scene.mesh)
     return {"status": "ok", "seconds": seconds, "tets": scene.mesh.n_tets, "u": np.asarray(u)[idx]}
 
 
