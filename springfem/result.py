@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from .files import atomic_write_text, jsonable, remove_stale_temp_files
-from .mesh import TetMesh, write_vtu
+from .mesh import TetMesh, displacement_gradients, write_vtu
 
 TIMING_FIELDS = ("wall_time",)
 
@@ -138,12 +138,7 @@ def frame_cell_data(scene, u: np.ndarray) -> dict[str, np.ndarray]:
     True
     """
     mesh = scene.mesh
-    x0 = mesh.points[mesh.tets]
-    x = x0 + np.asarray(u).reshape(-1, 3)[mesh.tets]
-    d0 = x0[:, 1:] - x0[:, :1]  # (m, 3 edges, 3)
-    d = x[:, 1:] - x[:, :1]
-    # F d0_e = d_e for the three edges: F = D D0^-1 with the edges as columns
-    F = np.swapaxes(d, 1, 2) @ np.linalg.inv(np.swapaxes(d0, 1, 2))
+    F = np.eye(3) + displacement_gradients(mesh.points, mesh.tets, u)
     f = np.asarray(scene.frames)[:, 0]
     out = {
         "fiber": f,

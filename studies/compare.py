@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from springfem.errors import InputError, SolverError
+from springfem.mesh import displacement_gradients
 from springfem.scene import Scene
 
 from . import metrics
@@ -161,11 +162,7 @@ def max_principal_strain(scene: Scene, u: np.ndarray) -> float:
     flags large rotations (a rotation by θ gives ``E ≈ θ²/2``), which a linear solution
     cannot represent either.
     """
-    pts, tets = scene.mesh.points, scene.mesh.tets
-    u = np.asarray(u).reshape(-1, 3)
-    Dm = np.swapaxes(pts[tets[:, 1:]] - pts[tets[:, :1]], 1, 2)  # columns: rest edges
-    Du = np.swapaxes(u[tets[:, 1:]] - u[tets[:, :1]], 1, 2)
-    H = Du @ np.linalg.inv(Dm)
+    H = displacement_gradients(scene.mesh.points, scene.mesh.tets, u)
     E = 0.5 * (H + np.swapaxes(H, 1, 2) + np.swapaxes(H, 1, 2) @ H)
     return float(np.abs(np.linalg.eigvalsh(E)).max())
 

@@ -20,7 +20,13 @@ from .colouring import element_colouring
 from .generate import Split, box_mesh
 from .io import mesh_from_meshio, read_mesh, write_vtu
 from .refine import refine_uniform
-from .tetmesh import TetMesh, boundary_facets, mean_ratio_quality, tet_volumes
+from .tetmesh import (
+    TetMesh,
+    boundary_facets,
+    displacement_gradients,
+    mean_ratio_quality,
+    tet_volumes,
+)
 from .topology import topology_notes
 from .validate import MAX_COORDINATE, SLIVER_QUALITY, validate_mesh
 
@@ -37,6 +43,7 @@ __all__ = [
     "read_mesh",
     "refine_uniform",
     "tet_volumes",
+    "displacement_gradients",
     "topology_notes",
     "validate_mesh",
     "write_vtu",

@@ -139,6 +139,35 @@ def tet_volumes(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ij->i", d[:, 0], np.cross(d[:, 1], d[:, 2])) / 6.0
 
 
+def displacement_gradients(points: np.ndarray, tets: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Gradient ``H = du/dX`` of the P1 interpolation of vertex displacements, per tet.
+
+    Parameters
+    ----------
+    points
+        Rest node positions ``(n, 3)``.
+    tets
+        Node indices ``(m, 4)``.
+    u
+        Vertex displacements ``(n, 3)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(m, 3, 3)``; ``H[k, i, j] = du_i / dX_j`` (the deformation gradient is ``I + H``).
+
+    Examples
+    --------
+    >>> X = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    >>> displacement_gradients(X, np.array([[0, 1, 2, 3]]), 0.1 * X[:, [1, 0, 2]])[0, 0]
+    array([0. , 0.1, 0. ])
+    """
+    u = np.asarray(u).reshape(-1, 3)
+    D0 = np.swapaxes(points[tets[:, 1:]] - points[tets[:, :1]], 1, 2)  # columns: rest edges
+    Du = np.swapaxes(u[tets[:, 1:]] - u[tets[:, :1]], 1, 2)
+    return Du @ np.linalg.inv(D0)
+
+
 def mean_ratio_quality(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
     """Mean-ratio quality ``12 (3|V|)^(2/3) / sum of squared edge lengths``, in [0, 1].
 

@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 
 from springfem.errors import SolverError
+from springfem.mesh import displacement_gradients
 
 from ..registry import StudyContext, StudyOutput, Table
 from ..tables import write_table
@@ -141,10 +142,7 @@ def tet_strains(points: np.ndarray, tets: np.ndarray, u: np.ndarray) -> np.ndarr
     numpy.ndarray
         ``(m, 3, 3)``.
     """
-    X, U = points[tets], u[tets]
-    D = np.transpose(X[:, 1:] - X[:, :1], (0, 2, 1))  # columns: edges from vertex 0
-    dU = np.transpose(U[:, 1:] - U[:, :1], (0, 2, 1))
-    G = dU @ np.linalg.inv(D)
+    G = displacement_gradients(points, tets, u)
     return 0.5 * (G + np.transpose(G, (0, 2, 1)))
 
 
