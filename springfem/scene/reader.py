@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import numbers
 from collections.abc import Iterable
 from typing import Any
 
@@ -59,6 +60,11 @@ def suggestion(word: str, known: Iterable[str]) -> str | None:
     """
     close = difflib.get_close_matches(word, sorted(known), n=1, cutoff=SUGGEST_CUTOFF)
     return close[0] if close else None
+
+
+def _is_number(v: Any) -> bool:
+    """A real number that is not a bool (numpy scalars of a programmatic table count)."""
+    return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
 
 
 class TableReader:
@@ -201,20 +207,20 @@ class TableReader:
                 raise self.fail(key, f"must be true or false, got {_show(v)}")
             return v
         if kind in ("float", "int"):
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
+            if not _is_number(v):
                 raise self.fail(key, f"must be a number, got {type(v).__name__}")
-            if kind == "int" and not isinstance(v, int):
+            if kind == "int" and not isinstance(v, numbers.Integral):
                 raise self.fail(key, f"must be an integer, got {_show(v)}")
             self._check_number(key, v, kind == "int", positive, nonneg, v)
-            return float(v) if kind == "float" else int(v)
+            return float(v) if kind == "float" else int(v)  # numpy scalars become Python
         if kind in ("vec", "ivec"):
             if not isinstance(v, list) or (length is not None and len(v) != length):
                 n = f"{length} " if length else ""
                 raise self.fail(key, f"must be a list of {n}numbers, got {_show(v)}")
             for x in v:
-                if isinstance(x, bool) or not isinstance(x, (int, float)):
+                if not _is_number(x):
                     raise self.fail(key, f"must be a list of numbers, got {_show(v)}")
-                if kind == "ivec" and not isinstance(x, int):
+                if kind == "ivec" and not isinstance(x, numbers.Integral):
                     raise self.fail(key, f"must be a list of integers, got {_show(v)}")
                 self._check_number(key, x, kind == "ivec", positive, False, v, "entries ")
             return np.array(v, dtype=np.int64 if kind == "ivec" else float)

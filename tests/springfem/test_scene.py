@@ -266,3 +266,19 @@ def test_model_sections_suggest_their_keys():
     with pytest.raises(SceneError) as info:
         scene_from_dict(data, path="bad.toml")
     assert str(info.value) == "bad.toml: fem.ordr: unknown key; did you mean 'order'?"
+
+
+def test_numpy_scalars_in_a_programmatic_table_are_numbers():
+    # a table built in Python often carries numpy scalars (np.int64 from an array, the
+    # result of arithmetic on numpy values): they are numbers, and bools are still not
+    table = {"name": "np", "material": {"law": "linear", "E": np.float32(1e4), "nu": 0.3},
+             "mesh": {"generator": "box", "size": [1.0, 1.0, np.float64(2.0)],
+                      "divisions": [np.int64(2), np.int32(1), 1]}}  # fmt: skip
+    scene = scene_from_dict(table)
+    assert scene.mesh.n_tets == 2 * 1 * 1 * 6 and scene.material.E == pytest.approx(1e4)
+    table["mesh"]["divisions"] = [np.bool_(True), 1, 1]
+    with pytest.raises(SceneError, match="mesh.divisions: must be a list of numbers"):
+        scene_from_dict(table)
+    table["mesh"]["divisions"] = [np.float64(2.0), 1, 1]
+    with pytest.raises(SceneError, match="mesh.divisions: must be a list of integers"):
+        scene_from_dict(table)
