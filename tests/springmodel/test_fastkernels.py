@@ -132,7 +132,12 @@ def test_kernel_matches_oracle(mesh_state, options):
 @pytest.mark.slow
 @pytest.mark.parametrize("options", list(all_variants()), ids=label)
 def test_every_variant_matches_oracle(mesh_state, options):
-    _, el, x, v = mesh_state
+    points, el, x, v = mesh_state
+    if options.axis_volume and options.volumetric == "log":
+        # U = kappa/2 ln(J)^2 is undefined for inverted elements, which the large random
+        # deformation has (both backends give NaN there): a fifth of it inverts none
+        x = points + 0.2 * (x - points)
+        assert np.isfinite(springs.internal_forces(x, v, el, options)).all()
     check(el, x, v, options)
 
 
