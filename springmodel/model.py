@@ -34,8 +34,10 @@ from .advice import scene_warnings
 from .elements import SpringElements, build_spring_elements
 from .nodal_volume import NodalPart
 from .options import SpringOptions
+from .run_series import dynamic_series, end_of_run
 from .spring_kernel import SpringKernel
 from .springs import is_conservative, lms_update, volume_measures
+from .stiffening import StiffeningPart, stiffening_modulus
 from .stop_reason import stopped_error
 from .tangent import MISMATCH_NORM
 
@@ -66,6 +68,11 @@ class SpringModel:
         )
         # volume_average = "nodal": (part of) the volume term on nodal volumes, else None
         self.nodal, kernel_elements = NodalPart.split(mesh, self.elements, self.options)
+        # stiffening = "exponential": the part added to the quadratic kernel, else None
+        self.stiffening = None
+        if self.options.stiffening != "off":
+            modulus = stiffening_modulus(self.options, scene.material)
+            self.stiffening = StiffeningPart(kernel_elements, self.options, modulus)
         self.kernel = SpringKernel(
             kernel_elements,
             self.options,
@@ -99,9 +106,15 @@ class SpringModel:
         return external_forces(self.scene, x=x, scale=scale)
 
     def internal(self, x: np.ndarray, v: np.ndarray | None = None) -> np.ndarray:
-        """Spring forces ``(n, 3)`` (fused kernel, plus the nodal volume term when on)."""
-        f = self.kernel.forces(x, v)
+        """Spring forces ``(n, 3)`` (fused kernel, plus the stiffening and nodal volume terms
+        when on)."""
+        f = self._element_forces(x, v)
         return f if self.nodal is None else f + self.nodal.term.forces(x)
+
+    def _element_forces(self, x: np.ndarray, v: np.ndarray | None) -> np.ndarray:
+        """The kernel's forces and the stiffening's (the per-element terms)."""
+        f = self.kernel.forces(x, v)
+        return f if self.stiffening is None else f + self.stiffening.forces(x)
 
     def forces(self, x: np.ndarray, v: np.ndarray | None = None, scale: float = 1.0) -> np.ndarray:
         return self.internal(x, v) + self.external(x, scale)
@@ -111,15 +124,20 @@ class SpringModel:
             return None
         work = float(np.sum(self._f_dead * (x - self.x0))) * scale
         nodal = 0.0 if self.nodal is None else self.nodal.term.energy(x)
-        return self.kernel.energy(x) + nodal - work
+        stiff = 0.0 if self.stiffening is None else self.stiffening.energy(x)
+        return self.kernel.energy(x) + nodal + stiff - work
 
     def stiffness(self, x: np.ndarray, scale: float = 1.0) -> sp.csr_matrix | None:
         if self.nodal is not None:
-            rest = lambda y: self.kernel.forces(y, None) + self.external(y, scale)  # noqa: E731
-            return self.nodal.stiffness(x, self._hessian, rest)
-        if self._hessian is None:
-            return None
-        return self._hessian.matrix(x)
+            rest = lambda y: self._element_forces(y, None) + self.external(y, scale)  # noqa: E731
+            K = self.nodal.stiffness(x, self._hessian, rest)
+        elif self._hessian is None:
+            return None  # finite differences of all forces (follower loads, damping, LMS)
+        else:
+            K = self._hessian.matrix(x)
+        if self.stiffening is not None and self._hessian is not None:
+            K = K + self.stiffening.stiffness(x, K.shape)
+        return K
 
     def element_nodes(self) -> np.ndarray:
         return self.elements.tets
@@ -199,6 +217,8 @@ def variant_label(options: SpringOptions) -> str:
         parts.append(f"volume={options.volume_form}" if options.volume else "volume=off")
     if options.coupling:
         parts.append("coupling")
+    if options.stiffening != "off":
+        parts.append(f"stiffening={options.stiffening}")
     if options.lms is not None:
         parts.append(f"lms={options.lms.rule}")
     parts.append(f"calibration={options.calibration}")
@@ -314,71 +334,6 @@ def solve_spring(
         result.info["cavity"] = cavity_summary(scene.mesh, u)
     cells = {**model.cell_data(x), **frame_cell_data(scene, u)}
     return SpringSolution(result=result, u=u, cell_data=cells, info=info)
-
-
-def dynamic_series(scene: Scene, model: SpringModel, opts: SpringOptions, folder) -> object:
-    """The :class:`~springfem.series.SeriesWriter` of a timed run with ``[output] interval``.
-
-    Parameters
-    ----------
-    scene, model, opts
-        Scene, its spring model and options.
-    folder
-        Output folder of the series, or None.
-
-    Returns
-    -------
-    SeriesWriter or None
-        None for equilibrium solves, without a folder or without an interval.
-    """
-    from springfem.scene import OutputOptions
-    from springfem.series import SeriesWriter
-
-    out = OutputOptions.of(scene)
-    timed = opts.steps is not None or opts.t_end is not None
-    if folder is None or out.interval is None or not timed:
-        return None
-    return SeriesWriter(
-        Path(folder), scene.mesh, out.interval, masses=model.masses,
-        potential=model.energy, probes=scene.probe_displacements if out.probes_history else None,
-    )  # fmt: skip
-
-
-def end_of_run(info, writer) -> dict:
-    """``status`` ("end of run at t = … : at rest / still moving"), ``at_rest``, series files.
-
-    Parameters
-    ----------
-    info
-        Outcome of the timed solve (``kinetic``, ``times``, ``steps``).
-    writer
-        The run's series writer (closed here), or None.
-
-    Returns
-    -------
-    dict
-        ``status``, ``at_rest``, ``end_time`` and, with a writer, ``series`` and ``frames``.
-    """
-    from springfem.series import reached_rest
-
-    if writer is not None:
-        summary = writer.close(plot=writer.probes is not None)
-        return {
-            "status": summary.status_line(),
-            "at_rest": summary.at_rest,
-            "end_time": summary.end_time,
-            "series": str(summary.pvd),
-            "frames": len(summary.frames),
-        }
-    kinetic = np.asarray(getattr(info, "kinetic", []))
-    at_rest = reached_rest(kinetic) if kinetic.size else None
-    t_end = float(info.times[-1]) if len(getattr(info, "times", [])) else 0.0
-    rest = {True: "at rest", False: "still moving", None: "rest unknown"}[at_rest]
-    return {
-        "status": f"end of run at t = {t_end:.6g} s after {info.steps} steps: {rest}",
-        "at_rest": at_rest,
-        "end_time": t_end,
-    }
 
 
 def with_options(scene: Scene, **changes) -> Scene:

@@ -37,6 +37,11 @@ Precision = Literal["float64", "mixed", "float32"]
 VolumeKind = bool | Literal["axes"]
 #: ``element``: the axis-volume spring per tet; ``nodal``: on nodal volumes (Bonet & Burton).
 VolumeAverage = Literal["element", "nodal"]
+#: ``axial = "green"`` in a scene: the cubic law with these ``(b2, b3)``, whose energy is
+#: ``k l0^2 E^2 / 2`` in the spring's Green strain ``E = (lambda^2 - 1) / 2`` (eq. 2.36).
+GREEN_AXIAL_COEFFICIENTS = (1.5, 0.5)
+#: ``off``: the spec's quadratic springs; ``exponential``: :mod:`springmodel.stiffening`.
+Stiffening = Literal["off", "exponential"]
 
 
 @dataclass(frozen=True)
@@ -73,7 +78,8 @@ class SpringOptions:
     ----------
     axial
         Axial spring law: ``linear`` (eq. 2.35), ``quadratic``/``cubic`` polynomial (2.36),
-        ``stress-scaled`` (2.37–2.38).
+        ``stress-scaled`` (2.37–2.38). A scene's ``axial = "green"`` is ``cubic`` with
+        :data:`GREEN_AXIAL_COEFFICIENTS` (energy quadratic in the spring's Green strain).
     axial_coefficients
         Dimensionless polynomial coefficients ``(b2, b3)``: the axial force is
         ``-k (d + b2 d^2 / l0 + b3 d^3 / l0^2)`` with ``d = |zeta| - |zeta0|``.
@@ -100,6 +106,14 @@ class SpringOptions:
         With ``volume_average = "nodal"``: the share ``f`` of each element's ``kappa`` put
         on the nodal volumes; ``1 - f`` stays on the tet (``f < 1`` stiffens the element
         volume modes that nodal volumes leave free, at the price of some locking).
+    stiffening
+        ``off`` (the spec's springs) or ``exponential``: the element's axial, torsion and
+        coupling energy ``W_q`` becomes ``V C/2 (exp(2 W_q / (C V)) - 1)``, the shape of the
+        Guccione law, with the same small-strain tangent (:mod:`springmodel.stiffening`;
+        needs the energy forms: axial linear/quadratic/cubic, torsion energy/shear/off).
+    stiffening_modulus
+        ``C`` (Pa) of the stiffening; default: the ``guccione`` law's ``C`` (required for
+        other laws).
     volumetric
         ``U(J)`` of the axis-volume spring: ``quadratic``, ``log`` or ``simo-taylor``
         (:mod:`springfem.volumetric`, the FEM's choices).
@@ -147,6 +161,8 @@ class SpringOptions:
     volume: VolumeKind = True
     volume_average: VolumeAverage = "element"
     nodal_fraction: float = 1.0
+    stiffening: Stiffening = "off"
+    stiffening_modulus: float | None = None
     volumetric: Volumetric = "quadratic"
     coupling: bool = False
     volume_form: VolumeForm = "gradient"
@@ -177,6 +193,16 @@ class SpringOptions:
             raise ValueError('volume_average = "nodal" needs volume = "axes"')
         if not 0.0 <= self.nodal_fraction <= 1.0:
             raise ValueError(f"nodal_fraction {self.nodal_fraction} is not in [0, 1]")
+        if self.stiffening not in get_args(Stiffening):
+            raise ValueError(f"stiffening {self.stiffening!r} is not off or exponential")
+        if self.stiffening != "off" and (
+            self.axial == "stress-scaled" or self.torsion not in ("off", *ENERGY_TORSION)
+        ):
+            raise ValueError(
+                'stiffening = "exponential" needs an energy to exponentiate: axial linear, '
+                'quadratic or cubic and torsion "energy", "shear" or "off" (got axial '
+                f"{self.axial!r}, torsion {self.torsion!r})"
+            )
         if self.volumetric not in VOLUMETRIC_ENERGIES:
             raise ValueError(
                 f"volumetric {self.volumetric!r} is not one of {', '.join(VOLUMETRIC_ENERGIES)}"
@@ -215,6 +241,7 @@ class SpringOptions:
             "precision": Precision,
             "volumetric": Volumetric,
             "volume_average": VolumeAverage,
+            "stiffening": Stiffening,
         }
         return get_args(hints[name]) if name in hints else ()
 
@@ -243,9 +270,11 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
     """
     kw: dict[str, Any] = {}
     S = SpringOptions
-    for key in ("axial", "torsion", "calibration", "solver", "integrator", "precision"):
+    for key in ("torsion", "calibration", "solver", "integrator", "precision"):
         if r.has(key):
             kw[key] = r.get(key, "str", choices=S.choices(key))
+    if r.has("axial"):
+        kw["axial"] = r.get("axial", "str", choices=(*S.choices("axial"), "green"))
     if r.has("volume_form"):
         kw["volume_form"] = r.get("volume_form", "str", choices=S.choices("volume_form"))
     if r.has("volume"):
@@ -258,6 +287,10 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
         kw["nodal_fraction"] = f = r.get("nodal_fraction", "float", nonneg=True)
         if f > 1.0:
             raise r.fail("nodal_fraction", f"{f} is larger than 1")
+    if r.has("stiffening"):
+        kw["stiffening"] = r.get("stiffening", "str", choices=S.choices("stiffening"))
+    if r.has("stiffening_modulus"):
+        kw["stiffening_modulus"] = r.get("stiffening_modulus", "float", positive=True)
     if r.has("volumetric"):
         kw["volumetric"] = r.get("volumetric", "str", choices=VOLUMETRIC_ENERGIES)
     if r.has("coupling"):
@@ -274,7 +307,11 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
         if r.has(key):
             kw[key] = r.get(key, "int", positive=True)
     if r.has("axial_coefficients"):
+        if kw.get("axial") == "green":
+            raise r.fail("axial_coefficients", 'axial = "green" sets them (1.5, 0.5)')
         kw["axial_coefficients"] = tuple(r.get("axial_coefficients", "vec", length=2))
+    if kw.get("axial") == "green":
+        kw["axial"], kw["axial_coefficients"] = "cubic", GREEN_AXIAL_COEFFICIENTS
     if r.has("lms"):
         r.used.add("lms")
         lr = TableReader(r.t["lms"], "spring.lms", r.file)
@@ -292,7 +329,11 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
             raise lr.fail("k_min", f"{lms.k_min} is larger than k_max = {lms.k_max}")
         kw["lms"] = lms
     r.finish()
-    return SpringOptions(**kw)
+    try:
+        return SpringOptions(**kw)
+    except ValueError as exc:  # a combination of keys, e.g. stiffening of the cosine torsion
+        key = "stiffening" if "stiffening" in str(exc) else next(iter(kw), "spring")
+        raise r.fail(key, str(exc)) from None
 
 
 def _volume_kind(r: TableReader) -> VolumeKind:

@@ -94,7 +94,7 @@ def solve_fem_dynamic(
     """A time integration of the P1 FEM (``[fem] solver = "explicit"`` or ``"implicit"``)."""
     from reference_fem.dynamics import dynamic_system, solve_dynamic
     from springfem.loads import reactions
-    from springmodel.model import end_of_run
+    from springmodel.run_series import end_of_run
 
     t0 = time.perf_counter()
     opts = FemOptions.of(scene)
