@@ -27,13 +27,22 @@ SCENES = Path(__file__).resolve().parents[1] / "scenes"
 #: can carry (kappa = 50 C: nearly incompressible, Poisson's ratio near 0.5 at rest).
 GUCCIONE = {"law": "guccione", "C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0, "kappa": 100.0}
 
-#: The spring variants compared: the exact element, and the seed's default element.
+#: The spring variants compared: the exact element with the tissue's stiffening (Green-strain
+#: axial springs, shear torsion, exponential element energy: what the bundled ventricle scenes
+#: use; the FEM's penalty U(J)), the exact element with the spec's quadratic springs, and the
+#: seed's default element.
 VARIANTS = {
+    "stiffened": {"volume": "axes", "torsion": "shear", "calibration": "exact", "coupling": True,
+                  "axial": "green", "stiffening": "exponential", "volumetric": "log"},
     "exact": {"volume": "axes", "torsion": "energy", "calibration": "exact", "coupling": True},
     "seed": {},
-}
+}  # fmt: skip
 #: The ``[spring]`` keys that choose the element (a variant sets them, or leaves defaults).
-ELEMENT_KEYS = ("volume", "torsion", "calibration", "coupling")
+ELEMENT_KEYS = ("volume", "torsion", "calibration", "coupling", "axial", "axial_coefficients",
+                "stiffening", "stiffening_modulus", "volumetric")  # fmt: skip
+#: The FEM on the spring's mesh and element order: P1 in the displacement formulation with the
+#: spring's penalty (:func:`studies.compare_models.model_scene`), beside the P2 reference.
+FEM_P1 = "fem-p1"
 
 
 @dataclass(frozen=True)
@@ -87,7 +96,7 @@ class Settings:
         """A few seconds: a coarse cube, beam and ventricle."""
         return cls(n=1, stretches=(1.1, 1.3), beam_divisions=(10, 1, 1),
                    lv_scene="land-ventricle-fibres", lv_size=6.0, lv_steps=3,
-                   lv_variants=("exact",), conv_scenes=("land-ventricle-fibres",),
+                   lv_variants=("stiffened", "exact"), conv_scenes=("land-ventricle-fibres",),
                    conv_sizes=(6.0, 5.0), conv_steps=3)  # fmt: skip
 
 
@@ -154,6 +163,10 @@ def _solve(data: dict, path: Path | None, model: str, variant: str | None, parti
         own = {k: v for k, v in data.get("spring", {}).items() if k not in ELEMENT_KEYS}
         data = {**data, "spring": {**own, **VARIANTS[variant or "exact"]}}
     scene = scene_from_dict(data, path)
+    if model == FEM_P1:
+        from ..compare_models import model_scene
+
+        scene, model = model_scene(scene, "P1"), "fem"
     t0 = time.perf_counter()
     try:
         return solve_scene(scene, model), None
@@ -197,7 +210,8 @@ def beam_case(case: dict) -> dict:
     Parameters
     ----------
     case
-        ``divisions``, ``model``, ``variant`` (spring only).
+        ``divisions``, ``model`` (``fem``, ``fem-p1`` or ``spring``), ``variant`` (spring
+        only).
 
     Returns
     -------

@@ -15,7 +15,9 @@ BEAM_RANGE = (4.14, 4.20)
 
 
 def _label(case: dict) -> str:
-    return "fem" if case["model"] == "fem" else f"spring ({case['variant']})"
+    if case["model"] in ("fem", "fem-p1"):
+        return {"fem": "fem", "fem-p1": "fem P1"}[case["model"]]
+    return f"spring ({case['variant']})"
 
 
 def _rel(value: float, ref: float) -> float:
@@ -46,7 +48,15 @@ def beam_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
     fem = float(df.loc[df.model == "fem", "tip_z"].iloc[0])
     # the deflection is tip_z - 1 (the point starts at z = 1 mm)
     df["rel_error"] = [_rel(z - 1.0, fem - 1.0) for z in df.tip_z]
+    p1 = _reference(df, "tip_z")
+    df["rel_error_p1"] = [_rel(z - 1.0, p1 - 1.0) for z in df.tip_z]
     return df
+
+
+def _reference(df: pd.DataFrame, column: str) -> float:
+    """The same-mesh P1 FEM's ``column`` (NaN when the P1 row is missing or failed)."""
+    rows = df.loc[(df.model == "fem P1") & (df.error.fillna("") == ""), column]
+    return float(rows.iloc[0]) if len(rows) else math.nan
 
 
 def ventricle_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
@@ -63,8 +73,14 @@ def ventricle_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
                 "load_factor"):  # fmt: skip
         df[col] = pd.to_numeric(df[col])  # a failed case's NaN comes back from JSON as None
     fem = float(df.loc[df.model == "fem", "endo_apex_z"].iloc[0])
-    df["rel_error"] = [_rel(z + 17.0, fem + 17.0) for z in df.endo_apex_z]
-    df.loc[~(df.load_factor >= 1.0), "rel_error"] = float("nan")  # partial: another load
+    # the apex motion is its downward displacement -17 - z (negative error: it moves less)
+    df["rel_error"] = [_rel(-17.0 - z, -17.0 - fem) for z in df.endo_apex_z]
+    p1 = _reference(df, "endo_apex_z")
+    df["rel_error_p1"] = [_rel(-17.0 - z, -17.0 - p1) for z in df.endo_apex_z]
+    cav = _reference(df, "cavity_final")
+    df["cavity_rel_p1"] = [_rel(v, cav) for v in df.cavity_final]
+    partial = ~(df.load_factor >= 1.0)  # its values are at another load
+    df.loc[partial, ["rel_error", "rel_error_p1", "cavity_rel_p1"]] = float("nan")
     return df
 
 
@@ -76,11 +92,14 @@ def tables(ctx: StudyContext, sdf, bdf, vdf, settings) -> list[Table]:
          "of 6 tets), fibre along or across the pull; rel_error against the P1 FEM."),
         (bdf, "beam", f"Land beam {tuple(settings.beam_divisions)}: deformed z of "
          f"(10, 0.5, 1) mm (published {BEAM_RANGE[0]}-{BEAM_RANGE[1]}); rel_error of the "
-         "deflection against the FEM (P2 mixed)."),
+         "deflection against the FEM (P2 mixed), rel_error_p1 against the same-mesh P1 FEM "
+         "(displacement formulation, the spring's penalty)."),
         (vdf, "ventricle", f"{settings.lv_scene} (size {settings.lv_size} mm): apex z "
          "(mm) and cavity volume (mm^3, each model's own field: the P2 FEM's quadratic "
-         "facets, the spring model's flat ones); rel_error of the endocardial apex motion "
-         "vs the FEM (none for a partial row: its values are at the load_factor it reached)."),
+         "facets, the P1 FEM's and the spring model's flat ones); rel_error of the "
+         "endocardial apex's downward motion vs the FEM (negative: it moves less), "
+         "rel_error_p1 vs the same-mesh P1 FEM, cavity_rel_p1 of the final cavity vs P1's "
+         "(none for a partial row: its values are at the load_factor it reached)."),
     ):  # fmt: skip
         out.append(Table(write_table(df, ctx.path(stem)), caption))
     return out
@@ -132,6 +151,8 @@ def findings(sdf, bdf, vdf) -> tuple[list[str], dict[str, float]]:
                 f"{BEAM_RANGE[1]} mm on this mesh).")  # fmt: skip
     for _, row in bdf[bdf.model != "fem"].iterrows():
         what = f"failed: {row.error}" if row.error else f"{100 * row.rel_error:+.1f}% deflection"
+        if not row.error and row.model != "fem P1" and math.isfinite(row.rel_error_p1):
+            what += f", {100 * row.rel_error_p1:+.1f}% against the same-mesh P1 FEM"
         text.append(f"Land beam, {row.model}: tip z = {row.tip_z:.4g} mm ({what}).")
         head[f"beam_error_{row.model}"] = float(row.rel_error)
     for _, row in vdf.iterrows():
@@ -140,6 +161,10 @@ def findings(sdf, bdf, vdf) -> tuple[list[str], dict[str, float]]:
         if row.error and row.load_factor == row.load_factor:  # partial (not NaN)
             what = (f"partial, stopped at load factor {row.load_factor:.3g}: endo apex z = "
                     f"{row.endo_apex_z:.4g} mm, epi {row.epi_apex_z:.4g} mm")  # fmt: skip
+        spring = row.model not in ("fem", "fem P1")
+        if not row.error and spring and math.isfinite(row.cavity_rel_p1):
+            what += (f"; against the same-mesh P1 FEM: apex motion {100 * row.rel_error_p1:+.1f}%,"
+                     f" final cavity {100 * row.cavity_rel_p1:+.1f}%")  # fmt: skip
         text.append(f"Land ventricle, {row.model}: {what}.")
         if row.model != "fem":
             head[f"ventricle_error_{row.model}"] = float(row.rel_error)
