@@ -184,6 +184,28 @@ class SpringHessian:
         K.has_sorted_indices = True
         return K
 
+    def assemble(self, Ke: np.ndarray) -> sp.csr_matrix:
+        """Sum element matrices ``(m, 12, 12)`` (rows as :meth:`element_matrices`) into the
+        ``(3n, 3n)`` CSR matrix of this pattern.
+
+        Parameters
+        ----------
+        Ke
+            One matrix per element, in the elements' order.
+
+        Returns
+        -------
+        scipy.sparse.csr_matrix
+            ``sum_e`` of ``Ke`` on each element's 12 DOFs.
+        """
+        data = np.zeros(self._nnz)
+        _scatter_add(data, self._map, np.ascontiguousarray(Ke, dtype=float))
+        K = sp.csr_matrix(
+            (data, self._indices.copy(), self._indptr.copy()), shape=self.shape, copy=False
+        )
+        K.has_sorted_indices = True
+        return K
+
     def _block(self, x: np.ndarray, kv: np.ndarray, lo: int, hi: int) -> np.ndarray:
         """Element matrices of elements ``lo:hi``, ``(hi - lo, 12, 12)``."""
         el, opts = self.elements, self.options

@@ -136,7 +136,7 @@ class SpringModel:
         else:
             K = self._hessian.matrix(x)
         if self.stiffening is not None and self._hessian is not None:
-            K = K + self.stiffening.stiffness(x, K.shape)
+            K = K + self.stiffening.stiffness(x)
         return K
 
     def element_nodes(self) -> np.ndarray:

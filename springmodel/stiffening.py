@@ -230,32 +230,21 @@ class StiffeningPart:
         H = self._hessian.element_matrices(x)
         return (s - 1.0)[:, None, None] * H + rank_one * g[:, :, None] * g[:, None, :]
 
-    def stiffness(self, x: np.ndarray, shape: tuple[int, int]):
+    def stiffness(self, x: np.ndarray):
         """The added tangent as a ``(3n, 3n)`` CSR matrix.
 
         Parameters
         ----------
         x
             Node positions ``(n, 3)``.
-        shape
-            ``(3n, 3n)``.
 
         Returns
         -------
         scipy.sparse.csr_matrix
             ``sum_e`` of :meth:`element_matrices` on the tets' DOFs.
         """
-        import scipy.sparse as sp
-
-        from .hessian_numba import _scatter_add
-
-        Ke = self.element_matrices(x)
-        if self._hessian is None:
-            raise RuntimeError("element_matrices builds the pattern")
-        h = self._hessian
-        data = np.zeros(h._nnz)
-        _scatter_add(data, h._map, Ke)
-        return sp.csr_matrix((data, h._indices, h._indptr), shape=shape)
+        Ke = self.element_matrices(x)  # builds the pattern on the first call
+        return self._hessian.assemble(Ke)
 
 
 def check_stiffening(options: SpringOptions) -> None:
