@@ -112,8 +112,8 @@ class SpringOptions:
         Guccione law, with the same small-strain tangent (:mod:`springmodel.stiffening`;
         needs the energy forms: axial linear/quadratic/cubic, torsion energy/shear/off).
     stiffening_modulus
-        ``C`` (Pa) of the stiffening; default: the ``guccione`` law's ``C`` (required for
-        other laws).
+        ``C`` (Pa) of the stiffening; default: the ``guccione`` law's ``C``, the
+        ``holzapfel-ogden`` law's ``a_f / b_f`` (required for other laws).
     volumetric
         ``U(J)`` of the axis-volume spring: ``quadratic``, ``log`` or ``simo-taylor``
         (:mod:`springfem.volumetric`, the FEM's choices).

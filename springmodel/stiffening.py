@@ -10,7 +10,8 @@ Guccione law wraps its quadratic form ``Q``::
 
     W_e = V C/2 (exp(2 W_q / (C V)) - 1),       s_e = dW_e / dW_q = exp(2 W_q / (C V))
 
-``C`` (Pa) is the law's ``C`` for ``guccione`` or ``[spring] stiffening_modulus``. To second
+``C`` (Pa) is the law's ``C`` for ``guccione``, ``a_f / b_f`` for ``holzapfel-ogden`` (the
+fibre term's shape, :func:`stiffening_modulus`) or ``[spring] stiffening_modulus``. To second
 order ``W_e = W_q``, so the small-strain tangent and every calibration are unchanged; with the
 exact calibration of a Guccione material ``2 W_q / (C V)`` is the law's ``Q`` to leading order
 (its normal-strain coupling is the penalty's alone, which the axis-volume spring carries).
@@ -46,7 +47,12 @@ MAX_EXPONENT = 60.0
 
 
 def stiffening_modulus(options: SpringOptions, material) -> float:
-    """The modulus ``C`` (Pa) of the stiffening: ``stiffening_modulus`` or the Guccione ``C``.
+    """The modulus ``C`` (Pa) of the stiffening: ``stiffening_modulus``, else the law's.
+
+    ``guccione``: its ``C``. ``holzapfel-ogden``: ``a_f / b_f``, for which the wrapper is the
+    law's fibre term ``a_f/(2 b_f) (exp(b_f (I4f - 1)^2) - 1)`` under a stretch along the
+    fibre (``2 W_q / (C V) = b_f (I4f - 1)^2`` to leading order, ``W_q / V = 2 a_f E_ff^2``);
+    one exponent per element cannot also be the sheet's ``b_s`` or the isotropic ``b``.
 
     Parameters
     ----------
@@ -63,16 +69,20 @@ def stiffening_modulus(options: SpringOptions, material) -> float:
     Raises
     ------
     ValueError
-        Stiffening on, no modulus given and the law is not ``guccione``.
+        Stiffening on, no modulus given and the law gives none (not ``guccione``, nor
+        ``holzapfel-ogden`` with ``a_f, b_f > 0``).
     """
     if options.stiffening_modulus is not None:
         return float(options.stiffening_modulus)
     law = getattr(material, "law", None)
+    p = getattr(material, "parameters", {}) or {}
     if law == "guccione":
-        return float(material.parameters["C"])
+        return float(p["C"])
+    if law == "holzapfel-ogden" and p.get("a_f", 0) > 0 and p.get("b_f", 0) > 0:
+        return float(p["a_f"]) / float(p["b_f"])
     raise ValueError(
         f'[spring] stiffening = "exponential" needs stiffening_modulus for law {law!r} '
-        "(only the guccione law gives its C as the default)"
+        "(the defaults: guccione's C, holzapfel-ogden's a_f / b_f when both are positive)"
     )
 
 

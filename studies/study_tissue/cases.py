@@ -26,6 +26,13 @@ SCENES = Path(__file__).resolve().parents[1] / "scenes"
 #: Land's problem-1/3 Guccione constants (kPa) with a volumetric penalty the spring model
 #: can carry (kappa = 50 C: nearly incompressible, Poisson's ratio near 0.5 at rest).
 GUCCIONE = {"law": "guccione", "C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0, "kappa": 100.0}
+#: Holzapfel & Ogden's (2009) fit to myocardium shear data (kPa), with a penalty
+#: kappa = 1000 kPa (nearly incompressible against the fibre's small-strain 4 a_f = 74 kPa).
+HOLZAPFEL_OGDEN = {"law": "holzapfel-ogden", "a": 0.059, "b": 8.023, "a_f": 18.472,
+                   "b_f": 16.026, "a_s": 2.481, "b_s": 11.120, "a_fs": 0.216, "b_fs": 11.436,
+                   "kappa": 1000.0}  # fmt: skip
+#: The stress-stretch cube's laws by name.
+STRETCH_LAWS = {"guccione": GUCCIONE, "holzapfel-ogden": HOLZAPFEL_OGDEN}
 
 #: The spring variants compared: the exact element with the tissue's stiffening (Green-strain
 #: axial springs, shear torsion, exponential element energy: what the bundled ventricle scenes
@@ -100,24 +107,25 @@ class Settings:
                    conv_sizes=(6.0, 5.0), conv_steps=3)  # fmt: skip
 
 
-def stretch_scene(direction: str, stretch: float, n: int) -> Scene:
+def stretch_scene(direction: str, stretch: float, n: int, law: str = "guccione") -> Scene:
     """The scene of :func:`stretch_data` (see there).
 
     Parameters
     ----------
-    direction, stretch, n
+    direction, stretch, n, law
         See :func:`stretch_data`.
 
     Returns
     -------
     Scene
     """
-    return scene_from_dict(stretch_data(direction, stretch, n))
+    return scene_from_dict(stretch_data(direction, stretch, n, law))
 
 
-def stretch_data(direction: str, stretch: float, n: int) -> dict:
-    """A unit cube (mm) of :data:`GUCCIONE` pulled to ``stretch`` along x, the fibre along
-    x (``along``) or y (``across``), the lateral faces free (rigid motions removed only).
+def stretch_data(direction: str, stretch: float, n: int, law: str = "guccione") -> dict:
+    """A unit cube (mm) of a :data:`STRETCH_LAWS` material pulled to ``stretch`` along x, the
+    fibre along x (``along``) or y (``across``), the lateral faces free (rigid motions
+    removed only).
 
     Parameters
     ----------
@@ -127,6 +135,8 @@ def stretch_data(direction: str, stretch: float, n: int) -> dict:
         The prescribed stretch of the x edge.
     n
         Divisions per side.
+    law
+        ``guccione`` (:data:`GUCCIONE`) or ``holzapfel-ogden`` (:data:`HOLZAPFEL_OGDEN`).
 
     Returns
     -------
@@ -138,7 +148,7 @@ def stretch_data(direction: str, stretch: float, n: int) -> dict:
     data = {
         "name": f"tissue-{direction}",
         "mesh": {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [n, n, n]},
-        "material": dict(GUCCIONE),
+        "material": dict(STRETCH_LAWS[law]),
         "axes": {"fiber": fiber, "sheet": sheet},
         "boundary": [
             {"region": "x_min", "fix": ["x"]},
@@ -181,14 +191,16 @@ def stretch_case(case: dict) -> dict:
     Parameters
     ----------
     case
-        ``direction``, ``stretch``, ``n``, ``model`` and ``variant`` (spring only).
+        ``direction``, ``stretch``, ``n``, ``model``, ``variant`` (spring only) and ``law``
+        (default ``guccione``).
 
     Returns
     -------
     dict
         ``stress`` (NaN on failure), ``wall_time`` and ``error`` (message or "").
     """
-    data = stretch_data(case["direction"], case["stretch"], case["n"])
+    law = case.get("law", "guccione")
+    data = stretch_data(case["direction"], case["stretch"], case["n"], law)
     sol, err = _solve(data, None, case["model"], case.get("variant"))
     if sol is None:
         return {"stress": math.nan, "wall_time": math.nan, "error": err}

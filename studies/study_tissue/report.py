@@ -25,16 +25,17 @@ def _rel(value: float, ref: float) -> float:
 
 
 def stretch_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
-    """One row per (direction, stretch, model): stress and its error against the FEM."""
-    rows = [{"direction": c["direction"], "stretch": c["stretch"], "model": _label(c),
-             "stress": r["stress"], "error": r["error"]}
+    """One row per (law, direction, stretch, model): stress and its error against the FEM."""
+    rows = [{"law": c.get("law", "guccione"), "direction": c["direction"],
+             "stretch": c["stretch"], "model": _label(c), "stress": r["stress"],
+             "error": r["error"]}
             for c, r in zip(cases, results, strict=True)]  # fmt: skip
     df = pd.DataFrame(rows)
     df["stress"] = pd.to_numeric(df["stress"])
-    ref = df[df.model == "fem"].set_index(["direction", "stretch"])["stress"]
+    ref = df[df.model == "fem"].set_index(["law", "direction", "stretch"])["stress"]
     df["rel_error"] = [
-        _rel(s, ref[(d, lam)])
-        for d, lam, s in zip(df.direction, df.stretch, df.stress, strict=True)
+        _rel(s, ref[tuple(key)])
+        for *key, s in zip(df.law, df.direction, df.stretch, df.stress, strict=True)
     ]
     return df
 
@@ -89,7 +90,9 @@ def tables(ctx: StudyContext, sdf, bdf, vdf, settings) -> list[Table]:
     out = []
     for df, stem, caption in (
         (sdf, "stress_stretch", f"Nominal stress (kPa) of the unit cube ({settings.n}^3 boxes "
-         "of 6 tets), fibre along or across the pull; rel_error against the P1 FEM."),
+         "of 6 tets), Guccione (Land's problem 1) and Holzapfel-Ogden (their 2009 fit), "
+         "fibre along or across the pull; rel_error against the P1 FEM (exact for this "
+         "homogeneous stretch)."),
         (bdf, "beam", f"Land beam {tuple(settings.beam_divisions)}: deformed z of "
          f"(10, 0.5, 1) mm (published {BEAM_RANGE[0]}-{BEAM_RANGE[1]}); rel_error of the "
          "deflection against the FEM (P2 mixed), rel_error_p1 against the same-mesh P1 FEM "
@@ -112,27 +115,42 @@ def pv_figure(ctx: StudyContext, sdf, lv_cases, lv_results, settings) -> Figure:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.5))
-    for (direction, model), g in sdf.groupby(["direction", "model"]):
-        style = "-" if model == "fem" else "--"
-        a.plot(g.stretch, g.stress, style, marker="o", ms=3, label=f"{model}, {direction}")
-    a.set_xlabel("stretch")
-    a.set_ylabel("nominal stress (kPa)")
-    a.legend(fontsize=7)
-    a.grid(True, alpha=0.3)
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    for ax, law in zip(axes[:2], ("guccione", "holzapfel-ogden"), strict=True):
+        for (direction, model), g in sdf[sdf.law == law].groupby(["direction", "model"]):
+            style = "-" if model == "fem" else "--"
+            ax.plot(g.stretch, g.stress, style, marker="o", ms=3, label=f"{model}, {direction}")
+        ax.set_yscale("log")  # Holzapfel-Ogden's fibre stress grows by e^7.6 to 30 %
+        ax.set_title(law, fontsize=9)
+        ax.set_xlabel("stretch")
+        ax.set_ylabel("nominal stress (kPa)")
+        ax.legend(fontsize=6)
+        ax.grid(True, alpha=0.3)
+    b = axes[2]
+    p_end = math.nan  # the FEM's full pressure: the spring model's one point is drawn there
     for c, r in zip(lv_cases, lv_results, strict=True):
         rows = (r.get("cavity") or {}).get("pressure_volume")
         if rows:
             pv = np.asarray(rows, dtype=float)
+            p_end = pv[-1, 1]
             b.plot(pv[:, 2] / 1000.0, pv[:, 1], "o-", ms=3, label=_label(c))
+    for c, r in zip(lv_cases, lv_results, strict=True):
+        cav = r.get("cavity") or {}
+        if c["model"] == "spring" and cav.get("final") and math.isfinite(p_end):
+            lf = r.get("load_factor", 1.0)
+            b.plot(cav["final"] / 1000.0, p_end * lf, "s", ms=6,
+                   label=_label(c) + ("" if lf >= 1 else f" (stopped at {lf:.2f})"))  # fmt: skip
     b.set_xlabel("cavity volume (ml)")
     b.set_ylabel("endocardial pressure (kPa)")
     b.legend(fontsize=7)
     b.grid(True, alpha=0.3)
     path = save_figure(fig, ctx.path("tissue.png"))
     plt.close(fig)
-    return Figure(path, "Left: stress-stretch along and across the fibre. Right: the Land "
-                  "ventricle's pressure-volume curve over the FEM's load steps.")  # fmt: skip
+    return Figure(path, "Left and middle: nominal stress against stretch along and across the "
+                  "fibre (log scale), Guccione and Holzapfel-Ogden, FEM solid, spring variants "
+                  "dashed. Right: the Land ventricle's pressure-volume curve over the FEM's "
+                  "load steps (P2 reference and same-mesh P1); squares: the spring variants' "
+                  "final cavity, at the load factor each reached.")  # fmt: skip
 
 
 def findings(sdf, bdf, vdf) -> tuple[list[str], dict[str, float]]:
@@ -140,10 +158,11 @@ def findings(sdf, bdf, vdf) -> tuple[list[str], dict[str, float]]:
     text, head = [], {}
     last = sdf[sdf.stretch == sdf.stretch.max()]
     for _, row in last[last.model != "fem"].iterrows():
-        text.append(f"At stretch {row.stretch:g} {row.direction} the fibre, {row.model} is "
-                    f"{100 * row.rel_error:+.1f}% off the FEM's nominal stress"
+        text.append(f"{row.law}, at stretch {row.stretch:g} {row.direction} the fibre, "
+                    f"{row.model} is {100 * row.rel_error:+.1f}% off the FEM's nominal stress"
                     + (f" (failed: {row.error})" if row.error else "") + ".")  # fmt: skip
-        head[f"stress_error_{row.direction}_{row.model}"] = float(row.rel_error)
+        law = "" if row.law == "guccione" else f"{row.law}_"  # the Guccione keys as before
+        head[f"stress_error_{law}{row.direction}_{row.model}"] = float(row.rel_error)
     fem = bdf[bdf.model == "fem"].iloc[0]
     inside = BEAM_RANGE[0] <= fem.tip_z <= BEAM_RANGE[1]
     text.append(f"Land beam: FEM tip z = {fem.tip_z:.4g} mm "

@@ -199,6 +199,10 @@ def test_scene_errors_name_the_key():
     scene = scene_from_dict({**base, "spring": {**EXACT, "stiffening": "exponential"}})
     with pytest.raises(ValueError, match="needs stiffening_modulus for law 'linear'"):
         SpringModel(scene)
+    ho = Material("holzapfel-ogden", 1.0, 0.49, parameters={"a_f": 18.472, "b_f": 16.026})
+    assert stiffening_modulus(SpringOptions(**EXACT, stiffening="exponential"), ho) == (
+        pytest.approx(18.472 / 16.026)
+    )
 
 
 @pytest.mark.parametrize(
