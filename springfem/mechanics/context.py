@@ -23,6 +23,7 @@ from typing import Literal
 import numpy as np
 import scipy.sparse as sp
 
+from ..errors import SolverError
 from .fd_jacobian import ColoredJacobian
 from .limits import LIMITS, SolveStopped
 from .system import MechanicalSystem, constrained_positions, free_dofs
@@ -30,6 +31,8 @@ from .system import MechanicalSystem, constrained_positions, free_dofs
 JacobianKind = Literal["auto", "analytic", "fd"]
 #: Fraction of the prescribed displacement of the central difference in :func:`reference_norm`.
 LINEARISATION_STEP = 1e-4
+#: The linearised reference is used only above this fraction of the external load's norm.
+CANCELLATION_FLOOR = 1e-3
 Scale = float | Callable[[float], float]
 
 _TET_EDGES = np.array([(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)])
@@ -295,8 +298,10 @@ def reference_norm(ctx: SolveContext, s: float) -> float:
     central difference of the forces along the prescribed displacement ``d``): a layer of
     elements at the constrained boundary strained by the whole ``d`` at once can carry a
     far larger force than the solution does in a stiffening law (an exponential spring
-    element: ``e^14`` times at 30 % stretch of a 3-element cube), which would loosen the
-    tolerance by as much.
+    element: ``e^14`` times at 30 % stretch of a 3-element cube, not finite on a finer one),
+    which would loosen the tolerance by as much. The linearisation is not used when it is
+    below :data:`CANCELLATION_FLOOR` of the external load (a load the prescribed
+    displacements' reaction cancels gives no scale).
 
     Parameters
     ----------
@@ -309,6 +314,11 @@ def reference_norm(ctx: SolveContext, s: float) -> float:
     -------
     float
         The reference force norm, never 0.
+
+    Raises
+    ------
+    SolverError
+        Neither the force nor its linearisation is finite.
     """
     x = constrained_positions(ctx.system, s)
     f_ref = float(np.linalg.norm(ctx.free_force(x, s)))
@@ -316,10 +326,19 @@ def reference_norm(ctx: SolveContext, s: float) -> float:
     d = x - x0
     if np.any(d != 0.0):
         h = LINEARISATION_STEP
+        f_ext = ctx.free_force(x0, s)
         kd = (ctx.free_force(x0 + h * d, s) - ctx.free_force(x0 - h * d, s)) / (2 * h)
-        f_lin = float(np.linalg.norm(ctx.free_force(x0, s) + kd))
-        if 0.0 < f_lin < f_ref:
+        f_lin = float(np.linalg.norm(f_ext + kd))
+        # a load cancelled by the prescribed displacements' reaction is no scale: floor
+        usable = np.isfinite(f_lin) and f_lin >= CANCELLATION_FLOOR * np.linalg.norm(f_ext)
+        if usable and f_lin > 0 and (f_lin < f_ref or not np.isfinite(f_ref)):
             f_ref = f_lin
+    if not np.isfinite(f_ref):
+        raise SolverError(
+            "the load is not finite at the rest positions with the prescribed displacements "
+            "(nor its linearisation): no scale for the static tolerance",
+            state=x0,
+        )
     ctx.f_ref = f_ref if f_ref > 0 else 1.0
     return ctx.f_ref
 

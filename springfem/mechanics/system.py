@@ -248,10 +248,12 @@ def check_constrained(system: MechanicalSystem, x: np.ndarray | None = None) -> 
 
 
 def reference_force(system: MechanicalSystem, scale: float = 1.0) -> float:
-    """Norm of the free-DOF force at the rest positions with the fixed DOFs prescribed.
+    """The load the body must balance, which static tolerances are relative to.
 
-    This is the load the body must balance: external forces times ``scale`` plus the
-    internal reaction to the prescribed displacements. Static tolerances are relative to it.
+    The norm of the free-DOF force at the rest positions with the fixed DOFs prescribed
+    (external forces times ``scale`` plus the internal reaction to the prescribed
+    displacements), or its linearisation when that is smaller: see
+    :func:`springfem.mechanics.context.reference_norm`, which the solvers call.
 
     Parameters
     ----------
@@ -263,8 +265,8 @@ def reference_force(system: MechanicalSystem, scale: float = 1.0) -> float:
     Returns
     -------
     float
-        The norm.
+        The norm (1 for an unloaded system).
     """
-    x = constrained_positions(system, scale)
-    f = np.asarray(system.forces(x, None, scale), dtype=float).reshape(-1)
-    return float(np.linalg.norm(f[free_dofs(system)]))
+    from .context import SolveContext, reference_norm
+
+    return reference_norm(SolveContext(system), scale)
