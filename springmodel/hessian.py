@@ -184,22 +184,27 @@ class SpringHessian:
         K.has_sorted_indices = True
         return K
 
-    def assemble(self, Ke: np.ndarray) -> sp.csr_matrix:
-        """Sum element matrices ``(m, 12, 12)`` (rows as :meth:`element_matrices`) into the
-        ``(3n, 3n)`` CSR matrix of this pattern.
+    def assemble(self, blocks) -> sp.csr_matrix:
+        """Sum element matrices into the ``(3n, 3n)`` CSR matrix of this pattern.
 
         Parameters
         ----------
-        Ke
-            One matrix per element, in the elements' order.
+        blocks
+            ``(m, 12, 12)`` matrices of all elements in their order (rows as
+            :meth:`element_matrices`), or a list of ``(lo, Ke)``: the matrices of elements
+            ``lo:lo + len(Ke)`` (chunks bound the memory).
 
         Returns
         -------
         scipy.sparse.csr_matrix
-            ``sum_e`` of ``Ke`` on each element's 12 DOFs.
+            ``sum_e`` of the element matrices on each element's 12 DOFs.
         """
+        if isinstance(blocks, np.ndarray):
+            blocks = [(0, blocks)]
         data = np.zeros(self._nnz)
-        _scatter_add(data, self._map, np.ascontiguousarray(Ke, dtype=float))
+        for lo, Ke in blocks:
+            Ke = np.ascontiguousarray(Ke, dtype=float)
+            _scatter_add(data, self._map[lo : lo + Ke.shape[0]], Ke)
         K = sp.csr_matrix(
             (data, self._indices.copy(), self._indptr.copy()), shape=self.shape, copy=False
         )

@@ -33,7 +33,7 @@ from springfem.scene import Scene, model_precision
 from .advice import scene_warnings
 from .elements import SpringElements, build_spring_elements
 from .nodal_volume import NodalPart
-from .options import SpringOptions
+from .options import GREEN_AXIAL_COEFFICIENTS, SpringOptions
 from .run_series import dynamic_series, end_of_run
 from .spring_kernel import SpringKernel
 from .springs import is_conservative, lms_update, volume_measures
@@ -160,17 +160,21 @@ class SpringModel:
     # -- outputs ----------------------------------------------------------------------
 
     def cell_data(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        """Per-element data for the VTU: axis strains, volume error, calibration residual."""
+        """Per-element data for the VTU: axis strains, volume error, calibration residual
+        (and the stiffening factor ``s_e`` when on)."""
         els = self.elements
         zeta = np.einsum("kil,kic->klc", els.G, x[els.tets])
         strain = np.linalg.norm(zeta, axis=2) / els.l0 - 1.0
         V = self.scene.mesh.volumes(x)
-        return {
+        out = {
             "axis_strain": strain,
             "volume_error": (V - els.V0) / els.V0,
             "calibration_mismatch": np.nan_to_num(els.mismatch),
             "k_volume_ratio": els.k_volume / np.where(els.k_volume0 > 0, els.k_volume0, 1.0),
         }
+        if self.stiffening is not None:  # where the element stiffens: s_e = dW_e / dW_q
+            out["stiffening_factor"] = self.stiffening.scale(x)[1]
+        return out
 
 
 @dataclass
@@ -208,7 +212,11 @@ def variant_label(options: SpringOptions) -> str:
     str
         Comma-separated ``part=law`` items, ending with the calibration.
     """
-    parts = [f"axial={options.axial}", f"torsion={options.torsion}"]
+    axial = options.axial
+    if axial in ("quadratic", "cubic"):
+        b = tuple(float(c) for c in options.axial_coefficients)
+        axial = "green" if b == GREEN_AXIAL_COEFFICIENTS else f"{axial}({b[0]:g},{b[1]:g})"
+    parts = [f"axial={axial}", f"torsion={options.torsion}"]
     if options.axis_volume:
         f = options.nodal_fraction
         nodal = ("/nodal" + (f"{f:g}" if f < 1 else "")) * options.nodal_volume

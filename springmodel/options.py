@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from typing import Any, Literal, get_args
 
+from springfem.errors import SceneError
 from springfem.scene import Scene, TableReader, register_section
 from springfem.volumetric import VOLUMETRIC_ENERGIES, Volumetric
 
@@ -332,7 +333,9 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
     try:
         return SpringOptions(**kw)
     except ValueError as exc:  # a combination of keys, e.g. stiffening of the cosine torsion
-        key = "stiffening" if "stiffening" in str(exc) else next(iter(kw), "spring")
+        key = next((k for k in ("stiffening", "volume_average") if k in str(exc)), None)
+        if key is None:
+            raise SceneError(f"{r.file}: spring: {exc}") from None
         raise r.fail(key, str(exc)) from None
 
 

@@ -36,11 +36,24 @@ from dataclasses import replace
 
 import numpy as np
 
-from .options import SpringOptions, Stiffening
+from springfem.errors import InputError
+
+from .hessian_numpy import polynomial_coefficients
+from .options import SpringOptions
 from .rest_geometry import TORSION_PAIRS
 from .springs.shear import shear_derivatives, shear_energy
 
-__all__ = ["Stiffening", "StiffeningPart", "deviatoric_energy", "stiffened_energy"]
+__all__ = [
+    "MAX_EXPONENT",
+    "StiffeningPart",
+    "deviatoric_energy",
+    "stiffened_energy",
+    "stiffening_modulus",
+]
+#: Torsion codes of :func:`springmodel.stiffening_kernel.stiffening_pass`.
+TORSION_CODES = {"off": 0, "energy": 1, "shear": 2}
+#: Elements per block of :meth:`StiffeningPart.stiffness` (bounds its element matrices).
+CHUNK = 16384
 #: Largest exponent ``2 W_q / (C V)`` evaluated: beyond it the state is far outside any tissue
 #: law's range (``e^60``) and the forces are reported as not finite, so that Newton cuts back.
 MAX_EXPONENT = 60.0
@@ -68,9 +81,16 @@ def stiffening_modulus(options: SpringOptions, material) -> float:
 
     Raises
     ------
-    ValueError
+    InputError
         Stiffening on, no modulus given and the law gives none (not ``guccione``, nor
-        ``holzapfel-ogden`` with ``a_f, b_f > 0``).
+        ``holzapfel-ogden`` with ``a_f, b_f > 0``): a scene error (exit 2).
+
+    Examples
+    --------
+    >>> from springfem.scene import Material
+    >>> opts = SpringOptions(torsion="energy", stiffening="exponential")
+    >>> stiffening_modulus(opts, Material("guccione", 1.0, 0.49, parameters={"C": 2.0}))
+    2.0
     """
     if options.stiffening_modulus is not None:
         return float(options.stiffening_modulus)
@@ -80,7 +100,7 @@ def stiffening_modulus(options: SpringOptions, material) -> float:
         return float(p["C"])
     if law == "holzapfel-ogden" and p.get("a_f", 0) > 0 and p.get("b_f", 0) > 0:
         return float(p["a_f"]) / float(p["b_f"])
-    raise ValueError(
+    raise InputError(
         f'[spring] stiffening = "exponential" needs stiffening_modulus for law {law!r} '
         "(the defaults: guccione's C, holzapfel-ogden's a_f / b_f when both are positive)"
     )
@@ -112,6 +132,10 @@ def stiffened_energy(W_q: np.ndarray, V: np.ndarray, C: float) -> np.ndarray:
 def deviatoric_energy(x: np.ndarray, elements, options: SpringOptions):
     """Energy ``W_q`` of the axial, torsion and coupling springs per element, and its gradient.
 
+    The vectorised numpy reference of :mod:`springmodel.stiffening_kernel` (the model runs
+    the compiled pass); the energy alone is also :func:`springmodel.springs.spring_energy`
+    with the volume terms off, written again here to carry its gradient per element.
+
     ``W_q = sum_l f_l(|zeta_l|) + sum_lm k_lm phi(c_lm) + sum_lm c_lm s_l s_m`` (the
     polynomial axial law of eq. 2.36, the torsion law ``energy`` or ``shear``, the Poisson
     coupling) with ``zeta_l = sum_i G[k, i, l] x_i``.
@@ -135,7 +159,7 @@ def deviatoric_energy(x: np.ndarray, elements, options: SpringOptions):
     L = np.linalg.norm(zeta, axis=-1)
     zh = zeta / L[..., None]
     d = L - el.l0
-    b2, b3 = _polynomial(options)
+    b2, b3 = polynomial_coefficients(options)
     W = np.sum(el.k_axial * (d**2 / 2 + b2 * d**3 / (3 * el.l0) + b3 * d**4 / (4 * el.l0**2)), 1)
     df = el.k_axial * (d + b2 * d**2 / el.l0 + b3 * d**3 / el.l0**2)
     gz = df[..., None] * zh
@@ -160,13 +184,6 @@ def deviatoric_energy(x: np.ndarray, elements, options: SpringOptions):
     return W, np.einsum("kil,klc->kic", el.G, gz)
 
 
-def _polynomial(options: SpringOptions) -> tuple[float, float]:
-    if options.axial in ("quadratic", "cubic"):
-        b2, b3 = options.axial_coefficients
-        return float(b2), float(b3) if options.axial == "cubic" else 0.0
-    return 0.0, 0.0
-
-
 class StiffeningPart:
     """The exponential stiffening of a :class:`~springmodel.model.SpringModel` (module text).
 
@@ -179,7 +196,8 @@ class StiffeningPart:
     elements
         The kernel's spring elements.
     options
-        Spring options (energy forms: see :func:`check_stiffening`).
+        Spring options (the energy forms: :class:`~springmodel.options.SpringOptions`
+        refuses stiffening of the others).
     modulus
         ``C`` (Pa), :func:`stiffening_modulus`.
 
@@ -199,49 +217,129 @@ class StiffeningPart:
     """
 
     def __init__(self, elements, options: SpringOptions, modulus: float):
-        check_stiffening(options)
+        replace(options, stiffening="exponential")  # SpringOptions refuses a non-energy
         self.elements, self.options, self.modulus = elements, options, float(modulus)
         self._hessian = None
+        el = elements
+        self._args = (
+            np.ascontiguousarray(el.tets, dtype=np.int64), np.ascontiguousarray(el.G),
+            np.ascontiguousarray(el.l0), np.ascontiguousarray(el.k_axial),
+            np.ascontiguousarray(el.k_torsion), np.ascontiguousarray(el.c0),
+            np.ascontiguousarray(el.k_coupling), np.ascontiguousarray(el.V0),
+            *polynomial_coefficients(options), TORSION_CODES[options.torsion],
+            bool(options.coupling), self.modulus, MAX_EXPONENT,
+        )  # fmt: skip
 
-    def scale(self, x: np.ndarray):
-        """``(W_q (m,), grad W_q (m, 4, 3), s_e (m,))`` at positions ``x`` ``(n, 3)``."""
-        W, g = deviatoric_energy(np.asarray(x, float).reshape(-1, 3), self.elements, self.options)
-        q = 2.0 * W / (self.modulus * self.elements.V0)
-        with np.errstate(over="ignore"):
-            s = np.where(q <= MAX_EXPONENT, np.exp(np.minimum(q, MAX_EXPONENT)), np.inf)
-        return W, g, s
+    def _pass(self, x: np.ndarray, forces: bool, gradients: bool = False):
+        """``W_q``, ``s_e``, the added forces (zero unless ``forces``) and, with
+        ``gradients``, ``grad W_q`` per element (else ``None``)."""
+        from .stiffening_kernel import stiffening_pass
+
+        x = np.ascontiguousarray(x, dtype=float).reshape(-1, 3)
+        m = self.elements.n_elements
+        W, s, f = np.empty(m), np.empty(m), np.zeros((x.shape[0] if forces else 1, 3))
+        g = np.empty((m if gradients else 1, 4, 3))
+        stiffening_pass(x, *self._args, W, s, f, forces, g, gradients)
+        return W, s, f, (g if gradients else None)
+
+    def scale(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``W_q`` and ``s_e`` of every element.
+
+        Parameters
+        ----------
+        x
+            Node positions ``(n, 3)``.
+
+        Returns
+        -------
+        W, s
+            ``(m,)`` (J) and ``(m,)`` (``inf`` past :data:`MAX_EXPONENT`).
+        """
+        W, s, _, _ = self._pass(x, False)
+        return W, s
 
     def forces(self, x: np.ndarray) -> np.ndarray:
-        """Nodal forces ``-(s_e - 1) grad W_q`` added to the kernel's, ``(n, 3)`` (N)."""
-        from .springs.points import scatter
+        """Nodal forces ``-(s_e - 1) grad W_q`` added to the kernel's.
 
-        _, g, s = self.scale(x)
-        return scatter(-(s - 1.0)[:, None, None] * g, self.elements.tets, self.elements.n_points)
+        Parameters
+        ----------
+        x
+            Node positions ``(n, 3)``.
+
+        Returns
+        -------
+        ndarray
+            ``(n, 3)`` (N); not finite past :data:`MAX_EXPONENT` (Newton then cuts back).
+        """
+        with np.errstate(invalid="ignore", over="ignore"):
+            return self._pass(x, True)[2]
 
     def energy(self, x: np.ndarray) -> float:
-        """``sum_e (W_e - W_q)``, the energy added to the kernel's (J)."""
-        W, _, _ = self.scale(x)
-        return float(np.sum(stiffened_energy(W, self.elements.V0, self.modulus) - W))
+        """``sum_e (W_e - W_q)``, the energy added to the kernel's.
 
-    def element_matrices(self, x: np.ndarray) -> np.ndarray:
-        """Tangent added per element, ``(m, 12, 12)``: ``(s - 1) H_q + 2 s / (C V) g g^T``."""
+        Parameters
+        ----------
+        x
+            Node positions ``(n, 3)``.
+
+        Returns
+        -------
+        float
+            (J); ``inf`` past :data:`MAX_EXPONENT`.
+        """
+        W, _, _, _ = self._pass(x, False)
+        with np.errstate(invalid="ignore", over="ignore"):
+            return float(np.sum(stiffened_energy(W, self.elements.V0, self.modulus) - W))
+
+    def element_matrices(
+        self,
+        x: np.ndarray,
+        lo: int = 0,
+        hi: int | None = None,
+        s: np.ndarray | None = None,
+        g: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Tangent added per element: ``(s - 1) H_q + 2 s / (C V) g g^T``.
+
+        Parameters
+        ----------
+        x
+            Node positions ``(n, 3)``.
+        lo, hi
+            The elements ``lo:hi`` (default all).
+        s, g
+            ``s_e`` ``(m,)`` and ``grad W_q`` ``(m, 4, 3)`` of all elements at ``x``
+            (computed when not given).
+
+        Returns
+        -------
+        ndarray
+            ``(hi - lo, 12, 12)``, rows as
+            :meth:`springmodel.hessian.SpringHessian.element_matrices`.
+        """
+        from .hessian import SpringHessian
+
+        el = self.elements
+        hi = el.n_elements if hi is None else hi
         if self._hessian is None:
-            from .hessian import SpringHessian
-
-            el = self.elements
             zero = np.zeros(el.n_elements)
             deviatoric = replace(el, k_axis_volume=zero, k_volume=zero)
             opts = replace(self.options, volume=False, volume_average="element")
             self._hessian = SpringHessian(deviatoric, opts)
         x = np.asarray(x, float).reshape(-1, 3)
-        _, g, s = self.scale(x)
-        g = g.reshape(-1, 12)
-        rank_one = (2.0 * s / (self.modulus * self.elements.V0))[:, None, None]
-        H = self._hessian.element_matrices(x)
-        return (s - 1.0)[:, None, None] * H + rank_one * g[:, :, None] * g[:, None, :]
+        if s is None or g is None:
+            _, s, _, g = self._pass(x, False, gradients=True)
+        s, g = s[lo:hi], g[lo:hi].reshape(-1, 12)
+        H = self._hessian._block(x, np.zeros(el.n_elements), lo, hi)
+        with np.errstate(invalid="ignore", over="ignore"):
+            H *= (s - 1.0)[:, None, None]
+            H += (2.0 * s / (self.modulus * el.V0[lo:hi]))[:, None, None] * (
+                g[:, :, None] * g[:, None, :]
+            )
+        return H
 
     def stiffness(self, x: np.ndarray):
-        """The added tangent as a ``(3n, 3n)`` CSR matrix.
+        """The added tangent as a ``(3n, 3n)`` CSR matrix, :data:`CHUNK` elements at a time.
 
         Parameters
         ----------
@@ -253,26 +351,9 @@ class StiffeningPart:
         scipy.sparse.csr_matrix
             ``sum_e`` of :meth:`element_matrices` on the tets' DOFs.
         """
-        Ke = self.element_matrices(x)  # builds the pattern on the first call
-        return self._hessian.assemble(Ke)
-
-
-def check_stiffening(options: SpringOptions) -> None:
-    """Refuse stiffening of a spring element that is not an energy.
-
-    Parameters
-    ----------
-    options
-        Spring options.
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    ValueError
-        Axial law ``stress-scaled`` or torsion ``angle``/``cosine``/``cubic``: no energy
-        ``W_q`` to exponentiate.
-    """
-    replace(options, stiffening="exponential")  # SpringOptions validates the combination
+        m = self.elements.n_elements
+        _, s, _, g = self._pass(x, False, gradients=True)
+        blocks = []
+        for lo in range(0, m, CHUNK):
+            blocks.append((lo, self.element_matrices(x, lo, min(lo + CHUNK, m), s, g)))
+        return self._hessian.assemble(blocks)

@@ -9,7 +9,8 @@ machine change every number, DESIGN §8).
     On a box of about ``--tets`` tets (default 500k), for each precision (``float64``,
     ``mixed``, ``float32``): the spring kernel of the scene's variant and the explicit P1
     neo-Hookean and linear FEM kernels, serial and on all threads, and the numpy spring
-    oracle; ``--variants`` adds every spring variant (serial). Each kernel's ratio to the
+    oracle; ``--variants`` adds every spring variant (serial) and the stiffened exact element
+    (kernel + :mod:`springmodel.stiffening_kernel`, float64). Each kernel's ratio to the
     neo-Hookean FEM kernel of the same precision and threads, its bytes read per element and
     the bandwidth-bound limit (a measured read bandwidth / bytes per element). NVIDIA Warp is
     timed as a peer when installed (it is skipped with a note when not).
@@ -34,6 +35,7 @@ import numpy as np
 from springmodel.options import SpringOptions
 
 from .bench_print import print_forces, print_step
+from .bench_stiffening import stiffened_case
 from .timing import interleaved, load_average, median, median_ratio, stream_bandwidth
 
 # Passive OpenMP waiting (spinning threads steal a shared machine's cores), set before the
@@ -202,14 +204,12 @@ def bench_forces(
                     "bytes": kernel.bytes_per_element,
                     "fem": f"FEM neo-Hookean {p} 1",
                 }
+    if variants and "float64" in precisions:
+        name, cases[name], meta[name] = stiffened_case(scene, mesh, x, out)
     cases["spring numpy oracle"] = lambda: springs.internal_forces(x, None, el, options)
-    meta["spring numpy oracle"] = {
-        "kernel": "spring-oracle",
-        "precision": "float64",
-        "threads": "1",
-        "bytes": None,
-        "fem": "FEM neo-Hookean float64 1",
-    }
+    meta["spring numpy oracle"] = {"kernel": "spring-oracle", "precision": "float64",
+                                   "threads": "1", "bytes": None,
+                                   "fem": "FEM neo-Hookean float64 1"}  # fmt: skip
     bandwidth = stream_bandwidth()
     load_before = load_average()
     samples = interleaved(cases, rounds=repeats)

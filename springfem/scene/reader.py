@@ -62,8 +62,24 @@ def suggestion(word: str, known: Iterable[str]) -> str | None:
     return close[0] if close else None
 
 
-def _is_number(v: Any) -> bool:
-    """A real number that is not a bool (numpy scalars of a programmatic table count)."""
+def is_number(v: Any) -> bool:
+    """A real number that is not a bool (numpy scalars of a programmatic table count).
+
+    Parameters
+    ----------
+    v
+        A table value.
+
+    Returns
+    -------
+    bool
+        True for ``int``, ``float`` and numpy integer/float scalars.
+
+    Examples
+    --------
+    >>> is_number(np.int64(3)), is_number(True), is_number("1")
+    (True, False, False)
+    """
     return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
 
 
@@ -207,7 +223,7 @@ class TableReader:
                 raise self.fail(key, f"must be true or false, got {_show(v)}")
             return v
         if kind in ("float", "int"):
-            if not _is_number(v):
+            if not is_number(v):
                 raise self.fail(key, f"must be a number, got {type(v).__name__}")
             if kind == "int" and not isinstance(v, numbers.Integral):
                 raise self.fail(key, f"must be an integer, got {_show(v)}")
@@ -218,7 +234,7 @@ class TableReader:
                 n = f"{length} " if length else ""
                 raise self.fail(key, f"must be a list of {n}numbers, got {_show(v)}")
             for x in v:
-                if not _is_number(x):
+                if not is_number(x):
                     raise self.fail(key, f"must be a list of numbers, got {_show(v)}")
                 if kind == "ivec" and not isinstance(x, numbers.Integral):
                     raise self.fail(key, f"must be a list of integers, got {_show(v)}")

@@ -24,7 +24,7 @@ from ..materials.tissue import TISSUE_LAWS
 from ..mesh import Split, TetMesh, box_mesh, read_mesh
 from ..regions import Region, locate_points, resolve_region
 from .limits import check_mesh_size
-from .reader import MAX_MAGNITUDE, TableReader, _show
+from .reader import MAX_MAGNITUDE, TableReader, _show, is_number
 from .tissue import TISSUE_KEYS, parse_tissue
 from .types import (
     AXES_TYPES,
@@ -232,12 +232,7 @@ def parse_axes(r: TableReader, mesh: TetMesh) -> np.ndarray:
 
 def _coordinate(x: Any) -> bool:
     """A number usable as a coordinate: finite and within :data:`MAX_MAGNITUDE`."""
-    return (
-        isinstance(x, (int, float))
-        and not isinstance(x, bool)
-        and math.isfinite(x)
-        and abs(x) <= MAX_MAGNITUDE
-    )
+    return is_number(x) and math.isfinite(x) and abs(x) <= MAX_MAGNITUDE
 
 
 def parse_region(r: TableReader, mesh: TetMesh, key: str = "region") -> Region:
@@ -270,10 +265,7 @@ def parse_region(r: TableReader, mesh: TetMesh, key: str = "region") -> Region:
                 and all(
                     isinstance(c, list)
                     and len(c) == 3
-                    and all(
-                        isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
-                        for x in c
-                    )
+                    and all(is_number(x) and math.isfinite(x) for x in c)
                     for c in box
                 )
             )

@@ -274,8 +274,12 @@ def test_numpy_scalars_in_a_programmatic_table_are_numbers():
     table = {"name": "np", "material": {"law": "linear", "E": np.float32(1e4), "nu": 0.3},
              "mesh": {"generator": "box", "size": [1.0, 1.0, np.float64(2.0)],
                       "divisions": [np.int64(2), np.int32(1), 1]}}  # fmt: skip
+    table["boundary"] = [{"region": {"point": [np.float64(0.0), 0, 0]}, "fix": ["x"]},
+                         {"region": {"box": [[np.float32(-1), -1, -1], [0.1, 2, 3]]},
+                          "fix": ["y"]}]  # fmt: skip
     scene = scene_from_dict(table)
     assert scene.mesh.n_tets == 2 * 1 * 1 * 6 and scene.material.E == pytest.approx(1e4)
+    assert scene.dirichlet()[0].size == 1 + 4  # the corner's x, the x = 0 face's four y
     table["mesh"]["divisions"] = [np.bool_(True), 1, 1]
     with pytest.raises(SceneError, match="mesh.divisions: must be a list of numbers"):
         scene_from_dict(table)
