@@ -288,7 +288,7 @@ def solve_spring(
     except SolverError as exc:
         if writer is not None:
             writer.close(plot=False)
-        raise stopped_error(exc, model.x0, model.elements, opts) from None
+        raise stopped_error(exc, model.x0, model.elements, opts, model.stiffening) from None
     wall = time.perf_counter() - t0
     x = info.x
     u = x - model.x0

@@ -79,7 +79,11 @@ def axis_measures(x: np.ndarray, elements: SpringElements) -> dict[str, float]:
 
 
 def stop_reason(
-    x: np.ndarray, x0: np.ndarray, elements: SpringElements, options: SpringOptions
+    x: np.ndarray,
+    x0: np.ndarray,
+    elements: SpringElements,
+    options: SpringOptions,
+    stiffening=None,
 ) -> str:
     """One clause on the element state at ``x`` (the last converged state), with a reading.
 
@@ -89,6 +93,9 @@ def stop_reason(
         Node positions ``(n, 3)`` and their rest positions.
     elements, options
         The spring model's rest data and options.
+    stiffening
+        The model's :class:`~springmodel.stiffening.StiffeningPart` (its largest ``s_e`` is
+        named), or None.
 
     Returns
     -------
@@ -108,6 +115,13 @@ def stop_reason(
         term = NodalVolume(x0, elements.tets, k, options.volumetric)
         Ja = term.ratios(x)
         text += f", nodal volume ratio {Ja.min():.3g} to {Ja.max():.3g}"
+    if stiffening is not None:
+        s_max = float(np.max(stiffening.scale(x)[1]))
+        text += (
+            f", stiffening factor up to {s_max:.3g}"
+            if np.isfinite(s_max)
+            else (", an element past the stiffening's cap (exponent above 60)")
+        )
     if options.torsion == "energy" and m["shear_deg"] >= ENERGY_TORSION_LIMIT_DEG:
         text += (
             "; the energy torsion law's moment peaks at 45 deg of shear, beyond which the "
@@ -131,7 +145,11 @@ def stop_reason(
 
 
 def stopped_error(
-    exc: SolverError, x0: np.ndarray, elements: SpringElements, options: SpringOptions
+    exc: SolverError,
+    x0: np.ndarray,
+    elements: SpringElements,
+    options: SpringOptions,
+    stiffening=None,
 ) -> SolverError:
     """The spring model's :class:`SolverError` for a solver's ``exc`` (positions as state).
 
@@ -147,6 +165,8 @@ def stopped_error(
         Rest positions ``(n, 3)``.
     elements, options
         The spring model's rest data and options.
+    stiffening
+        The model's stiffening part or None (see :func:`stop_reason`).
 
     Returns
     -------
@@ -158,6 +178,6 @@ def stopped_error(
     x = np.asarray(exc.state, dtype=float).reshape(-1, 3)
     message = str(exc)
     if exc.load_factor is not None and np.isfinite(x).all():
-        why = stop_reason(x, x0, elements, options)
+        why = stop_reason(x, x0, elements, options, stiffening)
         message = f"spring {message}; at load factor {exc.load_factor:.4g}: {why}"
     return SolverError(message, state=x - x0, load_factor=exc.load_factor)

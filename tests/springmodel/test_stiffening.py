@@ -295,3 +295,15 @@ def test_bundled_ventricles_run_to_full_load_where_quadratic_springs_stop(name):
     with pytest.raises(SolverError, match="stopped at load factor 0") as err:
         solve_scene(scene_from_dict({**data, "spring": quadratic}, path), "spring")
     assert 0.0 < err.value.load_factor < 1.0
+
+
+def test_stop_reason_names_the_largest_stiffening_factor():
+    from springmodel.stop_reason import stop_reason
+
+    X, rng, opts, (el, _, _, part) = case_parts("guccione-green-shear")
+    x = deformed(X, rng)
+    s_max = part.scale(x)[1].max()
+    text = stop_reason(x, X, el, opts, part)
+    assert f"stiffening factor up to {s_max:.3g}" in text
+    past = stop_reason(X + 10.0 * (x - X), X, el, opts, part)  # strains of hundreds of %
+    assert "past the stiffening's cap" in past
