@@ -85,8 +85,9 @@ class SpringModel:
         self._follower = has_follower_loads(scene)
         self._f_dead = external_forces(scene) if not self._follower else None
         self._conservative = is_conservative(self.options) and not self._follower
-        self._hessian = None
-        if self._conservative:
+        self._hessian = None  # the springs' analytic tangent (follower loads add their own)
+        self._load_jacobian = None
+        if is_conservative(self.options):
             try:
                 from .hessian import SpringHessian
 
@@ -128,15 +129,27 @@ class SpringModel:
         return self.kernel.energy(x) + nodal + stiff - work
 
     def stiffness(self, x: np.ndarray, scale: float = 1.0) -> sp.csr_matrix | None:
-        if self.nodal is not None:
+        """The springs' analytic tangent (with the stiffening and nodal terms), plus the
+        coloured finite-difference Jacobian of the follower loads alone; ``None`` (the
+        solvers' differences of all forces) for non-conservative laws, damping or LMS, or
+        their differences with the nodal term's analytic tangent."""
+        if self._hessian is None:
+            if self.nodal is None:
+                return None
             rest = lambda y: self._element_forces(y, None) + self.external(y, scale)  # noqa: E731
-            K = self.nodal.stiffness(x, self._hessian, rest)
-        elif self._hessian is None:
-            return None  # finite differences of all forces (follower loads, damping, LMS)
+            return self.nodal.stiffness(x, None, rest)
+        if self.nodal is not None:
+            K = self.nodal.stiffness(x, self._hessian, None)
         else:
             K = self._hessian.matrix(x)
-        if self.stiffening is not None and self._hessian is not None:
+        if self.stiffening is not None:
             K = K + self.stiffening.stiffness(x)
+        if self._follower:  # a pressure's nodes share a facet, hence a tet: the colouring holds
+            if self._load_jacobian is None:
+                from springfem.mechanics.fd_jacobian import ColoredJacobian
+
+                self._load_jacobian = ColoredJacobian(self.elements.tets, self.elements.n_points)
+            K = K + self._load_jacobian(lambda y: self.external(y, scale), x)
         return K
 
     def element_nodes(self) -> np.ndarray:
