@@ -17,38 +17,46 @@ Examples
 'E = 0.01 Pa is outside 10 Pa – 1e+09 Pa, the range of soft tissue: check the units'
 >>> modulus_warning(Material("linear", 5e3, 0.3)) is None
 True
+>>> modulus_warning(Material("linear", 5.0, 0.3), units="mm-kPa") is None  # 5 kPa
+True
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from springfem.scene import Material, Scene
+from springfem.scene import UNIT_SYSTEMS, Material, Scene
 
 E_RANGE = (10.0, 1.0e9)  # Pa
 SMALL_STRAIN = 0.05  # max |principal Green-Lagrange strain| of a linear-law solution
 LINEAR_LAWS = ("linear", "transverse-linear")
 
 
-def modulus_warning(material: Material) -> str | None:
+def modulus_warning(material: Material, units: str = "SI") -> str | None:
     """A line when a Young's modulus of ``material`` is outside :data:`E_RANGE`.
 
     Parameters
     ----------
     material
         The scene's material.
+    units
+        The scene's unit system (:data:`springfem.scene.UNIT_SYSTEMS`): its stress unit
+        scales the moduli to Pa.
 
     Returns
     -------
     str or None
     """
     lo, hi = E_RANGE
+    scale = UNIT_SYSTEMS[units]
+    unit = "Pa" if units == "SI" else units.split("-")[1]
     for name in ("E", "E_fiber", "E_cross"):
         E = getattr(material, name, None)
-        if E is not None and not lo <= E <= hi:
+        if E is not None and not lo <= E * scale <= hi:
+            shown = f"{E:g} Pa" if scale == 1.0 else f"{E:g} {unit} ({E * scale:g} Pa)"
             return (
-                f"{name} = {E:g} Pa is outside {lo:g} Pa – {hi:g} Pa, the range of soft "
-                "tissue: check the units"
+                f"{name} = {shown} is outside {lo:g} Pa – {hi:g} Pa, the range of soft "
+                "tissue: check the units" + ("" if scale == 1.0 else f" (the scene's: {units})")
             )
     return None
 

@@ -262,7 +262,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))  # sweeps: --set
     for note in scene.mesh.notes:
         print(f"note: {note}", file=sys.stderr)
-    if (w := guards.modulus_warning(scene.material)) is not None:
+    if (w := guards.modulus_warning(scene.material, scene.units)) is not None:
         warn(w)
     tag = (
         args.model if args.model == "spring" else f"fem-p{args.order or FemOptions.of(scene).order}"

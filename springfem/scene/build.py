@@ -33,7 +33,7 @@ from .sections import (
     parse_mesh,
     parse_probe,
 )
-from .types import Material, Scene
+from .types import UNIT_SYSTEMS, Material, Scene
 
 MODEL_SECTIONS = ("spring", "fem", "output", "solver")
 """Sections parsed by a registered parser: the models' (``spring``, ``fem``) and the core's
@@ -68,7 +68,7 @@ def register_section(name: str, parse: Callable[[TableReader], Any]) -> None:
 
 
 #: The sections and keys of a scene's top level besides the model sections.
-SECTIONS = ("name", "mesh", "material", "axes", "boundary", "load", "probe")
+SECTIONS = ("name", "units", "mesh", "material", "axes", "boundary", "load", "probe")
 
 
 def _unknown_top_level(data: dict, file: str) -> SceneError | None:
@@ -131,6 +131,7 @@ def scene_from_dict(data: dict, path: str | os.PathLike | None = None) -> Scene:
     top = TableReader(data, "", file)
     name = top.get("name", "str", default=Path(file).stem if path else "scene")
     safe = safe_filename(name)  # the name becomes part of default output paths
+    units = top.get("units", "str", default="SI", choices=tuple(UNIT_SYSTEMS))
     for section in ("mesh", "material"):
         if section not in data:
             raise _unknown_top_level(data, file) or SceneError(
@@ -191,6 +192,7 @@ def scene_from_dict(data: dict, path: str | os.PathLike | None = None) -> Scene:
         options=options,
         path=Path(path) if path is not None else None,
         raw=data,
+        units=units,
     )
 
 

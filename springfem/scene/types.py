@@ -35,6 +35,11 @@ AXES_TYPES = ("uniform", "helix", "cells")
 COMPONENTS = ("x", "y", "z")
 
 
+#: Consistent unit systems a scene may declare (``units = "..."``), with the size of their
+#: stress unit in Pa (length mm, force mN for kPa and N for MPa).
+UNIT_SYSTEMS = {"SI": 1.0, "mm-kPa": 1.0e3, "mm-MPa": 1.0e6}
+
+
 @dataclass(frozen=True)
 class Material:
     """Material parameters (SI units). Isotropic constants are derived where possible.
@@ -181,6 +186,9 @@ class Scene:
         The scene file, if any.
     raw
         The scene's table as given.
+    units
+        The unit system the scene's numbers are in (:data:`UNIT_SYSTEMS`): ``SI`` or a
+        consistent ``mm-kPa`` / ``mm-MPa``; only the plausibility warnings read it.
     """
 
     name: str
@@ -193,6 +201,7 @@ class Scene:
     options: dict[str, Any] = field(default_factory=dict)
     path: Path | None = None
     raw: dict = field(default_factory=dict, repr=False)
+    units: str = "SI"
 
     def section(self, name: str, parse: Callable[[TableReader], Any]) -> Any:
         """The parsed options of the model section ``[name]`` (parsed once, then cached).

@@ -147,6 +147,7 @@ def stretch_data(direction: str, stretch: float, n: int, law: str = "guccione") 
     sheet = [0.0, 1.0, 0.0] if direction == "along" else [1.0, 0.0, 0.0]
     data = {
         "name": f"tissue-{direction}",
+        "units": "mm-kPa",
         "mesh": {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [n, n, n]},
         "material": dict(STRETCH_LAWS[law]),
         "axes": {"fiber": fiber, "sheet": sheet},

@@ -286,3 +286,24 @@ def test_numpy_scalars_in_a_programmatic_table_are_numbers():
     table["mesh"]["divisions"] = [np.float64(2.0), 1, 1]
     with pytest.raises(SceneError, match="mesh.divisions: must be a list of integers"):
         scene_from_dict(table)
+
+
+def test_declared_units_scale_the_modulus_check():
+    # a scene in mm and kPa (Land's): its moduli of a few kPa are soft tissue, not 10 Pa
+    from studies.guards import modulus_warning
+
+    for name in ("land-beam", "land-ventricle", "land-ventricle-fibres"):
+        bundled = load_scene(SCENES / f"{name}.toml")
+        assert bundled.units == "mm-kPa"
+        assert modulus_warning(bundled.material, bundled.units) is None
+    table = {"name": "u", "units": "mm-kPa", "material": {"law": "linear", "E": 5.0, "nu": 0.3},
+             "mesh": {"generator": "box", "size": [1, 1, 1], "divisions": [1, 1, 1]}}  # fmt: skip
+    scene = scene_from_dict(table)
+    assert scene.units == "mm-kPa" and modulus_warning(scene.material, scene.units) is None
+    assert modulus_warning(scene.material) is not None  # 5 Pa in SI: a unit slip
+    table["material"]["E"] = 5.0e-3  # 5 Pa written in kPa
+    line = modulus_warning(scene_from_dict(table).material, "mm-kPa")
+    assert line == ("E = 0.005 kPa (5 Pa) is outside 10 Pa – 1e+09 Pa, the range of soft "
+                    "tissue: check the units (the scene's: mm-kPa)")  # fmt: skip
+    with pytest.raises(SceneError, match=r"units: 'cm-kPa' is not one of SI, mm-kPa, mm-MPa"):
+        scene_from_dict({**table, "units": "cm-kPa"})
