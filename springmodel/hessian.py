@@ -153,13 +153,21 @@ class SpringHessian:
         """Use these volume constants ``(m,)`` from now on (``None``: ``elements.k_volume``)."""
         self._k_volume = None if k_volume is None else np.asarray(k_volume, dtype=float)
 
-    def element_matrices(self, x: np.ndarray, k_volume: np.ndarray | None = None) -> np.ndarray:
-        """Element stiffness matrices ``(m, 12, 12)`` at positions ``x`` ``(n, 3)``.
+    def element_matrices(
+        self,
+        x: np.ndarray,
+        k_volume: np.ndarray | None = None,
+        lo: int = 0,
+        hi: int | None = None,
+    ) -> np.ndarray:
+        """Element stiffness matrices ``(hi - lo, 12, 12)`` at positions ``x`` ``(n, 3)``.
 
-        Row/column ``3 i + a`` is component ``a`` of the element's vertex ``i``.
+        Row/column ``3 i + a`` is component ``a`` of the element's vertex ``i``; ``lo:hi``
+        selects elements (default all).
         """
         x = np.ascontiguousarray(x, dtype=float).reshape(-1, 3)
-        return self._block(x, self._volume_constants(k_volume), 0, self.elements.n_elements)
+        hi = self.elements.n_elements if hi is None else hi
+        return self._block(x, self._volume_constants(k_volume), lo, hi)
 
     def matrix(self, x: np.ndarray, k_volume: np.ndarray | None = None) -> sp.csr_matrix:
         """Tangent stiffness ``K = -d forces / dx`` at ``x``, ``(3n, 3n)`` CSR, symmetric.

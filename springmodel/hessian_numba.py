@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .springs.shear import SHEAR_FLOOR
+from .shear_numba import shear_terms
 
 
 @njit(cache=True, parallel=True, fastmath=False)
@@ -97,13 +97,9 @@ def _element_matrix(
             B = Ls[q]
             c = U[l, 0] * U[q, 0] + U[l, 1] * U[q, 1] + U[l, 2] * U[q, 2]
             if torsion == 2:
-                g = max(1.0 - c * c, SHEAR_FLOOR)
-                g0 = 1.0 - c0[k, p] * c0[k, p]
-                s03 = g0 * np.sqrt(g0)
-                delta = s03 * (c / np.sqrt(g) - c0[k, p] / np.sqrt(g0))
-                e1 = s03 / (g * np.sqrt(g))
+                delta, e1, e2 = shear_terms(c, c0[k, p])
                 dc = delta * e1
-                d2 = e1 * e1 + delta * 3.0 * c * e1 / g
+                d2 = e1 * e1 + delta * e2
             else:
                 dc = c - c0[k, p]
                 d2 = 1.0

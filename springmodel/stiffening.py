@@ -38,6 +38,7 @@ import numpy as np
 
 from springfem.errors import InputError
 
+from .hessian import TORSION_CODES, SpringHessian
 from .hessian_numpy import polynomial_coefficients
 from .options import SpringOptions
 from .rest_geometry import TORSION_PAIRS
@@ -50,8 +51,6 @@ __all__ = [
     "stiffened_energy",
     "stiffening_modulus",
 ]
-#: Torsion codes of :func:`springmodel.stiffening_kernel.stiffening_pass`.
-TORSION_CODES = {"off": 0, "energy": 1, "shear": 2}
 #: Elements per block of :meth:`StiffeningPart.stiffness` (bounds its element matrices).
 CHUNK = 16384
 #: Largest exponent ``2 W_q / (C V)`` evaluated: beyond it the state is far outside any tissue
@@ -317,8 +316,6 @@ class StiffeningPart:
             ``(hi - lo, 12, 12)``, rows as
             :meth:`springmodel.hessian.SpringHessian.element_matrices`.
         """
-        from .hessian import SpringHessian
-
         el = self.elements
         hi = el.n_elements if hi is None else hi
         if self._hessian is None:
@@ -330,7 +327,7 @@ class StiffeningPart:
         if s is None or g is None:
             _, s, _, g = self._pass(x, False, gradients=True)
         s, g = s[lo:hi], g[lo:hi].reshape(-1, 12)
-        H = self._hessian._block(x, np.zeros(el.n_elements), lo, hi)
+        H = self._hessian.element_matrices(x, lo=lo, hi=hi)
         with np.errstate(invalid="ignore", over="ignore"):
             H *= (s - 1.0)[:, None, None]
             H += (2.0 * s / (self.modulus * el.V0[lo:hi]))[:, None, None] * (

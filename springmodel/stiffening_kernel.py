@@ -33,9 +33,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .springs.shear import SHEAR_FLOOR
-
-_PAIRS = ((0, 1), (0, 2), (1, 2))
+from .rest_geometry import TORSION_PAIRS
+from .shear_numba import shear_terms
 
 
 @njit(cache=True, fastmath=False)
@@ -97,17 +96,14 @@ def stiffening_pass(
                 gz[l, c] = f1 * U[l, c]
             sl[l] = L[l] / l0[k, l] - 1.0
         for p in range(3):
-            l, q = _PAIRS[p]
+            l, q = TORSION_PAIRS[p]
             if torsion != 0:
                 cos = U[l, 0] * U[q, 0] + U[l, 1] * U[q, 1] + U[l, 2] * U[q, 2]
                 kk = kt[k, p]
                 if torsion == 2:
-                    g = max(1.0 - cos * cos, SHEAR_FLOOR)
-                    g0 = 1.0 - c0[k, p] * c0[k, p]
-                    s03 = g0 * math.sqrt(g0)
-                    delta = s03 * (cos / math.sqrt(g) - c0[k, p] / math.sqrt(g0))
+                    delta, e1, _ = shear_terms(cos, c0[k, p])
                     W += 0.5 * kk * delta * delta
-                    d1 = kk * delta * s03 / (g * math.sqrt(g))
+                    d1 = kk * delta * e1
                 else:
                     dc = cos - c0[k, p]
                     W += 0.5 * kk * dc * dc

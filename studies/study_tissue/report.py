@@ -14,10 +14,12 @@ from ..tables import save_figure, write_table
 BEAM_RANGE = (4.14, 4.20)
 
 
+#: Row labels of the FEM models (``fem``: the P2 reference; ``fem-p1``: the same-mesh P1).
+FEM_LABELS = {"fem": "fem", "fem-p1": "fem P1"}
+
+
 def _label(case: dict) -> str:
-    if case["model"] in ("fem", "fem-p1"):
-        return {"fem": "fem", "fem-p1": "fem P1"}[case["model"]]
-    return f"spring ({case['variant']})"
+    return FEM_LABELS.get(case["model"]) or f"spring ({case['variant']})"
 
 
 def _rel(value: float, ref: float) -> float:
