@@ -6,7 +6,8 @@ Modules: :mod:`.system` (protocol, rigid-body modes), :mod:`.results` (``Traject
 ``SolveInfo``), :mod:`.context` (per-solve view, failure location), :mod:`.linsolve`,
 :mod:`.timestep`, :mod:`.blowup`, :mod:`.explicit`, :mod:`.relaxation`, :mod:`.implicit`,
 :mod:`.newton`, :mod:`.static`, :mod:`.linear` (the linearised solve), :mod:`.limits`
-(time and step caps), :mod:`.fd_jacobian`, :mod:`.toy` (the one-DOF system of the examples).
+(time and step caps), :mod:`.modes` (zero-energy modes of a tangent), :mod:`.fd_jacobian`,
+:mod:`.toy` (the one-DOF system of the examples).
 
 Examples
 --------
@@ -20,6 +21,7 @@ from .fd_jacobian import ColoredJacobian, distance2_coloring, fd_jacobian
 from .implicit import implicit
 from .linear import linear_static
 from .linsolve import DIRECT_MAX_DOFS, LinearSolver, LinearSolverKind, solve_linear
+from .modes import ZeroModes, spurious_modes, zero_modes
 from .relaxation import explicit_static
 from .results import SolveInfo, Trajectory
 from .static import static
@@ -42,6 +44,7 @@ __all__ = [
     "MechanicalSystem",
     "SolveInfo",
     "Trajectory",
+    "ZeroModes",
     "check_constrained",
     "constrained_positions",
     "distance2_coloring",
@@ -54,6 +57,8 @@ __all__ = [
     "reference_force",
     "rigid_body_modes",
     "solve_linear",
+    "spurious_modes",
     "stable_time_step",
     "static",
+    "zero_modes",
 ]
