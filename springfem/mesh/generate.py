@@ -1,4 +1,5 @@
-"""Structured box meshes: every hexahedron of a grid split into five or six tets.
+"""Box meshes: every hexahedron of a grid split into five or six tets, or the Delaunay
+tets of a jittered grid (an unstructured mesh of the same box).
 
 Examples
 --------
@@ -7,6 +8,9 @@ Examples
 (27, 48)
 >>> round(float(m.volumes().sum()), 12)
 1.0
+>>> d = box_mesh((1.0, 1.0, 1.0), (3, 3, 3), split="delaunay", seed=0)
+>>> round(float(d.volumes().sum()), 12), bool((d.volumes() > 0).all())
+(1.0, True)
 """
 
 from __future__ import annotations
@@ -19,7 +23,9 @@ from ..errors import MeshError
 from .tetmesh import TetMesh, tet_volumes
 from .validate import MAX_COORDINATE
 
-Split = Literal["five", "six", "five-mirrored", "six-mirrored"]
+Split = Literal["five", "six", "five-mirrored", "six-mirrored", "delaunay"]
+#: A Delaunay tet below this fraction of a grid cell's volume is flat (dropped).
+MIN_DELAUNAY_VOLUME = 1e-6
 
 # Hexahedron corners, local index -> (i, j, k) offsets.
 _HEX_CORNERS = np.array(
@@ -41,8 +47,10 @@ def box_mesh(
     divisions: tuple[int, int, int],
     split: Split = "six",
     origin: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    jitter: float = 0.3,
+    seed: int = 0,
 ) -> TetMesh:
-    """Structured box mesh, each hexahedron split into five or six tets.
+    """Box mesh: each hexahedron split into five or six tets, or Delaunay tets.
 
     Parameters
     ----------
@@ -56,9 +64,15 @@ def box_mesh(
         axis, so each 2x2x2 block is symmetric. ``five``: five tets per hexahedron; a
         conforming five-tet mesh must alternate the two mirror-image splits, so ``five``
         starts with the even split at the origin and ``five-mirrored`` with the odd one
-        (the mirror image of ``five``).
+        (the mirror image of ``five``). ``delaunay``: an unstructured mesh, the Delaunay
+        tets of the grid's nodes moved at random (see ``jitter``), so that no element is
+        aligned with the axes.
     origin
         Coordinates of the box corner with the smallest coordinates.
+    jitter, seed
+        ``delaunay`` only: interior nodes move by up to ``jitter`` of a cell along each
+        axis, nodes on a face only within it (the box and its faces are kept exactly);
+        ``seed`` of the random moves (the mesh is a function of the arguments).
 
     Returns
     -------
@@ -76,6 +90,8 @@ def box_mesh(
     _check_box_axes(axes, size, origin, (nx, ny, nz))
     X, Y, Z = np.meshgrid(*axes, indexing="ij")
     points = np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
+    if split == "delaunay":
+        return _delaunay_box(points, size, origin, (nx, ny, nz), jitter, seed)
 
     def node(i, j, k):
         return (i * (ny + 1) + j) * (nz + 1) + k
@@ -122,6 +138,28 @@ def box_mesh(
     tets[flip] = tets[flip][:, [0, 2, 1, 3]]
     desc = f"box {[float(s) for s in size]} divisions {[nx, ny, nz]} split {split}"
     return TetMesh(points=points, tets=tets, source=desc)
+
+
+def _delaunay_box(points, size, origin, divisions, jitter: float, seed: int) -> TetMesh:
+    """The Delaunay tets of the grid ``points`` moved at random (see :func:`box_mesh`)."""
+    from scipy.spatial import Delaunay
+
+    if not 0.0 <= jitter < 0.5:
+        raise MeshError(f"mesh jitter must be in [0, 0.5) of a cell, got {jitter}")
+    rng = np.random.default_rng(seed)
+    lo = np.asarray(origin, float)
+    hi = lo + np.asarray(size, float)
+    h = np.asarray(size, float) / np.asarray(divisions, float)
+    move = rng.uniform(-jitter, jitter, points.shape) * h
+    on_face = np.isclose(points, lo) | np.isclose(points, hi)
+    pts = points + np.where(on_face, 0.0, move)
+    tets = Delaunay(pts).simplices.astype(np.int64)
+    vol = tet_volumes(pts, tets)
+    keep = np.abs(vol) > MIN_DELAUNAY_VOLUME * float(np.prod(h))
+    tets, vol = tets[keep], vol[keep]
+    tets[vol < 0] = tets[vol < 0][:, [0, 2, 1, 3]]
+    desc = f"jittered Delaunay box {list(divisions)} seed {seed}"
+    return TetMesh(pts, tets, source=desc)
 
 
 def _check_box_axes(axes: list[np.ndarray], size, origin, divisions) -> None:

@@ -42,7 +42,10 @@ from .ventricle import ELLIPSOID_KEYS, RULE_BASED_KEYS, parse_ellipsoid, parse_r
 
 #: The keys valid in each core section (messages suggest the closest for a misspelt one).
 SECTION_KEYS = {
-    "mesh": ("file", "scale", "generator", "size", "divisions", "split", "origin", *ELLIPSOID_KEYS),
+    "mesh": (
+        *("file", "scale", "generator", "size", "divisions", "split", "origin", "jitter", "seed"),
+        *ELLIPSOID_KEYS,
+    ),
     "material": (
         *("law", "density", "E", "nu", "mu", "kappa", "formulation", "volumetric"),
         *("E_fiber", "E_cross", "nu_fiber_cross", "nu_cross", "G_fiber"),
@@ -99,16 +102,25 @@ def parse_mesh(r: TableReader, base: Path) -> TetMesh:
     div = r.get("divisions", "ivec", length=3, positive=True)
     split: Split = r.get("split", "str", default="six", choices=opt_splits())
     origin = r.get("origin", "vec", default=np.zeros(3), length=3)
+    jitter = seed = None
+    for key in ("jitter", "seed"):
+        if r.has(key) and split != "delaunay":
+            raise r.fail(key, f'applies to split = "delaunay" only (this box: split = "{split}")')
+    if split == "delaunay":
+        jitter = r.get("jitter", "float", default=0.3, nonneg=True)
+        seed = r.get("seed", "int", default=0)
     r.finish()
-    n_tets = math.prod(int(d) for d in div) * (6 if split.startswith("six") else 5)
+    per_cell = 6 if split.startswith("six") or split == "delaunay" else 5
+    n_tets = math.prod(int(d) for d in div) * per_cell
     too_big = check_mesh_size(n_tets)
     if too_big:
         raise r.fail("divisions", too_big)
     assert gen == "box"
+    extra = {} if split != "delaunay" else {"jitter": jitter, "seed": seed}
     try:
-        return box_mesh(tuple(size), tuple(int(d) for d in div), split, tuple(origin))
+        return box_mesh(tuple(size), tuple(int(d) for d in div), split, tuple(origin), **extra)
     except InputError as exc:
-        raise r.fail("size", str(exc)) from None
+        raise r.fail("jitter" if "jitter" in str(exc) else "size", str(exc)) from None
 
 
 def opt_splits() -> tuple[str, ...]:

@@ -162,3 +162,45 @@ def test_unreadable_and_tetless_files(tmp_path):
     meshio.write(tri, meshio.Mesh(np.eye(3), [("triangle", np.array([[0, 1, 2]]))]))
     with pytest.raises(MeshError, match="contains no tetrahedra"):
         read_mesh(tri)
+
+
+def test_delaunay_box_is_unstructured_and_fills_the_box_exactly():
+    """split = "delaunay": the box's volume exactly, faces kept planar, no axis-aligned
+    hexahedral pattern (tets per cell not a constant), seeded (same mesh twice)."""
+    from springfem.mesh import box_mesh
+    from springfem.regions import resolve_region
+    from springfem.scene import scene_from_dict
+
+    size, div = (2.0, 1.0, 0.5), (8, 4, 2)
+    m = box_mesh(size, div, "delaunay", origin=(1.0, -1.0, 0.0), jitter=0.3, seed=4)
+    V = m.volumes()
+    assert (V > 0).all() and abs(V.sum() - 1.0) < 1e-12
+    lo, hi = m.points.min(axis=0), m.points.max(axis=0)
+    np.testing.assert_allclose(lo, [1.0, -1.0, 0.0], atol=1e-15)
+    np.testing.assert_allclose(hi, [3.0, 0.0, 0.5], atol=1e-15)
+    h = np.array(size) / np.array(div)
+    interior = np.all((m.points > lo + 1e-9) & (m.points < hi - 1e-9), axis=1)
+    grid = np.array([1.0, -1.0, 0.0]) + np.round((m.points - [1.0, -1.0, 0.0]) / h) * h
+    assert np.abs(m.points[interior] - grid[interior]).max() > 0.1 * h.min()  # moved
+    again = box_mesh(size, div, "delaunay", origin=(1.0, -1.0, 0.0), jitter=0.3, seed=4)
+    assert np.array_equal(again.tets, m.tets)
+    scene = scene_from_dict({
+        "mesh": {"generator": "box", "size": list(size), "divisions": list(div),
+                 "split": "delaunay", "seed": 4, "origin": [1.0, -1.0, 0.0]},
+        "material": {"law": "linear", "E": 1.0, "nu": 0.3},
+    })  # fmt: skip
+    assert np.array_equal(scene.mesh.tets, m.tets)
+    # the x_max face's nodes all lie on the plane x = 3 (faces move within themselves)
+    x_max = resolve_region(scene.mesh, "x_max").nodes
+    assert x_max.size >= (div[1] + 1) * (div[2] + 1)
+    assert np.allclose(m.points[x_max][:, 0], 3.0)
+
+
+def test_delaunay_keys_are_refused_on_a_structured_split():
+    from springfem.errors import SceneError
+    from springfem.scene import scene_from_dict
+
+    mesh = {"generator": "box", "size": [1, 1, 1], "divisions": [2, 2, 2], "jitter": 0.2}
+    table = {"mesh": mesh, "material": {"law": "linear", "E": 1.0, "nu": 0.3}}
+    with pytest.raises(SceneError, match='mesh.jitter: applies to split = "delaunay" only'):
+        scene_from_dict(table)
