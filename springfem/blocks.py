@@ -25,6 +25,7 @@ Examples
 from __future__ import annotations
 
 import hashlib
+from typing import Any
 
 import numba
 import numpy as np
@@ -32,7 +33,7 @@ from numba import njit, prange
 
 #: Elements per block (two AVX-512 vectors of float64).
 BLOCK = 16
-_FLAGS = {"error_model": "numpy", "fastmath": {"contract"}}
+_FLAGS: dict[str, Any] = {"error_model": "numpy", "fastmath": {"contract"}}
 
 
 def block_layout(tets: np.ndarray, columns: np.ndarray, dtype) -> tuple[np.ndarray, np.ndarray]:
@@ -134,28 +135,71 @@ def variant_id(variant) -> str:
     return hashlib.sha256(repr(variant).encode()).hexdigest()[:12]
 
 
-def compile_named(py_func, name: str):
-    """``njit(cache=True)`` of a kernel closure under its own unique name.
+def compile_named(py_func, name: str, cache: bool = True):
+    """``njit(cache=cache)`` of a kernel closure under its own unique name.
 
     Every variant's block loop is a closure of the same factory, so all would share one
-    qualified name; numba derives the compiled symbol and the on-disk cache entry from it,
-    and a parallel driver that calls a second variant by that symbol was measured to run
-    the first variant's code (wrong forces, garbage in unused columns). A name per variant
-    keeps the symbols and cache files apart.
+    qualified name. numba names a compiled function's symbol by its qualified name, a
+    counter of the functions compiled so far *in the process that compiled it*, and the
+    argument types; a cached entry keeps the counter of the process that wrote it, so two
+    variants cached by two processes that had compiled the same number of functions (two
+    pytest-xdist workers, say) carry the same symbol. A process that loads both and then
+    compiles a parallel driver (never cached) links the block loop by that symbol and gets
+    the definition loaded last: the driver runs another variant's code, reading its
+    constant columns (wrong forces; past the end of ``K`` in the last block: garbage in the
+    last rows), while the serial driver, which calls its own dispatcher, stays right. A
+    name per variant keeps the symbols (and cache files) apart; reusing a name for other
+    code is refused.
 
     Parameters
     ----------
     py_func
         The Python function of the block loop.
     name
-        A valid identifier unique to the variant.
+        A valid identifier unique to the variant (the same name may be compiled again only
+        for the same code and captured values).
+    cache
+        Cache the compiled code on disk (numba's ``cache``).
 
     Returns
     -------
     numba dispatcher
+
+    Raises
+    ------
+    ValueError
+        If ``name`` was already given to a function of other code or captured values.
+
+    Examples
+    --------
+    >>> def factory(c):
+    ...     def run(a):
+    ...         return c * a
+    ...     return run
+    >>> compile_named(factory(2.0), "doubled", cache=False)(3.0)
+    6.0
+    >>> compile_named(factory(3.0), "doubled", cache=False)
+    Traceback (most recent call last):
+    ...
+    ValueError: kernel name 'doubled' is already used by other code or captured values
     """
+    key = _fingerprint(py_func)
+    if _NAMES.setdefault(name, key) != key:
+        raise ValueError(f"kernel name {name!r} is already used by other code or captured values")
     py_func.__name__ = py_func.__qualname__ = name
-    return njit(cache=True, **_FLAGS)(py_func)
+    return njit(cache=cache, **_FLAGS)(py_func)
+
+
+#: name -> fingerprint of the code and captured values compiled under it (:func:`compile_named`)
+_NAMES: dict[str, str] = {}
+
+
+def _fingerprint(py_func) -> str:
+    """Hash of a function's code and of its captured values (their ``repr``)."""
+    code = py_func.__code__
+    cells = tuple(c.cell_contents for c in py_func.__closure__ or ())
+    text = repr((code.co_code, code.co_consts, code.co_names, cells))
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def block_drivers(run):

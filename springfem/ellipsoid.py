@@ -60,7 +60,7 @@ def wall_volume(endo=ENDO, epi=EPI, base_z: float = BASE_Z) -> float:
     >>> math.isclose(wall_volume((1.0, 1.0), (2.0, 2.0), 2.0), 4 / 3 * math.pi * 7)
     True
     """
-    return _cap_volume(*epi, base_z) - _cap_volume(*endo, base_z)
+    return _cap_volume(epi[0], epi[1], base_z) - _cap_volume(endo[0], endo[1], base_z)
 
 
 def cavity_volume(endo=ENDO, base_z: float = BASE_Z) -> float:
@@ -84,7 +84,7 @@ def cavity_volume(endo=ENDO, base_z: float = BASE_Z) -> float:
     >>> math.isclose(cavity_volume((1.0, 1.0), 0.0), 2 / 3 * math.pi)  # half a unit ball
     True
     """
-    return _cap_volume(*endo, base_z)
+    return _cap_volume(endo[0], endo[1], base_z)
 
 
 def ellipsoid_mesh(
@@ -149,11 +149,11 @@ def ellipsoid_mesh(
         points = coords.reshape(-1, 3)
         index = np.zeros(int(tags.max()) + 1, dtype=np.int64)
         index[tags.astype(np.int64)] = np.arange(len(tags))
-        tets = []
+        blocks = []
         for dim, tag in solid:
             _, _, nodes = gmsh.model.mesh.getElements(dim, tag)
-            tets.append(np.asarray(nodes[0], dtype=np.int64).reshape(-1, 4))
-        tets = index[np.concatenate(tets)]
+            blocks.append(np.asarray(nodes[0], dtype=np.int64).reshape(-1, 4))
+        tets = index[np.concatenate(blocks)]
         facets: dict[str, list[np.ndarray]] = {"endo": [], "epi": [], "base": []}
         for _, tag in gmsh.model.getEntities(2):
             _, _, nodes = gmsh.model.mesh.getElements(2, tag)

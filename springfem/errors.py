@@ -1,4 +1,4 @@
-"""Typed errors shared by both models and the CLI (exit codes of DESIGN §6).
+"""Typed errors shared by both models and the CLI (exit codes of docs/contract.rst#exit-codes).
 
 Every error is one line; :func:`format_ids` names the offending elements or nodes in it.
 

@@ -134,7 +134,7 @@ def remove_stale_temp_files(folder: str | os.PathLike) -> list[Path]:
     list of pathlib.Path
         The files removed.
     """
-    removed = []
+    removed: list[Path] = []
     try:
         entries = list(Path(folder).iterdir())
     except (FileNotFoundError, NotADirectoryError):

@@ -73,15 +73,17 @@ def external_forces(scene: Scene, x: np.ndarray | None = None, scale: float = 1.
     for load in scene.loads:
         if load.type == "gravity":
             f += lumped_masses(scene)[:, None] * load.value[None, :]
-        elif load.type == "traction":
-            area, _ = facet_areas_normals(mesh.points, load.region.facets)
-            f += _spread_on_facets(n, load.region.facets, area[:, None] * load.value[None, :])
+            continue
+        reg = load.region
+        assert reg is not None  # every load but gravity acts on a region
+        if load.type == "traction":
+            area, _ = facet_areas_normals(mesh.points, reg.facets)
+            f += _spread_on_facets(n, reg.facets, area[:, None] * load.value[None, :])
         elif load.type == "pressure":
             pts = mesh.points if x is None else x
-            area, normal = facet_areas_normals(pts, load.region.facets)
-            f += _spread_on_facets(n, load.region.facets, -load.value[0] * (area[:, None] * normal))
+            area, normal = facet_areas_normals(pts, reg.facets)
+            f += _spread_on_facets(n, reg.facets, -load.value[0] * (area[:, None] * normal))
         elif load.type == "force":
-            reg = load.region
             if reg.facets.size:
                 area, _ = facet_areas_normals(mesh.points, reg.facets)
                 w = area / area.sum()

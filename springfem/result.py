@@ -1,4 +1,4 @@
-"""The result contract: the same fields for every model (DESIGN §6).
+"""The result contract: the same fields for every model (docs/contract.rst#result-fields).
 
 A :class:`Result` is written as ``result.json`` (atomically) next to a VTU file with the
 displacement and per-element data for ParaView.

@@ -1,7 +1,11 @@
-"""Test configuration: off-screen rendering and the Agg backend (pyvista's convention)."""
+"""Test configuration: off-screen rendering and the Agg backend (pyvista's convention), and
+the shared helpers of ``tests/support`` on the import path."""
 
 import os
+import sys
+from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the shared helpers: ``support``
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")

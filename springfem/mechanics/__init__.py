@@ -11,11 +11,21 @@ Modules: :mod:`.system` (protocol, rigid-body modes), :mod:`.results` (``Traject
 
 Examples
 --------
+The one-DOF spring-mass system of :mod:`.toy` solved statically and stepped explicitly at
+its stable step ``2 / omega_max``:
+
 >>> from springfem import mechanics
->>> callable(mechanics.static) and callable(mechanics.explicit)
+>>> from springfem.mechanics.toy import Oscillator
+>>> system = Oscillator()
+>>> dt, omega = mechanics.stable_time_step(system)
+>>> float(omega), float(dt)
+(2.0, 1.0)
+>>> info = mechanics.static(system)
+>>> bool(info.converged)
 True
 """
 
+from .context import reference_force
 from .explicit import Integrator, explicit
 from .fd_jacobian import ColoredJacobian, distance2_coloring, fd_jacobian
 from .implicit import implicit
@@ -30,7 +40,6 @@ from .system import (
     check_constrained,
     constrained_positions,
     free_dofs,
-    reference_force,
     rigid_body_modes,
 )
 from .timestep import stable_time_step

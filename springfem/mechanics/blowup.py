@@ -6,17 +6,18 @@ that names the step, time, node and element.
 
 Examples
 --------
-An unstable step (``omega dt = 2.2 > 2``) on an oscillator is caught:
+A non-finite kinetic energy is a blow-up; a quiet step is not:
 
 >>> import numpy as np
+>>> from springfem.mechanics.context import SolveContext
 >>> from springfem.mechanics.toy import Oscillator
->>> from springfem.mechanics import explicit
->>> from springfem.errors import SolverError
->>> try:
-...     explicit(Oscillator(), dt=1.1, steps=200)
-... except SolverError as err:
-...     print(str(err)[:38])
-explicit integration blew up at step 1
+>>> ctx = SolveContext(Oscillator())
+>>> monitor = BlowupMonitor(ctx, n_steps=10, dt=0.1, factor=1e4, ke0=1.0)
+>>> x, v = ctx.x0.copy(), np.zeros_like(ctx.x0)
+>>> monitor.check(1, 1.0, x, v, 1.0) is None
+True
+>>> monitor.check(2, float("nan"), x, v, 1.0)
+'non-finite velocity'
 """
 
 from __future__ import annotations

@@ -359,3 +359,26 @@ def note_solver(ctx: SolveContext, name: str) -> None:
     """
     if name != "none" and name not in ctx.solvers_used:
         ctx.solvers_used.append(name)
+
+
+def reference_force(system: MechanicalSystem, scale: float = 1.0) -> float:
+    """The load the body must balance, which static tolerances are relative to.
+
+    The norm of the free-DOF force at the rest positions with the fixed DOFs prescribed
+    (external forces times ``scale`` plus the internal reaction to the prescribed
+    displacements), or its linearisation when that is smaller: see
+    :func:`reference_norm`, which the solvers call.
+
+    Parameters
+    ----------
+    system
+        The system.
+    scale
+        Load factor.
+
+    Returns
+    -------
+    float
+        The norm (1 for an unloaded system).
+    """
+    return reference_norm(SolveContext(system), scale)

@@ -1,11 +1,18 @@
 """The linearised static solve: one tangent solve at rest, ``K(x0) du = f(x0)``.
 
-Small-strain FEM solves ``K u = f`` with the stiffness of the rest configuration; this is
+Small-strain FEM solves ``K u = f`` with the stiffness of the rest configuration and the
+loads applied on the reference configuration; this is
 the same for any :class:`~springfem.mechanics.system.MechanicalSystem`, so a nonlinear model
 can be compared with a linear reference *at the same kinematics*: for the spring model this
-is the small-strain spring element, which DESIGN §4 shows to be a P1 element with each
+is the small-strain spring element, which docs/theory.rst#the-effective-small-strain-matrix-d-k
+shows to be a P1 element with each
 element's effective matrix ``D_k``. Any difference from linear P1 FEM on the same mesh is
 then model error alone, with no geometric nonlinearity mixed in.
+
+``K`` is the tangent of the internal forces alone (the system's tangent at load factor 0,
+where its external forces vanish): a follower load such as a pressure is taken on the
+reference surface, so its dependence on the deformed surface (the load stiffness) has no
+place in a linear analysis, as in linear FEM.
 
 Examples
 --------
@@ -34,6 +41,9 @@ def linear_static(
 ) -> SolveInfo:
     """Solve the system linearised at rest: ``K(x0) du = f(x0)`` with prescribed ``du``.
 
+    ``K`` is the stiffness of the internal forces (``system.stiffness(x0, 0)``: no load
+    stiffness of follower loads), ``f`` the loads on the reference configuration.
+
     Parameters
     ----------
     system
@@ -61,7 +71,7 @@ def linear_static(
     ctx = SolveContext(system)
     check_constrained(system)
     x0 = ctx.x0
-    K = ctx.stiffness(x0, 1.0, jacobian)
+    K = ctx.stiffness(x0, 0.0, jacobian)  # internal forces only: loads on the reference
     f = ctx.forces(x0, None, 1.0).reshape(-1)
     du = np.zeros(3 * ctx.n)
     du[ctx.fixed] = np.asarray(system.prescribed(1.0), dtype=float) - x0.reshape(-1)[ctx.fixed]

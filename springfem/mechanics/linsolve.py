@@ -1,25 +1,30 @@
-"""The one linear solver of both models: SuperLU, or CG / GMRES preconditioned by pyamg
-smoothed aggregation with the rigid-body modes as near-nullspace (DESIGN §5).
+"""The one linear solver of both models: a sparse direct factorisation (MKL PARDISO, or
+SuperLU without it: :mod:`.direct`), or CG / GMRES preconditioned by pyamg smoothed
+aggregation with the rigid-body modes as near-nullspace.
 
-A :class:`LinearSolver` holds the choice (``auto``, ``direct``, ``amg``) and the settings;
-:meth:`LinearSolver.factorize` prepares one matrix (an LU factor or an AMG hierarchy) for
-several right-hand sides, :meth:`LinearSolver.solve` solves once. The matrix is either the
-free-DOF block itself or, with ``free`` given, the full matrix whose constrained DOFs are
-eliminated symmetrically (rows and columns zeroed, unit diagonal), which keeps the 3x3
-block structure smoothed aggregation works best with.
+A :class:`LinearSolver` holds the choice (``auto``, ``direct``, ``amg``), the settings and
+the direct solver's per-pattern state (so the matrices of one solve reuse the symbolic
+analysis); :meth:`LinearSolver.factorize` prepares one matrix for several right-hand sides,
+:meth:`LinearSolver.solve` solves once. With ``free`` given the matrix is the full one: the
+direct solver factorises its free block, AMG its symmetric elimination (constrained rows
+and columns zeroed, unit diagonal: the 3x3 blocks smoothed aggregation works best with).
 
-Size rule (``auto``): direct up to :data:`DIRECT_MAX_DOFS` unknowns, AMG above. Measured on
-the FEM stiffness of a clamped 2:1:1 box (P1 and P2, ν = 0.3, one process, warm caches):
-SuperLU and AMG-CG cost the same at about 4,100 DOFs on P1 (nnz 160k) and about 6,000 on P2
-(nnz 450k); at 7,600 DOFs direct is 1.8x (P1) and 1.3x (P2) slower, at 19,600 DOFs 3.5x and
-3.7x, at 28,600 P2 DOFs 5.9x, and its cost grows superlinearly (fill-in) while AMG's grows
-about linearly. The crossover in DOFs is about the same for both orders (it is not in nnz),
-so the rule counts DOFs; below it a factorisation is also exact, which suits the small,
-ill-conditioned problems (slender beams, near-incompressible P1) tests use.
+Size rule (``auto``): direct up to :data:`DIRECT_MAX_DOFS` unknowns, AMG above; a saddle
+point (``saddle_point``: mixed u–p, indefinite, which smoothed aggregation cannot
+precondition) is always factorised. With SuperLU the crossover with AMG-CG on the P1 and P2
+stiffness of a clamped box is at about 4,000–6,000 DOFs, the same in DOFs for both orders
+(not in nnz), and SuperLU's cost grows superlinearly (fill-in) while AMG's grows about
+linearly. PARDISO moves the crossover on that box to about 25,000 DOFs (P1) and 35,000
+(P2); on the slender P2 tangents of the bundled scenes (14k–19k DOFs) it is 15–35 times
+faster than AMG-CG, whose iterations grow with the slenderness. A factorisation is also
+exact, which suits the small, ill-conditioned problems (slender beams, near-incompressible
+P1) tests use.
 
 A solution is accepted when its relative residual ``|A x - b| / |b|`` is at most
 :data:`RESIDUAL_ACCEPT`; otherwise the solve raises :class:`~springfem.errors.SolverError`
-(a singular or ill-conditioned matrix). A failed factorisation falls back to AMG.
+(a singular or ill-conditioned matrix). A failed factorisation of a definite matrix falls
+back to AMG. A factorisation runs through :func:`~springfem.mechanics.limits.interruptible`
+(a time cap or Ctrl-C stops a solve inside it).
 
 Examples
 --------
@@ -32,30 +37,37 @@ Examples
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from springfem.errors import InputError, SolverError
 
+from .amg import hierarchy, krylov
+from .direct import DirectFactor, DirectSolver
+from .limits import interruptible
 from .matrices import SYMMETRY_TOL, eliminate, is_symmetric
 
 __all__ = [
-    "DIRECT_MAX_DOFS", "RESIDUAL_ACCEPT", "REUSE_GROWTH", "SYMMETRY_TOL", "Factorization",
+    "DIRECT_MAX_DOFS", "RESIDUAL_ACCEPT", "REUSE_GROWTH", "SUPERLU_MAX_DOFS", "SYMMETRY_TOL",
+    "Factorization",
     "LinearSolver", "LinearSolverKind", "eliminate", "is_symmetric", "solve_linear",
 ]  # fmt: skip
 
 LinearSolverKind = Literal["auto", "direct", "amg"]
 
-#: ``auto`` factorises (SuperLU) up to this many unknowns and uses AMG above (see the
-#: module docstring for the measurement).
-DIRECT_MAX_DOFS = 5_000
+#: ``auto`` factorises up to this many unknowns and uses AMG above (see the module
+#: docstring for the measurement); SuperLU's crossover is lower (:data:`SUPERLU_MAX_DOFS`).
+DIRECT_MAX_DOFS = 20_000
+#: The size rule of ``auto`` when the direct solver is SuperLU (no PARDISO installed).
+SUPERLU_MAX_DOFS = 5_000
 #: Largest accepted relative residual ``|A x - b| / |b|`` of a solution.
 RESIDUAL_ACCEPT = 1e-6
+#: The counters of :attr:`LinearSolver.stats`.
+STATS = ("solves", "krylov_iterations", "factorizations", "analyses")
 #: A reused AMG hierarchy is rebuilt past this growth of its Krylov iterations.
 REUSE_GROWTH = 2.0
 
@@ -67,9 +79,7 @@ class LinearSolver:
     Parameters
     ----------
     method
-        ``direct`` (SuperLU), ``amg`` (CG for a symmetric matrix, GMRES otherwise, with a
-        smoothed-aggregation preconditioner built on the symmetric part) or ``auto``
-        (the size rule :data:`DIRECT_MAX_DOFS`).
+        ``direct`` (:mod:`.direct`), ``amg`` (:mod:`.amg`) or ``auto`` (the size rule).
     near_nullspace
         ``(n, 6)`` rigid-body modes of the matrix's unknowns, for smoothed aggregation.
     rtol
@@ -77,27 +87,39 @@ class LinearSolver:
     maxiter
         Krylov iterations at most.
     direct_max_dofs
-        The size rule of ``auto``.
+        The size rule of ``auto`` (default: :data:`DIRECT_MAX_DOFS` with PARDISO,
+        :data:`SUPERLU_MAX_DOFS` with SuperLU).
+    saddle_point
+        The matrices are saddle points (indefinite): always factorised.
 
     Attributes
     ----------
     stats
-        ``solves`` and ``krylov_iterations`` so far.
+        ``solves``, ``krylov_iterations``, ``factorizations`` and ``analyses`` (symbolic
+        analyses of the direct solver) so far.
     name
         The solver that produced the last solution (``direct``, ``cg+amg``, ``gmres+amg``).
+    direct
+        The :class:`~springfem.mechanics.direct.DirectSolver` (its backend and the analysis
+        it keeps per pattern).
     """
 
     method: str = "auto"
     near_nullspace: np.ndarray | None = None
     rtol: float = 1e-10
     maxiter: int = 2000
-    direct_max_dofs: int = DIRECT_MAX_DOFS
-    stats: dict = field(default_factory=lambda: {"solves": 0, "krylov_iterations": 0})
+    direct_max_dofs: int | None = None
+    saddle_point: bool = False
+    stats: dict = field(default_factory=lambda: dict.fromkeys(STATS, 0))
     name: str = "none"
+    direct: DirectSolver = field(default_factory=DirectSolver, repr=False)
 
     def __post_init__(self):
         if self.method not in ("auto", "direct", "amg"):
             raise InputError(f"linear_solver {self.method!r} is not one of auto, direct, amg")
+        if self.direct_max_dofs is None:
+            pardiso = self.direct.backend == "pardiso"
+            self.direct_max_dofs = DIRECT_MAX_DOFS if pardiso else SUPERLU_MAX_DOFS
 
     def kind(self, n_dofs: int) -> str:
         """``direct`` or ``amg``: what ``method`` means for ``n_dofs`` unknowns.
@@ -112,8 +134,11 @@ class LinearSolver:
         str
             ``direct`` or ``amg``.
         """
+        if self.saddle_point:
+            return "direct"
         if self.method == "auto":
-            return "direct" if n_dofs <= self.direct_max_dofs else "amg"
+            limit = DIRECT_MAX_DOFS if self.direct_max_dofs is None else self.direct_max_dofs
+            return "direct" if n_dofs <= limit else "amg"
         return self.method
 
     def factorize(
@@ -198,36 +223,52 @@ class Factorization:
     def __init__(self, solver: LinearSolver, A, free, symmetric, where: str, reuse=None):
         self.solver = solver
         self.free = None if free is None else np.asarray(free, dtype=bool)
-        self.A = eliminate(A, self.free) if self.free is not None else sp.csr_matrix(A)
+        self._full = A
+        self._given_symmetric = symmetric
         self.where = where
-        n = self.A.shape[0]
-        self.symmetric = is_symmetric(self.A) if symmetric is None else bool(symmetric)
-        # CG needs an exactly symmetric matrix: a tangent symmetric to finite-difference
-        # noise is symmetrised for the Krylov solve (and checked against that)
-        self._K = self.A if symmetric is not None else (0.5 * (self.A + self.A.T)).tocsr()
-        if not self.symmetric:
-            self._K = self.A
-        self.kind = solver.kind(n)
+        self.n = A.shape[0]
+        self.kind = solver.kind(self.n if self.free is None else int(self.free.sum()))
         self.name = "none"
-        self._lu = None
+        self._lu: DirectFactor | None = None
+        self._residual = np.inf  # of the last direct solution that was not accepted
         self._ml = None
         self._coarse = "splu"  # pinv's dense SVD is slow with oversubscribed BLAS threads
-        self._fresh_iterations = self._last_iterations = None  # Krylov its (fresh, last)
+        self._fresh_iterations: int | None = None  # Krylov iterations: of the fresh hierarchy
+        self._last_iterations: int | None = None  # and of the last solve
         self._reused = reuse is not None and self.kind == "amg" and reuse._reusable(self)
         if self._reused:
             self._ml, self._coarse = reuse._ml, reuse._coarse
             self._fresh_iterations = reuse._fresh_iterations
         if self.kind == "direct":
-            with warnings.catch_warnings():
-                # a rank-deficient factor is judged by the residual of its solutions (a
-                # singular but consistent system, e.g. a mechanism the load does not move,
-                # is solvable)
-                warnings.simplefilter("ignore", spla.MatrixRankWarning)
-                try:
-                    # minimum degree on A^T + A: ~4x less fill than COLAMD on these matrices
-                    self._lu = spla.splu(self.A.tocsc(), permc_spec="MMD_AT_PLUS_A")
-                except RuntimeError:
-                    self._lu = None  # exactly singular factor: try AMG, which reports it
+            before = solver.direct.analyses
+            try:
+                self._lu = interruptible(solver.direct.factor, A, self.free)
+            except RuntimeError as exc:  # an exactly singular factor: AMG reports it
+                if solver.saddle_point:
+                    raise SolverError(f"{where}singular saddle-point system ({exc})") from None
+                self._lu = None
+            solver.stats["factorizations"] += 1
+            solver.stats["analyses"] += solver.direct.analyses - before
+
+    @cached_property
+    def A(self) -> sp.csr_matrix:
+        """The matrix the Krylov methods solve (the symmetric elimination with ``free``)."""
+        A = self._full
+        return eliminate(A, self.free) if self.free is not None else sp.csr_matrix(A)
+
+    @cached_property
+    def symmetric(self) -> bool:
+        """Whether :attr:`A` is symmetric (as given, or by :func:`is_symmetric`)."""
+        given = self._given_symmetric
+        return is_symmetric(self.A) if given is None else bool(given)
+
+    @cached_property
+    def _K(self) -> sp.csr_matrix:
+        # CG needs an exactly symmetric matrix: a tangent symmetric to finite-difference
+        # noise is symmetrised for the Krylov solve (and checked against that)
+        if not self.symmetric or self._given_symmetric is not None:
+            return self.A
+        return (0.5 * (self.A + self.A.T)).tocsr()
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         """Solve ``A x = b``.
@@ -255,26 +296,30 @@ class Factorization:
         self.solver.stats["solves"] += 1
         bnorm = float(np.linalg.norm(b))
         if bnorm == 0:
-            return np.zeros(self.A.shape[0])
-        A, x = self.A, None
+            return np.zeros(self.n)
         if self._lu is not None:
-            x = self._lu.solve(b)
-            self.name = "direct"
-        if x is None or not self._accepted(A, x, b, bnorm):
-            A = self._K
+            x = self._direct(b, bnorm)
+            if x is not None:
+                return x
+        if self.solver.saddle_point:
+            raise SolverError(
+                f"{self.where}singular saddle-point system: linear solve failed with relative "
+                f"residual {self._residual:.2e}"
+            )
+        A = self._K
+        try:
+            x = self._krylov(b)
+            if self._reused and not self._accepted(A, x, b, bnorm):
+                self._ml, self._reused = None, False  # stale hierarchy: rebuild once
+                x = self._krylov(b)
+        except RuntimeError:
+            # exactly singular coarsest level (a mechanism): its pseudo-inverse lets CG
+            # solve a singular but consistent system; an inconsistent one is refused
+            self._ml, self._coarse = None, "pinv"
             try:
                 x = self._krylov(b)
-                if self._reused and not self._accepted(A, x, b, bnorm):
-                    self._ml, self._reused = None, False  # stale hierarchy: rebuild once
-                    x = self._krylov(b)
-            except RuntimeError:
-                # exactly singular coarsest level (a mechanism): its pseudo-inverse lets CG
-                # solve a singular but consistent system; an inconsistent one is refused
-                self._ml, self._coarse = None, "pinv"
-                try:
-                    x = self._krylov(b)
-                except (RuntimeError, ValueError, np.linalg.LinAlgError):
-                    x = np.full(b.shape, np.nan)
+            except (RuntimeError, ValueError, np.linalg.LinAlgError):
+                x = np.full(b.shape, np.nan)
         self.solver.name = self.name
         if self.free is not None:
             x[~self.free] = 0.0
@@ -285,6 +330,23 @@ class Factorization:
                 f"{r:.2e} (the tangent has a zero-energy mode: a mechanism, a limit point, or "
                 "a missing boundary condition)"
             )
+        return x
+
+    def _direct(self, b: np.ndarray, bnorm: float) -> np.ndarray | None:
+        """The direct solution, or ``None`` when its residual is not accepted."""
+        lu, free = self._lu, self.free
+        assert lu is not None  # a direct factor was made
+        bf = b if free is None else b[free]
+        xf = lu.solve(bf)
+        if not self._accepted(lu.block, xf, bf, bnorm):
+            finite = np.all(np.isfinite(xf))
+            self._residual = float(np.linalg.norm(lu.block @ xf - bf) / bnorm) if finite else np.inf
+            return None
+        self.name = self.solver.name = "direct"
+        if free is None:
+            return xf
+        x = np.zeros(self.n)
+        x[free] = xf
         return x
 
     @staticmethod
@@ -299,48 +361,18 @@ class Factorization:
         same = self.A.shape == other.A.shape and self.symmetric == other.symmetric
         return self._ml is not None and same and last <= REUSE_GROWTH * fresh + 2
 
-    def _hierarchy(self):
+    def _krylov(self, b: np.ndarray) -> np.ndarray:
         if self._ml is None:
             self._fresh_iterations = None
-            import pyamg
-
-            A = self.A
-            S = self._K if self.symmetric else (0.5 * (A + A.T)).tocsr()
-            n = A.shape[0]
-            if self.free is not None and n % 3 == 0:
-                S = S.tobsr(blocksize=(3, 3))
-            B = self.solver.near_nullspace
-            self._ml = pyamg.smoothed_aggregation_solver(
-                S,
-                B=B if B is not None and B.shape[0] == n else None,
-                symmetry="hermitian",
-                strength=("symmetric", {"theta": 0.0}),
-                smooth="jacobi",
-                max_coarse=500,
-                coarse_solver=self._coarse,
-            )
-        return self._ml
-
-    def _krylov(self, b: np.ndarray) -> np.ndarray:
-        M = self._hierarchy().aspreconditioner(cycle="V")
-        count = [0]
-
-        def cb(_):
-            count[0] += 1
-
+            S = self._K if self.symmetric else (0.5 * (self.A + self.A.T)).tocsr()
+            blocks = self.free is not None
+            self._ml = hierarchy(S, blocks, self.solver.near_nullspace, self._coarse)
         s = self.solver
-        if self.symmetric:
-            x, _ = spla.cg(self._K, b, rtol=s.rtol, atol=0.0, maxiter=s.maxiter, M=M, callback=cb)
-            self.name = "cg+amg"
-        else:
-            x, _ = spla.gmres(
-                self.A, b, rtol=s.rtol, atol=0.0, restart=60, maxiter=s.maxiter, M=M,
-                callback=cb, callback_type="pr_norm",
-            )  # fmt: skip
-            self.name = "gmres+amg"
-        s.stats["krylov_iterations"] += count[0]
-        self._last_iterations = count[0]
-        self._fresh_iterations = self._fresh_iterations or count[0]
+        A = self._K if self.symmetric else self.A
+        x, its, self.name = krylov(A, b, self._ml, self.symmetric, s.rtol, s.maxiter)
+        s.stats["krylov_iterations"] += its
+        self._last_iterations = its
+        self._fresh_iterations = self._fresh_iterations or its
         return x
 
 
@@ -355,10 +387,8 @@ def solve_linear(
 
     Parameters
     ----------
-    A
-        Square sparse matrix (all unknowns free).
-    b
-        Right-hand side.
+    A, b
+        Square sparse matrix (all unknowns free) and right-hand side.
     method, near_nullspace, rtol
         As in :class:`LinearSolver`.
 

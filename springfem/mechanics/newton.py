@@ -124,6 +124,9 @@ class NewtonProblem(Protocol):
         """Where the largest (or first non-finite) residual is, for messages (or ``""``)."""
         ...
 
+    # optional, for modified Newton (NewtonSettings.reuse):
+    # reused_correction(state, R) -> (d, resolve) with the last tangent kept, or None
+
 
 @dataclass
 class NewtonSettings:
@@ -137,11 +140,16 @@ class NewtonSettings:
         Newton iterations (linear solves) at most.
     max_backtracks
         Halvings of the step length in the line search.
+    reuse
+        Modified Newton: while an iteration lowers the residual to at most this fraction
+        of the previous one, the next reuses the last tangent's factorisation (a problem
+        with ``reused_correction``; 0: a fresh tangent every iteration).
     """
 
     tol: float = 1e-8
     max_iter: int = 200
     max_backtracks: int = 12
+    reuse: float = 0.0
 
 
 @dataclass
@@ -225,47 +233,45 @@ def newton(
     def done(ok: bool, its: int, reason: str = "") -> NewtonOutcome:
         return NewtonOutcome(ok, state, its, hist, reason)
 
+    reuse = settings.reuse > 0 and hasattr(problem, "reused_correction")
+    stale = reuse  # the next correction may use the last tangent (of an earlier step too)
     for it in range(1, max_iter + 1):
         if not np.isfinite(r):
             return done(False, it - 1, f"non-finite residual{problem.locate(R)}")
         if r <= tol and met:
             return done(True, it - 1)
-        try:
-            d, resolve = problem.correction(state, R)
-        except SolverError as err:
-            return done(False, it, f"singular tangent at iteration {it} ({err})")
-        except RejectedState as exc:
-            return done(False, it - 1, str(exc))
-        d_norm = float(np.linalg.norm(d))
-        corrections.append(d_norm)
-        slope = float(R @ d)  # dE/dalpha at alpha = 0 (R = grad E)
-        e0 = problem.energy(state) if met and slope < 0 else None
-        alpha, accepted = 1.0, False
-        for _ in range(settings.max_backtracks):
-            trial = problem.trial(state, alpha, d)
+        while True:
             try:
-                R_try, r_try = problem.residual(trial)
-            except RejectedState:
-                r_try = np.inf
-            if np.isfinite(r_try):
-                accepted = _acceptable(
-                    problem, trial, alpha, met, e0, slope, r, r_try, R_try, resolve, d_norm
-                )
-            if accepted:
+                reused = getattr(problem, "reused_correction", None) if stale else None
+                old = reused(state, R) if reused is not None else None
+                d, resolve = old if old is not None else problem.correction(state, R)
+            except SolverError as err:
+                return done(False, it, f"singular tangent at iteration {it} ({err})")
+            except RejectedState as exc:
+                return done(False, it - 1, str(exc))
+            stale = old is not None
+            accepted, alpha, trial, R_try, r_try, d_norm = _line_search(
+                problem, state, d, resolve, R, r, met, settings.max_backtracks
+            )
+            if accepted or not stale:
                 break
-            alpha *= 0.5
+            stale = False  # an old tangent's direction failed: a fresh one, same iteration
+        fresh = not stale
+        corrections.append(d_norm)
         if not accepted:
             if met and r <= ROUNDOFF_FLOOR * tol:
                 return done(True, it, f"residual stagnated at roundoff level {r:.3g}")
             return done(False, it, f"line search failed at iteration {it} (residual {r:.3g})")
         r_old, met_old = r, met
         state, R, r = trial, R_try, r_try
+        stale = reuse and alpha == 1.0 and r <= settings.reuse * r_old
         met = problem.constrained(state)
         hist.append(r)
         if monitor is not None:
             monitor(it, state, r, alpha)
         if met:
-            stalled = met_old and r > STALL_RATIO * r_old and r_old <= ROUNDOFF_FLOOR * tol
+            floor = r_old <= ROUNDOFF_FLOOR * tol
+            stalled = fresh and met_old and r > STALL_RATIO * r_old and floor
             if tol < r and stalled:
                 return done(True, it, f"residual stagnated at roundoff level {r:.3g}")
             if r0 is None:
@@ -285,6 +291,31 @@ def newton(
     return done(
         False, max_iter, f"no convergence in {max_iter} iterations (residual {r:.3g}{where})"
     )
+
+
+def _line_search(problem, state, d, resolve, R, r, met, max_backtracks):
+    """Backtracking by halving from ``alpha = 1`` (the Notes of :func:`newton`).
+
+    Returns ``(accepted, alpha, trial, R_try, r_try, |d|)``.
+    """
+    d_norm = float(np.linalg.norm(d))
+    slope = float(R @ d)  # dE/dalpha at alpha = 0 (R = grad E)
+    e0 = problem.energy(state) if met and slope < 0 else None
+    alpha, accepted, trial, R_try, r_try = 1.0, False, state, R, np.inf
+    for _ in range(max_backtracks):
+        trial = problem.trial(state, alpha, d)
+        try:
+            R_try, r_try = problem.residual(trial)
+        except RejectedState:
+            r_try = np.inf
+        if np.isfinite(r_try):
+            accepted = _acceptable(
+                problem, trial, alpha, met, e0, slope, r, r_try, R_try, resolve, d_norm
+            )
+        if accepted:
+            break
+        alpha *= 0.5
+    return accepted, alpha, trial, R_try, r_try, d_norm
 
 
 def _acceptable(problem, trial, alpha, met, e0, slope, r, r_try, R_try, resolve, d_norm) -> bool:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -52,8 +53,9 @@ class SpringStep:
     B
         Rigid-body modes on the free DOFs (near-nullspace of AMG).
     previous
-        Holder ``{"factorization": ...}`` shared by the load steps of one solve: the last
-        tangent's factorisation, whose AMG hierarchy preconditions the next tangent's
+        Holder ``{"solver": ..., "factorization": ...}`` shared by the load steps of one
+        solve: the linear solver (its direct solver keeps the symbolic analysis) and the
+        last tangent's factorisation, whose AMG hierarchy preconditions the next tangent's
         solves (:meth:`~springfem.mechanics.linsolve.LinearSolver.factorize`, ``reuse``).
 
     Attributes
@@ -76,9 +78,9 @@ class SpringStep:
     def correction(self, x: np.ndarray, R: np.ndarray):
         """Newton correction ``d = -K^-1 R`` and the re-solve with the same tangent."""
         self.K = self.ctx.stiffness(x, self.s, self.jacobian)
-        solver = LinearSolver(self.linear_solver, self.B).factorize(
-            self.ctx.ff(self.K), reuse=self.previous.get("factorization")
-        )
+        # one LinearSolver per solve: its direct solver keeps the symbolic analysis
+        ls = self.previous.setdefault("solver", LinearSolver(self.linear_solver, self.B))
+        solver = ls.factorize(self.ctx.ff(self.K), reuse=self.previous.get("factorization"))
         d = solver.solve(-R)
         self.previous["factorization"] = solver
         note_solver(self.ctx, solver.name)
@@ -195,7 +197,7 @@ def static(
     x_conv = np.array(ctx.x0 if x_init is None else x_init, dtype=float).reshape(ctx.n, 3)
     hist: list[float] = []
     total_its = 0
-    state = {"x": x_conv, "K": None}  # last converged positions and tangent
+    state: dict[str, Any] = {"x": x_conv, "K": None}  # last converged positions and tangent
     method = "newton"
     notes: list[str] = []
     first_attempt = [True]

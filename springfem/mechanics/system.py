@@ -245,28 +245,3 @@ def check_constrained(system: MechanicalSystem, x: np.ndarray | None = None) -> 
                 f"{SINGULAR_MESSAGE}{where}: {full - got} rigid-body mode(s) left free by "
                 f"{int(is_fixed[dofs].sum())} constrained DOF(s)"
             )
-
-
-def reference_force(system: MechanicalSystem, scale: float = 1.0) -> float:
-    """The load the body must balance, which static tolerances are relative to.
-
-    The norm of the free-DOF force at the rest positions with the fixed DOFs prescribed
-    (external forces times ``scale`` plus the internal reaction to the prescribed
-    displacements), or its linearisation when that is smaller: see
-    :func:`springfem.mechanics.context.reference_norm`, which the solvers call.
-
-    Parameters
-    ----------
-    system
-        The system.
-    scale
-        Load factor.
-
-    Returns
-    -------
-    float
-        The norm (1 for an unloaded system).
-    """
-    from .context import SolveContext, reference_norm
-
-    return reference_norm(SolveContext(system), scale)

@@ -96,8 +96,8 @@ def box_mesh(
     def node(i, j, k):
         return (i * (ny + 1) + j) * (nz + 1) + k
 
-    I, J, K = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
-    I, J, K = I.ravel(), J.ravel(), K.ravel()
+    I3, J3, K3 = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
+    I, J, K = I3.ravel(), J3.ravel(), K3.ravel()
     if split.startswith("six"):
         if split == "six-mirrored":
             # mirror the corner offsets of odd hexahedra along each axis

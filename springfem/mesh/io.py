@@ -74,8 +74,10 @@ def read_mesh(path: str | os.PathLike, scale: float = 1.0) -> TetMesh:
 
 
 #: meshio cell types that fill a volume (besides tets): dropped with a warning note.
-_VOLUME_TYPES = ("hexahedron", "wedge", "pyramid", "hexahedron20", "hexahedron27", "wedge15")
-_VOLUME_TYPES += ("pyramid13", "pyramid14", "wedge18", "hexahedron24", "polyhedron", "VTK_LAGRANGE")
+_VOLUME_TYPES: tuple[str, ...] = (
+    *("hexahedron", "wedge", "pyramid", "hexahedron20", "hexahedron27", "wedge15"),
+    *("pyramid13", "pyramid14", "wedge18", "hexahedron24", "polyhedron", "VTK_LAGRANGE"),
+)
 
 
 def mesh_from_meshio(m, name: str = "mesh", scale: float = 1.0) -> TetMesh:
@@ -103,8 +105,10 @@ def mesh_from_meshio(m, name: str = "mesh", scale: float = 1.0) -> TetMesh:
     if pts.shape[1] == 2:
         raise MeshError(f"{name}: is two-dimensional; a tetrahedral mesh is needed")
     pts = pts[:, :3]
-    tet_blocks, tri_blocks, dropped = [], [], {}
-    volume = {}
+    tet_blocks: list[tuple[int, np.ndarray]] = []  # (block index, connectivity)
+    tri_blocks: list[tuple[int, np.ndarray]] = []
+    dropped: dict[str, int] = {}
+    volume: dict[str, int] = {}
     for block in m.cells:
         if block.type.startswith(_VOLUME_TYPES):
             volume[block.type] = volume.get(block.type, 0) + len(block.data)

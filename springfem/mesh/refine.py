@@ -9,7 +9,7 @@ midpoints of edges with both ends in it.
 
 Examples
 --------
->>> from springfem.mesh import box_mesh
+>>> from springfem.mesh.generate import box_mesh
 >>> m = box_mesh((1.0, 1.0, 1.0), (1, 1, 1), split="six")
 >>> r = refine_uniform(m)
 >>> r.n_tets, r.n_points

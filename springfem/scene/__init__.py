@@ -22,7 +22,7 @@ Examples
 """
 
 from ..errors import SceneError
-from .build import MODEL_SECTIONS, SECTIONS, register_section, scene_from_dict
+from .build import SECTIONS, model_sections, register_section, scene_from_dict
 from .limits import BYTES_PER_TET, MAX_TETS, check_mesh_size, machine_memory
 from .loader import load_scene, parse_scene
 from .output import OutputOptions, parse_output
@@ -62,7 +62,6 @@ __all__ = [
     "MAX_MAGNITUDE",
     "MAX_TETS",
     "MIN_MAGNITUDE",
-    "MODEL_SECTIONS",
     "OutputOptions",
     "SECTIONS",
     "UNIT_SYSTEMS",
@@ -80,6 +79,7 @@ __all__ = [
     "machine_memory",
     "opt_splits",
     "parse_scene",
+    "model_sections",
     "register_section",
     "scene_from_dict",
     "suggestion",

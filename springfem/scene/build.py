@@ -1,7 +1,9 @@
 """The pure scene builder: a plain mapping in, a validated :class:`Scene` out.
 
-The model sections (``[spring]``, ``[fem]``) belong to the models: each registers its
-parser with :func:`register_section`, and the builder validates the section with it.
+The model sections of a scene belong to the packages built on the core: each registers its
+parser, through the entry-point group ``springfem.sections`` (:mod:`springfem.plugins`) or
+with :func:`register_section`, and the builder validates the section with it. A section no
+package registered is an unknown section.
 
 Examples
 --------
@@ -23,6 +25,7 @@ from typing import Any
 from ..errors import SceneError
 from ..files import safe_filename
 from ..mesh import TetMesh
+from ..plugins import entry_points, load
 from .reader import TableReader, _key_label, _show, suggestion
 from .sections import (
     SECTION_KEYS,
@@ -35,11 +38,10 @@ from .sections import (
 )
 from .types import UNIT_SYSTEMS, Material, Scene
 
-MODEL_SECTIONS = ("spring", "fem", "output", "solver")
-"""Sections parsed by a registered parser: the models' (``spring``, ``fem``) and the core's
-``output`` (:mod:`springfem.scene.output`), ``solver`` (:mod:`springfem.scene.solver`)."""
-
 _SECTION_PARSERS: dict[str, Callable[[TableReader], Any]] = {}
+
+#: The sections and keys of a scene's top level besides the model sections.
+SECTIONS = ("name", "units", "mesh", "material", "axes", "boundary", "load", "probe")
 
 
 def register_section(name: str, parse: Callable[[TableReader], Any]) -> None:
@@ -48,7 +50,7 @@ def register_section(name: str, parse: Callable[[TableReader], Any]) -> None:
     Parameters
     ----------
     name
-        One of :data:`MODEL_SECTIONS`.
+        The section's name (``[name]`` in a scene file).
     parse
         Takes a :class:`TableReader` over the section's table, returns the options object
         and raises :class:`SceneError` (via ``reader.fail``) on bad input.
@@ -60,20 +62,33 @@ def register_section(name: str, parse: Callable[[TableReader], Any]) -> None:
     Raises
     ------
     ValueError
-        If ``name`` is not a model section.
+        If ``name`` is a core section or another parser has it.
     """
-    if name not in MODEL_SECTIONS:
-        raise ValueError(f"unknown model section {name!r}; valid: {', '.join(MODEL_SECTIONS)}")
+    if name in SECTIONS:
+        raise ValueError(f"[{name}] is a core section, not a model section")
+    old = _SECTION_PARSERS.get(name)
+    if old is not None and old is not parse:
+        raise ValueError(f"model section [{name}] is registered twice")
     _SECTION_PARSERS[name] = parse
 
 
-#: The sections and keys of a scene's top level besides the model sections.
-SECTIONS = ("name", "units", "mesh", "material", "axes", "boundary", "load", "probe")
+def model_sections() -> dict[str, Callable[[TableReader], Any]]:
+    """The registered model sections and their parsers (the entry points loaded once).
+
+    Returns
+    -------
+    dict
+        Section name -> parser.
+    """
+    for name, value in entry_points("springfem.sections").items():
+        if name not in _SECTION_PARSERS:
+            register_section(name, load(value))
+    return dict(_SECTION_PARSERS)
 
 
 def _unknown_top_level(data: dict, file: str) -> SceneError | None:
     """The error for the first unknown top-level key or section, with a suggestion."""
-    known = (*SECTIONS, *MODEL_SECTIONS)
+    known = (*SECTIONS, *model_sections())
     extra = sorted(set(data) - set(known))
     if not extra:
         return None
@@ -168,12 +183,11 @@ def scene_from_dict(data: dict, path: str | os.PathLike | None = None) -> Scene:
         dup = sorted({n for n in names if names.count(n) > 1})
         raise SceneError(f"{file}: probe: duplicate probe name {_show(dup[0])}")
     top.used.update({"boundary", "load", "probe"})
+    parsers = model_sections()
     options = {
-        name: _SECTION_PARSERS[name](TableReader(data.get(name, {}), name, file))
-        for name in MODEL_SECTIONS
-        if name in _SECTION_PARSERS
+        name: parse(TableReader(data.get(name, {}), name, file)) for name, parse in parsers.items()
     }
-    top.used.update(MODEL_SECTIONS)
+    top.used.update(parsers)
     unknown = _unknown_top_level(data, file)
     if unknown is not None:
         raise unknown

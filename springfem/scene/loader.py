@@ -29,6 +29,7 @@ import tomllib
 from pathlib import Path
 
 from ..errors import SceneError
+from ..plugins import scene_folders
 from .build import scene_from_dict
 from .types import Scene
 
@@ -39,7 +40,9 @@ def load_scene(path: str | os.PathLike) -> Scene:
     Parameters
     ----------
     path
-        A TOML scene file; relative mesh paths in it are relative to its folder.
+        A TOML scene file (relative mesh paths in it are relative to its folder), or the
+        name of a scene in a folder an installed package registers
+        (:func:`springfem.plugins.scene_folders`: ``"cantilever"``, ``"sag"`` ...).
 
     Returns
     -------
@@ -50,15 +53,47 @@ def load_scene(path: str | os.PathLike) -> Scene:
     ------
     SceneError
         One line naming the file and the offending key.
+
+    Examples
+    --------
+    >>> load_scene("cantilever").mesh.n_tets
+    3840
     """
-    path = Path(path)
-    if not path.is_file():
-        raise SceneError(f"scene file {path} does not exist")
+    path = named_scene(Path(path))
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise SceneError(f"scene file {path} could not be read: {exc}") from None
     return parse_scene(text, path=path)
+
+
+def named_scene(path: Path) -> Path:
+    """``path`` if it is a file, else the registered scene of that name.
+
+    Parameters
+    ----------
+    path
+        A file, or a bare name (no folder, no suffix).
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    SceneError
+        Neither a file nor a registered name (the message lists the names).
+    """
+    if path.is_file():
+        return path
+    folders = scene_folders()
+    if path.suffix == "" and path.parent == Path("."):
+        for folder in folders:
+            if (folder / f"{path.name}.toml").is_file():
+                return folder / f"{path.name}.toml"
+    names = sorted({p.stem for f in folders for p in f.glob("*.toml")})
+    listed = f" (named scenes: {', '.join(names)})" if names else ""
+    raise SceneError(f"scene file {path} does not exist{listed}")
 
 
 def parse_scene(text: str, path: str | os.PathLike | None = None) -> Scene:

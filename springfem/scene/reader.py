@@ -51,15 +51,18 @@ def suggestion(word: str, known: Iterable[str]) -> str | None:
     -------
     str or None
         The closest of ``known`` with a :class:`difflib.SequenceMatcher` ratio of at least
-        :data:`SUGGEST_CUTOFF`.
+        :data:`SUGGEST_CUTOFF`, ignoring case (``Loaded`` finds ``loaded``).
 
     Examples
     --------
     >>> suggestion("valeu", ["value", "type", "region"]), suggestion("xyz", ["value"])
     ('value', None)
+    >>> suggestion("Loaded", ["loaded", "fixed"])
+    'loaded'
     """
-    close = difflib.get_close_matches(word, sorted(known), n=1, cutoff=SUGGEST_CUTOFF)
-    return close[0] if close else None
+    spelled = {k.lower(): k for k in sorted(known, reverse=True)}
+    close = difflib.get_close_matches(word.lower(), sorted(spelled), n=1, cutoff=SUGGEST_CUTOFF)
+    return spelled[close[0]] if close else None
 
 
 def is_number(v: Any) -> bool:
@@ -107,7 +110,8 @@ class TableReader:
     def __init__(self, table: Any, where: str, file: str, keys: Iterable[str] | None = None):
         if not isinstance(table, dict):
             raise SceneError(f"{file}: {where} must be a table")
-        self.t, self.where, self.file, self.used = table, where, file, set()
+        self.t, self.where, self.file = table, where, file
+        self.used: set[str] = set()
         self.keys = None if keys is None else frozenset(keys)
         self.known: set[str] = set(self.keys or ())
 

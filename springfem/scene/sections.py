@@ -102,7 +102,7 @@ def parse_mesh(r: TableReader, base: Path) -> TetMesh:
     div = r.get("divisions", "ivec", length=3, positive=True)
     split: Split = r.get("split", "str", default="six", choices=opt_splits())
     origin = r.get("origin", "vec", default=np.zeros(3), length=3)
-    jitter = seed = None
+    jitter, seed = 0.3, 0
     for key in ("jitter", "seed"):
         if r.has(key) and split != "delaunay":
             raise r.fail(key, f'applies to split = "delaunay" only (this box: split = "{split}")')
@@ -116,9 +116,13 @@ def parse_mesh(r: TableReader, base: Path) -> TetMesh:
     if too_big:
         raise r.fail("divisions", too_big)
     assert gen == "box"
-    extra = {} if split != "delaunay" else {"jitter": jitter, "seed": seed}
+    nx, ny, nz = (int(d) for d in div)
+    x0, y0, z0 = (float(o) for o in origin)
+    lx, ly, lz = (float(s) for s in size)
     try:
-        return box_mesh(tuple(size), tuple(int(d) for d in div), split, tuple(origin), **extra)
+        if split == "delaunay":
+            return box_mesh((lx, ly, lz), (nx, ny, nz), split, (x0, y0, z0), jitter, seed)
+        return box_mesh((lx, ly, lz), (nx, ny, nz), split, (x0, y0, z0))
     except InputError as exc:
         raise r.fail("jitter" if "jitter" in str(exc) else "size", str(exc)) from None
 

@@ -209,7 +209,7 @@ class Scene:
         Parameters
         ----------
         name
-            A name in :data:`MODEL_SECTIONS`.
+            A registered model section (:func:`springfem.scene.model_sections`).
         parse
             The model's parser: takes a :class:`TableReader` over the section's table.
 

@@ -152,7 +152,6 @@ def test_cli_solve_twice_is_bit_identical(solved_twice, model):
     assert va.point_data["displacement"].any()
 
 
-@pytest.mark.slow  # the parallel spring driver's known fault: springmodel/spring_kernel.py
 def test_parallel_spring_kernel_solve_is_bit_identical():
     scene = parse_scene(SCENE)
     assert SpringModel(scene, parallel=True).kernel.parallel  # the parallel path is used

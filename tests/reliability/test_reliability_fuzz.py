@@ -13,7 +13,7 @@ Property-based tests (hypothesis) over more than 1000 generated malformed inputs
   nodes, zero volume, inverted), mixed with other cell types, through
   :func:`springfem.mesh.mesh_from_meshio` and through files.
 
-The contract (DESIGN §6): :func:`springfem.scene.parse_scene` either returns a
+The contract (docs/contract.rst#exit-codes): :func:`springfem.scene.parse_scene` either returns a
 :class:`Scene` whose arrays are all finite and consistent, or raises an ``InputError``
 (exit code 2) with one non-empty line that names the file; never another exception, and
 never a hang. The scene cases run in-process (a subprocess per case would cost a second
@@ -26,7 +26,6 @@ from __future__ import annotations
 import contextlib
 import copy
 import io
-import json
 import math
 import os
 import signal
@@ -39,6 +38,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from support.toml import Raw
+from support.toml import to_toml as write_toml
 
 from springfem.errors import InputError, MeshError, SceneError
 from springfem.mesh import box_mesh, mesh_from_meshio, read_mesh
@@ -99,40 +100,9 @@ def assert_one_line(msg: str, file: str | None = None) -> None:
 # ------------------------------------------------------------------ TOML serialisation
 
 
-class Raw(str):
-    """TOML text emitted as is (dates, times)."""
-
-
-def toml_string(text: str) -> str:
-    """A TOML basic string (JSON escapes are TOML escapes; no surrogate pairs, DEL escaped)."""
-    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
-
-
-def toml_value(v) -> str:
-    if isinstance(v, Raw):
-        return str(v)
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        if math.isnan(v):
-            return "nan"
-        if math.isinf(v):
-            return "inf" if v > 0 else "-inf"
-        return repr(v)
-    if isinstance(v, str):
-        return toml_string(v)
-    if isinstance(v, list):
-        return "[" + ", ".join(toml_value(x) for x in v) + "]"
-    if isinstance(v, dict):
-        return "{ " + ", ".join(f"{toml_string(k)} = {toml_value(x)}" for k, x in v.items()) + " }"
-    raise TypeError(type(v))
-
-
 def to_toml(scene: dict) -> str:
     """Top-level keys as ``key = value`` lines, every table inline (same data as [table])."""
-    return "".join(f"{toml_string(k)} = {toml_value(v)}\n" for k, v in scene.items())
+    return write_toml(scene, inline=True)
 
 
 # ------------------------------------------------------------------ valid base scenes

@@ -1,4 +1,4 @@
-"""Reliability: every mesh defect gets its own exact message (DESIGN §6).
+"""Reliability: every mesh defect gets its own exact message (docs/contract.rst#exit-codes).
 
 What is refused (:class:`MeshError`, exit 2) and what is repaired or reported (a note on
 stderr, exit 0), decided per defect:
@@ -14,7 +14,7 @@ disconnected parts      note         several bodies are legal; each needs its ow
 non-manifold nodes      note         parts touching at a node/edge are solvable (a hinge)
 non-manifold facets     error        a triangle in three tets means overlapping tets
 folded tets             error        two tets on one side of their triangle overlap
-other volume cells      note         dropped as issue 2 asks; the note warns the body lost them
+other volume cells      note         dropped; the note warns the body lost them
 surface/line cells      note         boundary decoration, dropped (named triangles kept)
 empty region            error        a boundary or load on nothing is a scene mistake
 ======================  ===========  =====================================================
@@ -198,7 +198,7 @@ def test_tets_folded_onto_the_same_side_of_a_triangle_are_refused():
 
 
 def test_hexahedra_next_to_tets_are_dropped_with_a_warning_note(tmp_path):
-    """Issue 2: non-tet cells - tets are kept, and the note says what was dropped."""
+    """Non-tet cells - tets are kept, and the note says what was dropped."""
     cube = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
     p = np.vstack([cube, CORNERS + [2.0, 0.0, 0.0]])
     write(tmp_path / "mixed.vtu", p, [("tetra", TET + 8), ("hexahedron", np.arange(8)[None])])

@@ -8,6 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from support.meshes import ventricle_mesh
 
 from springfem.cardiac import (
     PressureVolume,
@@ -17,21 +18,20 @@ from springfem.cardiac import (
     write_pressure_volume,
 )
 from springfem.ellipsoid import cavity_volume as exact_cavity
-from springfem.ellipsoid import ellipsoid_mesh
 from springfem.errors import InputError
 from springfem.result import frame_cell_data
 
 
 @pytest.fixture(scope="module")
 def lv():
-    return ellipsoid_mesh(size=3.0)
+    return ventricle_mesh(3.0)
 
 
 def test_undeformed_cavity_converges_to_the_truncated_ellipsoid():
     # the facets are chords of the ellipsoid: the inscribed polyhedron misses O(h^2) of
     # the volume, so halving the size must cut the error by well over half
     errs = [abs(cavity_volume(m, m.points) / exact_cavity() - 1) for m in
-            (ellipsoid_mesh(size=4.0), ellipsoid_mesh(size=2.0))]  # fmt: skip
+            (ventricle_mesh(4.0), ventricle_mesh(2.0))]  # fmt: skip
     assert errs[1] < 0.6 * errs[0]
     assert errs[1] < 0.02  # h = 2 mm on radii >= 7 mm: chord sag (h/2)^2/(2R) ~ 1 %
 

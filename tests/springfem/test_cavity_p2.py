@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from skfem.quadrature import get_quadrature
 from skfem.refdom import RefTet
+from support.meshes import ventricle_mesh
 
 from springfem.cardiac import cavity_volume, oriented_facets
 from springfem.ellipsoid import BASE_Z, ellipsoid_mesh
@@ -39,7 +40,7 @@ def det_grad_phi(x):
 
 @pytest.fixture(scope="module")
 def lv():
-    m = ellipsoid_mesh(size=4.0)
+    m = ventricle_mesh(4.0)
     tris, rim = oriented_facets(m)
     return m, tris, rim
 

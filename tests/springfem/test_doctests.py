@@ -1,4 +1,5 @@
-"""The docstring examples of every core module run and pass (DESIGN §7: examples double
+"""The docstring examples of every core module run and pass
+(docs/verification.rst#docstring-examples: examples double
 as tests). Each public module has at least one. ``springfem.mechanics`` is checked by its
 own tests."""
 

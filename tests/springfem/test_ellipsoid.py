@@ -8,6 +8,7 @@ boundary condition on the plane z = 0 holds) for the transmural depth and the fr
 
 import numpy as np
 import pytest
+from support.meshes import ventricle_mesh
 
 from springfem.ellipsoid import ENDO, EPI, cavity_volume, ellipsoid_mesh, wall_volume
 from springfem.errors import InputError
@@ -16,7 +17,7 @@ from springfem.fibres import rule_based_frames, transmural_depth
 
 @pytest.fixture(scope="module")
 def lv():
-    return ellipsoid_mesh(size=2.0)
+    return ventricle_mesh(2.0)
 
 
 @pytest.fixture(scope="module")
@@ -40,7 +41,7 @@ def test_regions_lie_on_their_surfaces(lv):
 def test_volume_converges_to_the_exact_wall_volume():
     # chords of length h sit ~h^2/(8R) inside a surface of curvature radius R: the
     # faceting error is O(h^2), so halving the size must cut it by clearly more than 2
-    errs = [abs(ellipsoid_mesh(size=s).volumes().sum() / wall_volume() - 1) for s in (4.0, 2.0)]
+    errs = [abs(ventricle_mesh(s).volumes().sum() / wall_volume() - 1) for s in (4.0, 2.0)]
     assert errs[1] < errs[0] / 2.5
     assert errs[1] < 5e-3
     assert cavity_volume() == pytest.approx(np.pi * 49 * (22 - (125 + 17**3) / (3 * 17**2)))

@@ -17,7 +17,6 @@ from mechanics_systems import (  # noqa: E402
     free_block,
     oscillator,
     random_displacement,
-    stretch_fiber_model,
 )
 
 from springfem.errors import SolverError
@@ -27,11 +26,6 @@ from springfem.mechanics import (
     stable_time_step,
     static,
 )
-
-
-@pytest.fixture(scope="module", name="stretch_model")
-def _stretch_model():
-    return stretch_fiber_model()
 
 
 def test_stable_time_step_two_mass_chain_closed_form():

@@ -14,17 +14,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # the shared test syst
 from mechanics_systems import (  # noqa: E402
     beam,
     random_displacement,
-    stretch_fiber_model,
 )
 
 from springfem.mechanics.fd_jacobian import ColoredJacobian, distance2_coloring, fd_jacobian
 from springfem.mechanics.system import MechanicalSystem, node_adjacency
 from springfem.mesh import box_mesh
-
-
-@pytest.fixture(scope="module", name="stretch_model")
-def _stretch_model():
-    return stretch_fiber_model()
 
 
 def test_test_system_is_consistent():

@@ -13,6 +13,7 @@ import scipy.sparse as sp
 
 from springfem.errors import SolverError
 from springfem.mechanics import DIRECT_MAX_DOFS, LinearSolver, rigid_body_modes
+from springfem.mechanics.linsolve import SUPERLU_MAX_DOFS
 from springfem.mesh import box_mesh
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the shared test systems
@@ -74,9 +75,14 @@ def test_gmres_for_a_non_symmetric_matrix():
 
 
 def test_size_rule():
+    """PARDISO's crossover with AMG is higher than SuperLU's; a saddle point is always
+    factorised (smoothed aggregation cannot precondition an indefinite matrix)."""
     auto = LinearSolver()
-    assert auto.kind(DIRECT_MAX_DOFS) == "direct" and auto.kind(DIRECT_MAX_DOFS + 1) == "amg"
+    n = auto.direct_max_dofs
+    assert n == (DIRECT_MAX_DOFS if auto.direct.backend == "pardiso" else SUPERLU_MAX_DOFS)
+    assert auto.kind(n) == "direct" and auto.kind(n + 1) == "amg"
     assert LinearSolver("direct").kind(10**6) == "direct"
+    assert LinearSolver("amg", saddle_point=True).kind(10**6) == "direct"
 
 
 @pytest.mark.parametrize("method", ["direct", "amg"])

@@ -17,7 +17,6 @@ from mechanics_systems import (  # noqa: E402
     beam,
     linear_reference,
     prescribe_tip,
-    stretch_fiber_model,
 )
 
 from springfem.errors import SolverError
@@ -42,11 +41,6 @@ def test_static_linear_equals_direct_solve(linear_solver):
     assert np.linalg.norm(u - u_ref) / np.linalg.norm(u_ref) < tol
     assert info.iterations <= 3  # 1 (exact) + roundoff stagnation; AMG: +1 for its rtol
     assert info.linear_solver == ("direct" if linear_solver == "auto" else "cg+amg")
-
-
-@pytest.fixture(scope="module", name="stretch_model")
-def _stretch_model():
-    return stretch_fiber_model()
 
 
 def test_static_linear_with_prescribed_displacement():

@@ -6,8 +6,6 @@ import meshio
 import numpy as np
 import pytest
 
-import reference_fem  # noqa: F401  (registers the [fem] section, validated on load)
-import springmodel  # noqa: F401  (registers the [spring] section)
 from springfem.errors import SceneError
 from springfem.mesh import box_mesh
 from springfem.scene import load_scene, parse_scene, scene_from_dict
@@ -219,7 +217,7 @@ def drop(section: str, key: str, new: str):
     ],
 )
 def test_misspelt_keys_and_sections_are_named_with_a_suggestion(edit, message):
-    """Issue 12: the misspelt word is named (not the key it hides) with the closest valid one."""
+    """The misspelt word is named (not the key it hides) with the closest valid one."""
     data = base()
     edit(data)
     with pytest.raises(SceneError) as info:
@@ -234,7 +232,7 @@ def test_a_misspelt_section_in_a_file_is_named():
 
 
 def test_the_mesh_description_shows_plain_numbers(capsys, tmp_path):
-    """Issue 12: ``inspect`` printed ``box [np.float64(0.1), ...]`` (numpy 2 scalar repr)."""
+    """``inspect`` once printed ``box [np.float64(0.1), ...]`` (numpy 2 scalar repr)."""
     from studies.cli import main
 
     data = base()
@@ -307,3 +305,41 @@ def test_declared_units_scale_the_modulus_check():
                     "tissue: check the units (the scene's: mm-kPa)")  # fmt: skip
     with pytest.raises(SceneError, match=r"units: 'cm-kPa' is not one of SI, mm-kPa, mm-MPa"):
         scene_from_dict({**table, "units": "cm-kPa"})
+
+
+def test_model_sections_are_registered_not_named():
+    """The core validates a model section only through the parser a package registers:
+    the models' sections come from entry points, a new one can be registered at run time,
+    a name is registered once, and a section nobody registered is unknown."""
+    import springfem.scene.build as build
+    from springfem.errors import SceneError
+    from springfem.scene import model_sections, register_section, scene_from_dict
+
+    assert {"spring", "fem", "output", "solver"} <= set(model_sections())
+    box = {"generator": "box", "size": [1, 1, 1], "divisions": [1, 1, 1]}
+    table = {"mesh": box, "material": {"law": "linear", "E": 1.0, "nu": 0.3}, "extra": {"a": 1}}
+    with pytest.raises(SceneError, match=r"\[extra\]: unknown section"):
+        scene_from_dict(table)
+
+    def parse(r):
+        value = r.get("a", "int")
+        r.finish()
+        return value
+
+    register_section("extra", parse)
+    try:
+        assert scene_from_dict(table).options["extra"] == 1
+        with pytest.raises(ValueError, match="registered twice"):
+            register_section("extra", lambda r: None)
+        with pytest.raises(ValueError, match="core section"):
+            register_section("mesh", parse)
+    finally:
+        build._SECTION_PARSERS.pop("extra")
+
+
+def test_load_scene_by_registered_name():
+    from springfem.errors import SceneError
+
+    assert load_scene("cantilever").name == "cantilever"
+    with pytest.raises(SceneError, match=r"scene file cantilevr does not exist \(named scenes: "):
+        load_scene("cantilevr")

@@ -9,8 +9,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import reference_fem  # noqa: F401  (registers the [fem] section, validated on load)
-import springmodel  # noqa: F401  (registers the [spring] section)
 from springfem.ellipsoid import wall_volume
 from springfem.errors import SceneError
 from springfem.scene import load_scene, scene_from_dict
