@@ -8,7 +8,8 @@ One run times, on the same box mesh (a clamped block, end traction, linear P1):
   ``solve(*condense(...))`` (SuperLU);
 - one Newton iteration (residual, tangent, AMG solve) of the neo-Hookean problem.
 
-Speeds are compared as ratios measured in the same run (DESIGN §8).
+Speeds are compared as ratios measured in the same run
+(docs/verification.rst#how-speed-is-measured).
 
 Examples
 --------

@@ -1,6 +1,7 @@
 """Explicit P1 FEM: the internal forces of linear tets as a mechanical system.
 
-The competitor the spring model has to beat (DESIGN §4): a P1 element whose gradient is
+The competitor the spring model has to beat (docs/fem.rst#explicit-p1-fem): a P1 element whose
+gradient is
 constant, so one pass over the elements gathers the four vertices, forms
 
     F = sum_i x_i (x) grad N_i = sum_{a=1..3} (x_a - x_0) (x) grad N_a

@@ -1,6 +1,6 @@
 """Compressible neo-Hookean laws: energy, first Piola stress and its tangent.
 
-Two energies (DESIGN §5), both with ``F`` of shape ``(..., 3, 3)``:
+Two energies (docs/fem.rst#neo-hookean-energies), both with ``F`` of shape ``(..., 3, 3)``:
 
 - ``coupled``: ``psi = mu/2 (I1 - 3) - mu ln J + lam/2 ln^2 J`` (scikit-fem example 43),
 - ``uncoupled``: ``psi = mu/2 (I1bar - 3) + U(J)`` with ``I1bar = J^(-2/3) I1`` and

@@ -70,7 +70,7 @@ def parse_law(scene: Scene, law: str | None) -> tuple[str, NeoHookean | TissueLa
     mat = scene.material
     name = law or mat.law
     kind, _, rest = name.partition("/")
-    if kind in TISSUE_LAWS or mat.law in TISSUE_LAWS:  # issue 11: tissue laws
+    if kind in TISSUE_LAWS or mat.law in TISSUE_LAWS:  # the tissue laws
         if rest or kind != mat.law:
             raise InputError(f"law {name!r} does not apply to {mat.law}; use law {mat.law}")
         return kind, tissue_law(mat)

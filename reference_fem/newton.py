@@ -5,8 +5,17 @@ predictor, and the shared load-stepping rule :class:`springfem.mechanics.newton.
 The load factor ``lambda`` scales every load and every prescribed displacement. A load step
 that fails (too many iterations, a growing or non-finite residual, an inverted element, a
 failed linear solve) is retried with a smaller increment (the shared rule); when it gives
-up, the solve stops with :class:`~springfem.errors.SolverError` carrying the last converged
-displacement.
+up, the solve stops with :class:`~springfem.errors.SolverError` whose ``state`` is the last
+converged vertex displacement and ``load_factor`` its load factor. A ``--max-time`` cap or
+Ctrl-C stops it with :class:`~springfem.mechanics.limits.SolveStopped` carrying the same two
+fields, wherever the solve is (:mod:`springfem.mechanics.limits`).
+
+Each tangent is factorised once (:meth:`~springfem.mechanics.linsolve.LinearSolver.factorize`,
+the symbolic analysis kept across iterations and load steps) and reused by the line
+search's re-solves. The wall time per phase (``assembly`` of residual and tangent,
+``factorization``, ``solve``, ``line search``, ``predictor``) is in
+:attr:`NewtonReport.phases`; ``progress`` receives every iteration (load step, load,
+iteration, residual, step length).
 
 Convergence: ``|R_free| <= tol * max(|f_int|, |f_ext|)`` with the prescribed values reached.
 
@@ -31,7 +40,7 @@ from typing import Protocol
 import numpy as np
 
 from springfem.errors import SolverError
-from springfem.mechanics.limits import Deadline
+from springfem.mechanics.limits import Deadline, SolveStopped, checkpoint
 from springfem.mechanics.newton import (
     LoadStepping,
     NewtonOutcome,
@@ -39,6 +48,7 @@ from springfem.mechanics.newton import (
     RejectedState,
     newton,
 )
+from springfem.mechanics.phases import PhaseTimes
 
 
 class InvertedElements(RejectedState):
@@ -81,6 +91,8 @@ class NonlinearProblem(Protocol):
 
     def solve_linear(self, K, b: np.ndarray, symmetric: bool, where: str) -> np.ndarray: ...
 
+    linear_solver: object  # a springfem.mechanics.LinearSolver: ``factorize(K, free, ...)``
+
     def state(self, u: np.ndarray) -> np.ndarray: ...
 
 
@@ -101,10 +113,19 @@ class NewtonOptions:
     max_backtracks
         Line-search halvings of a Newton step.
     verbose
-        Print the residual history to stderr.
+        Print the residual history and, at the end, the phase table to stderr.
     on_step
         Called as ``on_step(load, u)`` with each converged load step, in order (e.g. to
         record a pressure-volume curve).
+    progress
+        Called as ``progress(event)`` at the start of each Newton iteration and after each
+        accepted step: ``event`` has ``step`` (load step, from 1), ``load``,
+        ``iteration``, ``residual`` (relative) and ``alpha`` (line-search step length, 0 at
+        the start).
+    reuse
+        Modified Newton (:class:`~springfem.mechanics.newton.NewtonSettings`): reuse the
+        last tangent's factorisation while each iteration lowers the residual to at most
+        this fraction of the previous one (0: a fresh tangent every iteration).
     """
 
     tol: float = 1e-10
@@ -114,6 +135,8 @@ class NewtonOptions:
     max_backtracks: int = 8
     verbose: bool = False
     on_step: Callable[[float, np.ndarray], None] | None = None
+    progress: Callable[[dict], None] | None = None
+    reuse: float = 0.0
 
 
 @dataclass
@@ -130,12 +153,15 @@ class NewtonReport:
         Per accepted step: ``load``, ``iterations`` and relative ``residuals``.
     cutbacks
         Failed steps (each halved the increment).
+    phases
+        Wall seconds per phase (:class:`~springfem.mechanics.phases.PhaseTimes`).
     """
 
     converged: bool = False
     iterations: int = 0
     steps: list[dict] = field(default_factory=list)
     cutbacks: int = 0
+    phases: PhaseTimes = field(default_factory=PhaseTimes)
 
 
 def _log(opts: NewtonOptions, msg: str) -> None:
@@ -154,27 +180,66 @@ class FemStep:
         The discrete problem.
     scale
         Load factor ``lambda`` (of the loads and the prescribed values).
+    phases
+        Where the wall time of the phases goes (``None``: a new one).
+    kept
+        Holder of the last tangent ``K`` and its ``factor``, shared by the load steps of a
+        solve, for :meth:`reused_correction` (modified Newton).
     """
 
-    def __init__(self, problem: NonlinearProblem, scale: float):
+    def __init__(
+        self,
+        problem: NonlinearProblem,
+        scale: float,
+        phases: PhaseTimes | None = None,
+        kept: dict | None = None,
+    ):
         self.problem, self.scale = problem, scale
         self.target = scale * problem.fixed_values
         self.free_ids = np.flatnonzero(problem.free)
+        self.phases = PhaseTimes() if phases is None else phases
+        self.phase = "line search"  # the phase of the next residual evaluation
+        self.kept = {} if kept is None else kept  # the last tangent and its factorisation
 
     def residual(self, u: np.ndarray) -> tuple[np.ndarray, float]:
         """Residual ``R`` (energy-gradient sign) and its relative norm."""
-        R, ref = self.problem.residual(u, self.scale)
+        checkpoint()
+        with self.phases(self.phase):
+            R, ref = self.problem.residual(u, self.scale)
         return R, float(np.linalg.norm(R[self.problem.free]) / max(ref, 1e-300))
 
     def correction(self, u: np.ndarray, R: np.ndarray):
         """Newton correction ``d = -K^-1 R`` and the re-solve with the same tangent."""
-        p = self.problem
-        _, K, symmetric, _ = p.residual_tangent(u, self.scale)
+        p, times = self.problem, self.phases
+        checkpoint()
+        with times("assembly"):
+            _, K, symmetric, _ = p.residual_tangent(u, self.scale)
+        checkpoint()
+        with times("factorization"):
+            factor = p.linear_solver.factorize(K, p.free, symmetric)
+        self.kept.update(K=K, factor=factor)
+        return self._solve(u, R, K, factor)
+
+    def reused_correction(self, u: np.ndarray, R: np.ndarray):
+        """The correction with the last tangent's factorisation (modified Newton), or
+        ``None`` when there is none."""
+        if self.kept.get("factor") is None:
+            return None
+        return self._solve(u, R, self.kept["K"], self.kept["factor"])
+
+    def _solve(self, u: np.ndarray, R: np.ndarray, K, factor):
+        times, p = self.phases, self.problem
         du = np.zeros_like(u)
         du[p.fixed_dofs] = self.target - u[p.fixed_dofs]
         b = -R - (K @ du if not self.constrained(u) else 0.0)
-        du += p.solve_linear(K, b, symmetric, "")
-        return du, lambda rhs: -p.solve_linear(K, rhs, symmetric, "")
+        with times("solve"):
+            du += factor.solve(b)
+
+        def resolve(rhs: np.ndarray) -> np.ndarray:
+            with times("line search"):
+                return -factor.solve(rhs)
+
+        return du, resolve
 
     def trial(self, u: np.ndarray, alpha: float, du: np.ndarray) -> np.ndarray:
         """The state ``+ alpha d``."""
@@ -211,6 +276,9 @@ def newton_step(
     label: str,
     deadline: Deadline | None = None,
     last_good: np.ndarray | None = None,
+    phases: PhaseTimes | None = None,
+    step: int = 0,
+    kept: dict | None = None,
 ) -> NewtonOutcome:
     """Iterate to equilibrium at load factor ``scale`` from ``u`` with the one Newton.
 
@@ -230,6 +298,12 @@ def newton_step(
         The solve's ``--max-time`` cap (checked once per iteration), if any.
     last_good
         The last converged vertex displacements, handed over when the cap stops the solve.
+    phases
+        Where the wall time of the phases goes.
+    step
+        Number of the load step (for ``opts.progress``).
+    kept
+        The tangent holder of :class:`FemStep` (shared by the load steps).
 
     Returns
     -------
@@ -243,14 +317,17 @@ def newton_step(
     """
 
     def monitor(it: int, state: np.ndarray, rel: float, alpha: float) -> None:
-        if deadline is not None and it > 0:
+        if deadline is not None:
             deadline.check(f"{label}, iteration {it}", rel, last_good)
+        if opts.progress is not None:
+            event = {"step": step, "load": scale, "iteration": it, "residual": rel}
+            opts.progress({**event, "alpha": alpha})
         if 0 < alpha < 1.0:
             _log(opts, f"  {label} line search alpha = {alpha:g}")
         _log(opts, f"  {label} iteration {it:2d}  |R|/|f| = {rel:.3e}")
 
-    settings = NewtonSettings(opts.tol, opts.max_iter, opts.max_backtracks)
-    return newton(FemStep(problem, scale), u.copy(), settings, monitor)
+    settings = NewtonSettings(opts.tol, opts.max_iter, opts.max_backtracks, opts.reuse)
+    return newton(FemStep(problem, scale, phases, kept), u.copy(), settings, monitor)
 
 
 def _predict(
@@ -298,16 +375,26 @@ def solve_nonlinear(
     ------
     SolverError
         When the load stepping gives up; ``state`` holds the last converged vertex
-        displacements.
+        displacements and ``load_factor`` their load factor.
+    SolveStopped
+        The ``--max-time`` cap passed or Ctrl-C: ``state`` and ``load_factor`` as above.
     """
     report = NewtonReport()
     state = {"u": np.zeros(problem.n_dofs) if u0 is None else u0.copy(), "prev": None}
+    state["load"] = 0.0
     deadline = Deadline()
+    times = report.phases
+    kept: dict = {}  # the last tangent and its factorisation (modified Newton)
 
     def try_step(lam: float, target: float) -> tuple[bool, int, str]:
-        label = f"step {len(report.steps) + 1} (load {target:.4g})"
-        start = _predict(problem, state["u"], lam, target, state["prev"])
-        out = newton_step(problem, start, target, opts, label, deadline, problem.state(state["u"]))
+        step = len(report.steps) + 1
+        label = f"step {step} (load {target:.4g})"
+        with times("predictor"):
+            start = _predict(problem, state["u"], lam, target, state["prev"])
+        last_good = problem.state(state["u"])
+        out = newton_step(
+            problem, start, target, opts, label, deadline, last_good, times, step, kept
+        )
         if not out.converged:
             _log(opts, f"  {label} failed: {out.reason}; load increment cut")
             return False, 0, out.reason
@@ -316,12 +403,26 @@ def solve_nonlinear(
         report.steps.append({"load": target, "iterations": its, "residuals": hist})
         _log(opts, f"step {len(report.steps)}: load {target:.4g} converged in {its} iterations")
         state["prev"] = (lam, state["u"])  # last converged (load, displacement)
-        state["u"] = u_new
+        state["u"], state["load"] = u_new, target
         if opts.on_step is not None:
             opts.on_step(target, u_new)
         return True, its, ""
 
-    path = LoadStepping(opts.load_steps, opts.max_cutbacks).run(try_step)
+    def stopped(exc: SolveStopped) -> SolveStopped:
+        load = state["load"]
+        msg = f"{exc}; last converged load factor {load:.4g}"
+        return SolveStopped(msg, state=problem.state(state["u"]), load_factor=load)
+
+    try:
+        with deadline.watch():
+            path = LoadStepping(opts.load_steps, opts.max_cutbacks).run(try_step)
+    except SolveStopped as exc:
+        raise stopped(exc) from None
+    except KeyboardInterrupt:
+        raise stopped(deadline.stopped(interrupted=True)) from None
+    finally:
+        if opts.verbose:
+            _log(opts, "phases:\n" + times.table())
     report.cutbacks = path.cutbacks
     if not path.converged:
         raise SolverError(
@@ -329,6 +430,7 @@ def solve_nonlinear(
             f"-> {path.failed_at:.4g}: {path.reason}; gave up after {path.cutbacks} cut-backs "
             "of the load increment",
             state=problem.state(state["u"]),
+            load_factor=path.load,
         )
     report.converged = True
     return state["u"], report

@@ -6,11 +6,10 @@ from a scene.
 
 Examples
 --------
->>> from reference_fem.scenes import bench_scene
 >>> FemOptions().order, FemOptions().linear_solver  # the defaults
 (1, 'auto')
->>> FemOptions.of(bench_scene(100)).linear_solver  # the bench scene's [fem] section
-'amg'
+>>> parse_fem_options(TableReader({"order": 2}, "[fem]", "scene.toml")).order
+2
 """
 
 from __future__ import annotations
@@ -55,8 +54,8 @@ class FemOptions:
         Explicit force kernel: ``float64``, ``mixed`` (float32 constants, float64
         arithmetic) or ``float32``.
     formulation
-        ``displacement``, or ``mixed``: Taylor–Hood P2 displacement / P1 pressure (issue 11;
-        needed for ``incompressible = true`` materials).
+        ``displacement``, or ``mixed``: Taylor–Hood P2 displacement / P1 pressure (needed
+        for ``incompressible = true`` materials).
     """
 
     order: int = 1

@@ -79,7 +79,7 @@ class FemProblem:
         self.nonlinear = self.law is not None
         if scene.material.incompressible and not self.mixed:
             raise InputError('incompressible = true needs [fem] formulation = "mixed"')
-        # per-element frames for anisotropic laws (issue 11), broadcast over quadrature
+        # per-element frames for anisotropic laws, broadcast over quadrature
         self.frames = scene.frames if getattr(self.law, "anisotropic", False) else None
         self.qframes = None if self.frames is None else self.frames[:, None]
         self.law_name = self.law.name if self.law is not None else self.kind
@@ -91,6 +91,7 @@ class FemProblem:
         self.linear_solver = LinearSolver(
             FemOptions.of(scene).linear_solver,
             near_nullspace=rigid_body_modes(self.space.node_coordinates),
+            saddle_point=self.mixed,
         )
         if not self.nonlinear:
             self.D_groups, self.group = material_groups(scene.material, scene.frames, self.kind)

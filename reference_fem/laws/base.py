@@ -13,11 +13,18 @@ The fibre invariants are those of the full ``C``, never split isochorically (Nol
 
 Examples
 --------
+A law with no energy of its own (``W = 0``) is the volumetric penalty alone:
+
 >>> import numpy as np
->>> from reference_fem.laws.guccione import Guccione
->>> law = Guccione(C=2.0, b_f=8.0, b_t=2.0, b_fs=4.0, kappa=1.0)
+>>> class Penalty(TissueLaw):
+...     label = "penalty"
+...     def local(self, F, tangent):
+...         zero = np.zeros(F.shape[:-2])
+...         A = np.zeros(F.shape + (3, 3)) if tangent else None
+...         return zero, np.zeros_like(F), A
+>>> law = Penalty(kappa=1.0, volumetric="quadratic")
 >>> law.name, float(law.energy(np.eye(3)))
-('guccione/log', 0.0)
+('penalty/quadratic', 0.0)
 >>> bool(np.isnan(law.energy(-np.eye(3))))  # inverted (J <= 0): NaN
 True
 """

@@ -51,7 +51,8 @@ def test_p2_tip_deflection_within_2_percent_of_timoshenko(p2, expected):
 
 
 def test_p1_is_too_stiff_on_this_mesh(scene, expected, p2):
-    """P1 tets are stiff in bending: about -21 % here (DESIGN §4); P2 is the cure."""
+    """P1 tets are stiff in bending: about -21 % here (docs/verification.rst#timoshenko-cantilever);
+    P2 is the cure."""
     p1 = solve(scene, order=1)
     ratio = p1.result.probes["tip"][2] / expected
     assert 0.70 < ratio < 0.90
