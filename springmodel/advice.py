@@ -1,24 +1,20 @@
 """Warnings when the spring model's calibration predicts a large model error.
 
-The spring element is a P1 element with its own small-strain tangent (DESIGN §4); its
+The spring element is a P1 element with its own small-strain tangent
+(docs/theory.rst#the-effective-small-strain-matrix-d-k); its
 mismatch against the material (:mod:`springmodel.tangent`, the relative Frobenius norm of the
 fourth-order tangent, equal to the Mandel Frobenius norm for symmetric tangents) depends on
 the element shapes when the barycentric volume spring is on, and on the axis lengths with the
 cosine/angle/cubic torsion laws. :func:`model_warnings` turns it into one line for
-``springfem inspect`` and ``springfem solve``: how many elements exceed
-:data:`MISMATCH_WARN`, and which options remove the mismatch.
+``springfem inspect`` and ``springfem solve``: the median and largest mismatch, how many
+elements exceed :data:`MISMATCH_WARN`, and the ``[spring]`` settings that remove it.
 
-The threshold is backed by a measurement (spring vs P1 on the same mesh at 1e-3 of the load,
-relative L2 of the displacement; bundled cantilever, sag and both stretch scenes, the
-cantilever at 20x4x4 (cells 2:1:1) and on a jittered-Delaunay mesh; variants: seed with
-cosine and with energy torsion, ``analytic-lsq``, ``nnls``, axis volume with cosine torsion,
-exact with and without coupling; 38 runs). Every run with a median mismatch below 1e-14 was
-within 3e-5 of P1 (geometric nonlinearity only). Otherwise the model error was 0.04-3.9
-times the median mismatch: the barycentric volume spring's mismatch (0.24-0.94) over-predicts
-(errors 2-63%), while the cosine law's skew part (mismatch 0.12 on 2:1:1 cells -> 46% error)
-and a transverse material without coupling (mismatch 0.0035 -> 0.6-1.2%) under-predict by up
-to ~4x. So :data:`MISMATCH_WARN` = 0.1%: below it the model error is expected to stay below
-~0.4%.
+The threshold is a measured one: spring model against P1 on the same mesh at 1e-3 of the
+load over the bundled scenes, 2:1:1 cells and a jittered Delaunay mesh, for every
+calibration and volume variant. An element with a mismatch below round-off was within
+geometric nonlinearity of P1; otherwise the model error was of the order of the median
+mismatch (a fraction of it to a few times it). Below :data:`MISMATCH_WARN` = 0.1 % the
+model error stays a small fraction of a percent (docs/theory.rst#measured-calibration-mismatch).
 
 Examples
 --------
@@ -35,7 +31,6 @@ from typing import Any
 import numpy as np
 
 from .options import SpringOptions
-from .tangent import MISMATCH_NORM
 
 #: Mismatch above which an element is counted in the warning (relative, 0.1%; see above).
 MISMATCH_WARN = 1e-3
@@ -96,21 +91,22 @@ def model_warnings(
         return []
     cause = []
     if options.barycentric_volume:
-        cause.append("the barycentric volume spring depends on the element shapes")
+        cause.append("barycentric volume springs depend on the tet shapes")
     if not (options.energy_torsion or options.torsion == "off"):
-        cause.append(f"{options.torsion} torsion is not the gradient of an energy")
+        cause.append(f"{options.torsion} torsion is no energy")
     if transverse and not options.coupling:
-        cause.append("an anisotropic material needs the Poisson-coupling springs")
+        cause.append("anisotropy needs coupling springs")
     if options.torsion == "off":
         cause.append("torsion is off (no shear stiffness)")
     fix = fixes(options, transverse)
-    fix_text = f"set {', '.join(fix)} in [spring]" if fix else "no option removes it"
-    return [
-        f"spring model: {bad} of {mm.size} elements have a calibration mismatch above "
-        f"{threshold:.1%} (median {np.nanmedian(mm):.2%}, max {np.nanmax(mm):.2%}; "
-        f"{MISMATCH_NORM}), which predicts a model error vs P1 of 0.04-4x the median "
-        "(measured)" + (f" ({'; '.join(cause)})" if cause else "") + f"; {fix_text}"
-    ]
+    head = (
+        f"spring model: calibration mismatch {np.nanmedian(mm):.2%} (median; max "
+        f"{np.nanmax(mm):.2%}; {bad} of {mm.size} tets above {threshold:.1%})"
+    )
+    if fix:  # the fix implies the cause
+        return [f"{head}, so much model error vs P1; set {', '.join(fix)} in [spring]"]
+    why = f" ({', '.join(cause)})" if cause else ""
+    return [f"{head}{why}: the element's constants cannot match the law's tangent exactly"]
 
 
 def scene_warnings(scene: Any, mismatch: np.ndarray, options: SpringOptions) -> list[str]:

@@ -1,4 +1,5 @@
-"""Axis-volume and Poisson-coupling springs, the numpy oracle (DESIGN §4b).
+"""Axis-volume and Poisson-coupling springs, the numpy oracle
+(docs/theory.rst#the-axis-volume-ratio-is-j).
 
 Both act on the axis vectors ``zeta_l = q_{2l} - q_{2l+1}`` only, as a force ``g_l`` on the
 point ``q_{2l}`` and ``-g_l`` on ``q_{2l+1}`` (so net force and torque vanish), distributed to

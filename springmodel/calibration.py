@@ -1,4 +1,4 @@
-"""Material parameters -> spring constants (DESIGN §4).
+"""Material parameters -> spring constants (docs/calibration.rst#calibration).
 
 A spring element's energy is a function of its deformation gradient ``F`` alone and, at
 small strain, that of a P1 element with the effective Voigt matrix
@@ -126,7 +126,8 @@ def analytic_constants(
     C_local
         ``(m, 6, 6)`` material matrix in each element's frame (fiber = axis 0).
     volume
-        ``mean``: ``k_s = b V / rho^2`` with ``rho = tr(R)/3`` (DESIGN §4). ``lsq``: the
+        ``mean``: ``k_s = b V / rho^2`` with ``rho = tr(R)/3``
+        (docs/calibration.rst#analytic-calibration). ``lsq``: the
         least-squares fit of ``k_s R R`` to ``b V I I`` (Frobenius),
         ``k_s = b V tr(R)^2 / ||R||^4``; both are exact when ``R = rho I``, ``lsq`` is about
         half the ``mean`` value on the six-tet split and leaves a smaller mismatch there.
@@ -183,7 +184,8 @@ def calibrate(
         ``volume = "axes"`` or ``coupling`` the analytic methods use the exact formulas for
         those parts (they are exact on any tet).
     options
-        :class:`~springmodel.options.SpringOptions`: which parts are on (default: the seed's).
+        :class:`~springmodel.options.SpringOptions`: which parts are on (default: the
+        specification's).
 
     Returns
     -------
@@ -210,7 +212,8 @@ def calibrate(
         volume = "lsq" if method == "analytic-lsq" else "mean"
         k["k_axial"], k["k_torsion"], k["k_volume"] = analytic_constants(geometry, C_local, volume)
     elif method == "nnls":
-        fit = nnls_fit(geometry, C_global, C_local, options)
+        ka, kt, _ = analytic_constants(geometry, C_local)
+        fit = nnls_fit(geometry, C_global, (ka, kt), options)
         names = basis_names(options.torsion, options.volume, options.coupling)
         col = {n: fit[:, i] for i, n in enumerate(names)}
         k["k_axial"] = fit[:, :3]

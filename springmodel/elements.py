@@ -1,6 +1,7 @@
 """Rest data of the spring elements: intersection coefficients, rest measures, constants.
 
-Everything here is computed once, in the rest configuration (DESIGN §3): the intersection
+Everything here is computed once, in the rest configuration
+(docs/spec.rst#c-k-is-computed-once-at-rest): the intersection
 coefficients ``C^k`` (eqs. 2.22–2.25), their axis differences ``G`` (the fast-kernel
 identity ``G[k,i,l] = C[k,i,2l] - C[k,i,2l+1] = grad N_i . zeta_l^0``), the rest lengths,
 cosines, radial lengths and volumes, and the calibrated spring constants.

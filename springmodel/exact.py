@@ -1,6 +1,7 @@
 """Closed-form ``exact`` calibration: the spring element equals the material's P1 element.
 
-The axis vectors are parallel to the element's frame axes on every tet (DESIGN §4b), so in
+The axis vectors are parallel to the element's frame axes on every tet
+(docs/theory.rst#axis-vectors-are-parallel-to-the-frame), so in
 the element frame the axial strains are ``s_l = eps_ll``, the energy-torsion measures are
 ``dc_lm = gamma_lm`` and the axis-volume measure is ``J - 1 = tr eps``. The small-strain
 element energy is then ``V/2 g^T D g`` with (frame-local Voigt, normal block ``N``, shears
@@ -18,7 +19,8 @@ and matching the material's frame-local matrix ``C`` gives, for any tet shape::
 Isotropic material: ``kappa = lambda``, ``k_l = 2 mu V / l_l^2``, ``c_lm = 0``, ``k_lm = mu V``
 (no coupling needed). Transversely isotropic / orthotropic: the off-diagonals differ and the
 couplings take the differences from ``kappa``; the axis-volume term is kept so that the volume
-is held at finite strain (coupling alone lets it drift, DESIGN §4b). Exactness needs
+is held at finite strain (coupling alone lets it drift, docs/calibration.rst#exact-calibration).
+Exactness needs
 ``volume = "axes"``, ``torsion = "energy"`` (or ``"shear"``: the same small-strain tangent)
 and (anisotropic) ``coupling = true``; with other
 parts the same formulas are used (barycentric volume: ``k_s = kappa V / rho^2`` as in the

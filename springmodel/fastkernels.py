@@ -9,7 +9,8 @@ and constants lane-major. A block's edge vectors are gathered into a scratch, it
 computed in one branch-free loop (LLVM vectorises it: ``error_model='numpy'``, contraction
 to FMA allowed; no law codes: the variant's choices are compile-time constants), and its
 vertex forces scattered. Each variant's block loop captures only numbers, so numba caches
-it on disk (``cache=True``). Compact constants, from DESIGN §4's identity
+it on disk (``cache=True``). Compact constants, from the fast-kernel identity
+(docs/theory.rst#the-fast-kernel-identity)
 ``G[i,l] = grad N_i . zeta_l^0``:
 
 * ``G' = G / l0`` (rows of vertices 1..3: ``sum_i G[i] = 0`` gives vertex 0), so
@@ -17,14 +18,15 @@ it on disk (``cache=True``). Compact constants, from DESIGN §4's identity
 * the axial constant ``k l0^2`` (the force ``f_i = G'[i,l] (l0 s_l) zeta_hat_l``);
 * torsion: ``energy`` needs ``k`` only (``l0`` cancels), the force laws ``k_f l0_l`` and
   ``k_f l0_m``; the rest cosines ``c0`` only when they are not zero to round-off (they are
-  zero for orthonormal frames, DESIGN §4b), the rest angles for ``angle``;
+  zero for orthonormal frames, docs/theory.rst#axis-vectors-are-parallel-to-the-frame), the rest
+  angles for ``angle``;
 * barycentric volume: ``k_s`` and ``sum_j |xi_j^0|``;
 * axis volume (``J = det[zeta] / det[zeta^0] = c_J det[zeta / l0]``, ``c_J = l0_0 l0_1 l0_2 /
   det0``): ``c_J``, ``V0 kappa c_J`` (and ``eta V0 c_J`` with damping), its force on axis
   ``l`` being ``-V0 U'(J) c_J (z_m x z_n)`` for the cyclic ``(l, m, n)``, times ``l0_l``;
 * Poisson coupling: ``c_lm`` (``l0`` cancels: ``l0_l g_l = -c_lm s_m zeta_hat_l``).
 
-The seed variant (linear axial, cosine torsion, gradient volume) reads 20 constants per
+The specification's variant (linear axial, cosine torsion, gradient volume) reads 20 constants per
 element (160 B in f64) and 16 B of connectivity, against 256 B before.
 
 Precision (``precision``): ``float64``; ``mixed`` (constants stored in float32, arithmetic

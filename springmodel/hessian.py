@@ -7,7 +7,8 @@ For the energy forms (axial ``linear``/``quadratic``/``cubic``, torsion
 
     U = sum_k [ sum_l f_l(|zeta_l|) + sum_(l,m) k_lm/2 (c_lm - c0_lm)^2 + k_s/2 (L - L0)^2 ],
 
-``zeta_l = sum_i G[k,i,l] x_i`` (the fast-kernel identity, DESIGN §4), ``c_lm = zh_l . zh_m``
+``zeta_l = sum_i G[k,i,l] x_i`` (the fast-kernel identity,
+docs/theory.rst#the-fast-kernel-identity), ``c_lm = zh_l . zh_m``
 and ``L = sum_j |x_j - x_b|``. Per element:
 
 axial, ``a = zeta_l``, ``f'(L) = k (d + b2 d^2/l0 + b3 d^3/l0^2)`` (eq. 2.36)

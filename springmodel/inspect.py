@@ -36,11 +36,13 @@ def inspect_scene(scene: Scene, calibration: bool = True) -> dict[str, Any]:
 
     Examples
     --------
-    >>> from springfem.scene import load_scene
-    >>> from studies.cli import DEFAULT_SCENE
-    >>> report = inspect_scene(load_scene(DEFAULT_SCENE))
+    >>> from springfem.scene import scene_from_dict
+    >>> scene = scene_from_dict({
+    ...     "mesh": {"generator": "box", "size": [0.1, 0.01, 0.01], "divisions": [10, 1, 1]},
+    ...     "material": {"law": "linear", "E": 1.0e4, "nu": 0.3}})
+    >>> report = inspect_scene(scene)
     >>> report["tets"], len(report["warnings"])
-    (3840, 1)
+    (60, 1)
     """
     mesh = scene.mesh
     q = mesh.quality()

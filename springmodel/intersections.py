@@ -247,7 +247,8 @@ def axis_vectors(points: np.ndarray, tets: np.ndarray, C: np.ndarray) -> np.ndar
 def axis_gradients(C: np.ndarray) -> np.ndarray:
     """``G[k, i, l] = C[k, i, 2l] - C[k, i, 2l+1]``, ``(m, 4, 3)``.
 
-    Equal to ``grad N_i . zeta_l^0`` (DESIGN §4), so ``zeta_l = sum_i G[k, i, l] x_i`` and
+    Equal to ``grad N_i . zeta_l^0`` (docs/theory.rst#the-fast-kernel-identity), so ``zeta_l = sum_i
+    G[k, i, l] x_i`` and
     opposite forces ``+-g_l`` on the two points of axis ``l`` give ``f_i = sum_l G[k, i, l] g_l``.
 
     Parameters

@@ -6,11 +6,14 @@ scene's ``[spring]`` section switches on are computed.
 
 Examples
 --------
->>> from springfem.scene import load_scene
->>> from studies.cli import DEFAULT_SCENE
->>> model = SpringModel(load_scene(DEFAULT_SCENE))
+>>> from springfem.scene import scene_from_dict
+>>> scene = scene_from_dict({
+...     "mesh": {"generator": "box", "size": [0.1, 0.01, 0.01], "divisions": [10, 1, 1]},
+...     "material": {"law": "linear", "E": 1.0e4, "nu": 0.3},
+...     "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}]})
+>>> model = SpringModel(scene)
 >>> model.elements.n_elements
-3840
+60
 """
 
 from __future__ import annotations
@@ -52,9 +55,8 @@ class SpringModel:
     options
         Overrides ``SpringOptions.of(scene)`` (studies switch parts on and off this way).
     parallel
-        Use the parallel kernel (both cores). ``None`` (default): the kernel's own choice,
-        serial (``spring_kernel.PARALLEL_BY_DEFAULT``: two threads were never faster than
-        one in this project's measurements).
+        Use the parallel kernel (all numba threads). ``None`` (default): the kernel's rule,
+        :func:`springmodel.spring_kernel.parallel_by_default` (by mesh size).
     """
 
     def __init__(
@@ -144,7 +146,9 @@ class SpringModel:
             K = self._hessian.matrix(x)
         if self.stiffening is not None:
             K = K + self.stiffening.stiffness(x)
-        if self._follower:  # a pressure's nodes share a facet, hence a tet: the colouring holds
+        # a pressure's nodes share a facet, hence a tet: the colouring holds; at load factor 0
+        # (the linear solve's tangent of the internal forces) the load has no stiffness
+        if self._follower and scale != 0.0:
             if self._load_jacobian is None:
                 from springfem.mechanics.fd_jacobian import ColoredJacobian
 

@@ -35,7 +35,6 @@ from scipy.optimize import lsq_linear
 from springfem.errors import InputError
 from springfem.materials import to_mandel
 
-from .calibration import analytic_constants
 from .tangent import basis_names, tangent_basis
 
 #: Lower bound of the axial and torsion constants, as a fraction of the analytic ones.
@@ -52,15 +51,24 @@ def _unique_rows(A: np.ndarray, decimals: int = 10) -> tuple[np.ndarray, np.ndar
     return first, inverse.ravel()
 
 
-def nnls_fit(geometry: Any, C_global: np.ndarray, C_local: np.ndarray, options: Any) -> np.ndarray:
+def nnls_fit(
+    geometry: Any,
+    C_global: np.ndarray,
+    analytic: tuple[np.ndarray, np.ndarray],
+    options: Any,
+) -> np.ndarray:
     """Bounded least-squares constants ``(m, nb)`` in the order of ``basis_names``.
 
     Parameters
     ----------
     geometry
         Rest geometry (``zeta0``, ``xi0``, ``V0``).
-    C_global, C_local
-        ``(m, 6, 6)`` material matrices in the global and in the element frames.
+    C_global
+        ``(m, 6, 6)`` material matrices in the global frame.
+    analytic
+        The analytic axial and torsion constants, ``(m, 3)`` each
+        (:func:`springmodel.calibration.analytic_constants`): the floors are
+        :data:`FLOOR` times them.
     options
         :class:`~springmodel.options.SpringOptions` (which parts are on, their laws).
 
@@ -73,7 +81,7 @@ def nnls_fit(geometry: Any, C_global: np.ndarray, C_local: np.ndarray, options: 
 
     m = geometry.V0.shape[0]
     names = basis_names(options.torsion, options.volume, options.coupling)
-    ka, kt, _ = analytic_constants(geometry, C_local)
+    ka, kt = analytic
     lower = np.full((m, len(names)), 0.0)
     lower[:, :3] = FLOOR * ka
     if options.torsion != "off":

@@ -34,7 +34,7 @@ SolverKind = Literal["static", "linear", "explicit", "implicit"]
 Integrator = Literal["symplectic-euler", "verlet"]
 VolumeForm = Literal["gradient", "spec"]
 Precision = Literal["float64", "mixed", "float32"]
-#: ``True``: the seed's barycentric volume springs; ``"axes"``: the axis-volume spring.
+#: ``True``: the specification's barycentric volume springs; ``"axes"``: the axis-volume spring.
 VolumeKind = bool | Literal["axes"]
 #: ``element``: the axis-volume spring per tet; ``nodal``: on nodal volumes (Bonet & Burton).
 VolumeAverage = Literal["element", "nodal"]
@@ -93,9 +93,10 @@ class SpringOptions:
     torsion_cubic
         Dimensionless cubic coefficient of the ``cubic`` torsion law.
     volume
-        ``True``: the seed's barycentric volume springs (2.76–2.77); ``False``: off;
+        ``True``: the specification's barycentric volume springs (2.76–2.77); ``False``: off;
         ``"axes"``: the axis-volume spring, energy ``V0 U(J)`` with the exact volume ratio
-        ``J = det[zeta_1 zeta_2 zeta_3] / det[zeta_1^0 zeta_2^0 zeta_3^0]`` (DESIGN §4b).
+        ``J = det[zeta_1 zeta_2 zeta_3] / det[zeta_1^0 zeta_2^0 zeta_3^0]``
+        (docs/theory.rst#the-axis-volume-ratio-is-j).
     volume_average
         Where the axis-volume energy measures ``J`` (only with ``volume = "axes"``):
         ``element`` (default), ``J`` of each tet; ``nodal``, the average nodal pressure
@@ -133,7 +134,8 @@ class SpringOptions:
     lms
         Adaptive volume stiffness, or ``None`` for off.
     calibration
-        ``analytic`` (match the small-strain element energy, DESIGN §4), ``analytic-lsq``
+        ``analytic`` (match the small-strain element energy,
+        docs/calibration.rst#analytic-calibration), ``analytic-lsq``
         (the same with a least-squares volume constant ``k_s = lam V tr(R)^2 / |R|^4``, equal
         when ``R = rho I``), ``nnls`` (per-element non-negative least squares of the
         effective 6x6 matrix, with positive axial and torsion constants so that every element
@@ -211,7 +213,7 @@ class SpringOptions:
 
     @property
     def barycentric_volume(self) -> bool:
-        """The seed's barycentric volume springs are on (``volume = true``)."""
+        """The specification's barycentric volume springs are on (``volume = true``)."""
         return self.volume is True
 
     @property

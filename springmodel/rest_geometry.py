@@ -1,4 +1,5 @@
-"""The rest geometry of a spring element and its small-strain measures (DESIGN §4).
+"""The rest geometry of a spring element and its small-strain measures
+(docs/theory.rst#the-effective-small-strain-matrix-d-k).
 
 Calibration needs, per element, the rest axis vectors ``zeta_l^0``, the radial vectors
 ``xi_j^0`` (barycenter to vertex) and the volume. At small strain ``eps`` every spring's

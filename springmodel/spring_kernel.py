@@ -6,23 +6,14 @@ compact constants of that variant (:func:`constant_columns`) in the blocked layo
 :mod:`springfem.blocks`, and runs the kernel of :func:`~springmodel.fastkernels.spring_kernel`
 serially or on all threads.
 
-Threads (rule: serial by default, :data:`PARALLEL_BY_DEFAULT`; with it on, parallel from
-:data:`PARALLEL_MIN_ELEMENTS` elements when numba has more than one thread; pass
-``parallel=True`` to use every thread). Measured with
-``springfem bench forces --tets 200000`` (210,912 tets, 7 interleaved rounds, 2 CPUs shared
-by other engineers, load average 2.6-3.5, ``OMP_WAIT_POLICY=passive``): two threads against
-one, wall, seed variant (torsion cosine) 0.91x (float64), 0.96x (mixed), 0.96x (float32);
-the serial/parallel CPU-time ratio was 1.00, 0.98, 0.90: the threads add almost no work
-(no barrier or reduction cost worth naming), so the wall-time loss is the cores being
-busy, not the kernel. At a quieter moment the issue measured 1.87x at 49k tets. A load
-that leaves a core free lets two threads win; this machine's usual load does not, so the
-default is the faster one measured here: serial.
-
-Known fault (open): with ``parallel=True`` the kernel returned wrong forces (garbage in the
-last rows, relative error up to 0.4) in 3 of about 8 runs of the whole test suite on the
-loaded machine, in tests that pass every time when run alone, in their folder or in any
-subset tried, with cold or warm numba caches; the serial kernel never did. Until it is
-found, the parallel path is opt-in and its tests run with ``-m slow``.
+Threads (:func:`parallel_by_default`): parallel from :data:`PARALLEL_MIN_ELEMENTS` elements
+when numba has two threads or more; ``parallel=True`` uses every thread, ``False`` one. The
+parallel driver gives each thread a static chunk of blocks and its own force buffer, summed
+in chunk order (:func:`springfem.blocks.block_drivers`): the forces are bitwise the same from
+call to call for a given thread count, and equal to the serial pass to round-off.
+``springfem bench threads`` times both on idle-machine sizes and checks the threshold;
+``springfem bench forces`` says whether the rule picks the faster at its size. Under another
+process's load two threads are slower than one at every size: the rule is for a free core.
 
 Examples
 --------
@@ -48,12 +39,36 @@ from springfem.blocks import BLOCK, block_layout, chunks, set_column
 from .fastkernels import _PAIRS, PRECISIONS, Variant, spring_kernel
 from .options import SpringOptions
 
-#: ``SpringKernel(parallel=None)`` runs serially unless this is on: two threads were never
-#: faster than one in this project's measurements on its shared 2-core machine (module
-#: docstring); turn it on where a core is free.
-PARALLEL_BY_DEFAULT = False
-#: With :data:`PARALLEL_BY_DEFAULT` on, below this many elements the kernel still runs serially.
+#: ``SpringKernel(parallel=None)`` follows :func:`parallel_by_default` while this is on.
+PARALLEL_BY_DEFAULT = True
+#: From this many elements two threads are faster than one on an idle machine, for every
+#: kernel (``springfem bench threads``); below it, waking the threads and summing their
+#: buffers costs more than they save.
 PARALLEL_MIN_ELEMENTS = 20_000
+
+
+def parallel_by_default(n_elements: int) -> bool:
+    """The kernel's default: parallel from :data:`PARALLEL_MIN_ELEMENTS` elements when
+    numba has two threads or more (and :data:`PARALLEL_BY_DEFAULT` is on).
+
+    Parameters
+    ----------
+    n_elements
+        Number of elements of the kernel.
+
+    Returns
+    -------
+    bool
+        Whether ``SpringKernel(parallel=None)`` runs on all threads.
+
+    Examples
+    --------
+    >>> parallel_by_default(10)
+    False
+    """
+    return (
+        PARALLEL_BY_DEFAULT and n_elements >= PARALLEL_MIN_ELEMENTS and numba.get_num_threads() > 1
+    )
 
 
 def constant_columns(elements, variant: Variant) -> np.ndarray:
@@ -101,7 +116,8 @@ def constant_columns(elements, variant: Variant) -> np.ndarray:
 
 
 def needs_c0(elements, tol: float = 1e-14) -> bool:
-    """False when every rest cosine is zero to round-off (orthonormal frames, DESIGN §4b).
+    """False when every rest cosine is zero to round-off (orthonormal frames,
+    docs/theory.rst#axis-vectors-are-parallel-to-the-frame).
 
     Parameters
     ----------
@@ -181,9 +197,8 @@ class SpringKernel:
     options
         Which parts are on and their laws.
     parallel
-        Use all numba threads (per-thread buffers); ``None`` (default): parallel from
-        :data:`PARALLEL_MIN_ELEMENTS` elements when there is more than one thread and
-        :data:`PARALLEL_BY_DEFAULT` is on (it is off: serial).
+        Use all numba threads (per-thread buffers); ``None`` (default):
+        :func:`parallel_by_default` (from :data:`PARALLEL_MIN_ELEMENTS` elements).
     precision
         ``float64`` (default), ``mixed`` or ``float32`` (see the module docstring).
 
@@ -209,11 +224,7 @@ class SpringKernel:
             ]
         )
         if parallel is None:
-            parallel = (
-                PARALLEL_BY_DEFAULT
-                and elements.n_elements >= PARALLEL_MIN_ELEMENTS
-                and numba.get_num_threads() > 1
-            )
+            parallel = parallel_by_default(elements.n_elements)
         self.parallel = bool(parallel)
         self._ptr = chunks(self._T.shape[0])
         nchunk = self._ptr.size - 1

@@ -53,7 +53,7 @@ torsion, for each pair ``(l, m)`` in (0,1), (0,2), (1,2), with ``c = zh_l . zh_m
       (reading "``f_{m->l} = -f_{l->m}``" literally would push axis ``m`` along itself).
     ``k_f = 2 k / (l_l + l_m)`` (:attr:`SpringElements.k_torsion_force`).
 
-volume (2.76–2.77), ``xi_j = x_j - x_b`` (the restoring sign, DESIGN §3)
+volume (2.76–2.77), ``xi_j = x_j - x_b`` (the restoring sign, docs/spec.rst#the-volume-spring-sign)
     ``dL = sum_j |xi_j| - L0``; ``gradient`` form: ``f_j = -k_s dL (xh_j - mean_i xh_i)``,
     the exact ``-dU/dx`` of ``U = k_s/2 dL^2`` (the barycenter depends on every vertex),
     net force zero. ``spec`` form: ``f_j = -k_s dL xh_j`` as written, whose net force

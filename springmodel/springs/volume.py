@@ -1,6 +1,7 @@
 """Barycentric volume springs (eqs. 2.76–2.77) and the volume measures LMS reads.
 
-``xi_j = x_j - x_b`` (barycenter to vertex, the restoring sign of DESIGN §3) and
+``xi_j = x_j - x_b`` (barycenter to vertex, the restoring sign of
+docs/spec.rst#the-volume-spring-sign) and
 ``dL = sum_j |xi_j| - L0``; the ``gradient`` and ``spec`` forms are described in
 :mod:`springmodel.springs`.
 

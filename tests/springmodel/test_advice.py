@@ -1,7 +1,8 @@
 """Warnings for a predicted model error (springmodel.advice) in inspect and solve.
 
 The references are the mismatch values themselves (counted here with numpy) and the option
-rules of issue 10: the seed's barycentric volume and cosine torsion are named, and the exact
+rules: the specification's barycentric volume and cosine torsion are named, and the
+exact
 options produce no warning.
 """
 
@@ -35,7 +36,7 @@ def test_seed_cantilever_warns_with_count_and_fix():
     n_bad = int(np.sum(SpringModel(scene).elements.mismatch > MISMATCH_WARN))
     assert n_bad == report["tets"]  # every six-split tet: mismatch ~0.58, far above 0.1%
     (line,) = report["warnings"]
-    assert f"{n_bad} of {report['tets']} elements" in line
+    assert f"{n_bad} of {report['tets']} tets" in line and len(line) < 250  # the former ran to 400
     for fix in ('volume = "axes"', 'torsion = "energy"', 'calibration = "exact"'):
         assert fix in line
     assert "Frobenius" in report["calibration_mismatch_norm"]
@@ -52,5 +53,7 @@ def test_transverse_material_asks_for_coupling():
     mm = np.array([0.0, 0.02, 0.5, np.nan])
     opts = SpringOptions(volume="axes", torsion="energy", calibration="exact")
     (line,) = model_warnings(mm, opts, transverse=True)
-    assert line.startswith("spring model: 2 of 4 elements") and "coupling = true" in line
+    # median and max of the finite values; two of the three above 0.1 %
+    assert line.startswith("spring model: calibration mismatch 2.00% (median; max 50.00%; 2 of 4")
+    assert "coupling = true" in line
     assert model_warnings(np.full(3, np.nan), opts, transverse=True) == []

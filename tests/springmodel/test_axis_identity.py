@@ -1,4 +1,5 @@
-"""The fast-kernel identity of DESIGN §4: axis differences of ``C^k`` are shape gradients.
+"""The fast-kernel identity of docs/theory.rst#the-fast-kernel-identity: axis differences of ``C^k``
+are shape gradients.
 
 ``G[k,i,l] = C[k,i,2l] - C[k,i,2l+1] = grad N_i . zeta_l^0``, on irregular tets with random
 axes; distributing ``+-g`` through ``C`` equals distributing ``g`` through ``G``. It is what
@@ -33,7 +34,8 @@ def mesh_state():
 
 
 def test_axis_gradient_identity(mesh_state):
-    # G[k,i,l] = C[k,i,2l] - C[k,i,2l+1] = grad N_i . zeta_l^0 (DESIGN §4), on irregular tets
+    # G[k,i,l] = C[k,i,2l] - C[k,i,2l+1] = grad N_i . zeta_l^0
+    # (docs/theory.rst#the-fast-kernel-identity), on irregular tets
     # with random axes; and distributing +-g through C equals distributing g through G
     points, el, x, _ = mesh_state
     grad = shape_gradients(points, el.tets)

@@ -29,7 +29,7 @@ TRANSVERSE = {
 }
 
 
-#: Energy torsion: the seed's cosine law is not a gradient and its tangent has a skew part
+#: Energy torsion: the specification's cosine law is not a gradient and its tangent has a skew part
 #: (tests/springmodel/test_exact.py), so exactness claims are made for the energy forms.
 ENERGY = SpringOptions(torsion="energy")
 
@@ -204,7 +204,7 @@ def test_analytic_calibration_reproduces_p1_stiffness_on_regular_tet(nu):
             material,
         )
         np.testing.assert_allclose(lsq.k_volume, el.k_volume, rtol=1e-12, atol=1e-12)
-        # the constants of DESIGN §4
+        # the constants of docs/calibration.rst#analytic-calibration
         mu = 1e3 / (2 * (1 + nu))
         lam = 1e3 * nu / ((1 + nu) * (1 - 2 * nu))
         V, l0 = el.V0[0], el.l0[0]

@@ -1,4 +1,5 @@
-"""Spring elements that are exact on any mesh (issue 10, DESIGN §4b).
+"""Spring elements that are exact on any mesh (
+docs/theory.rst#the-exact-element-is-the-p1-element).
 
 Independent references: the P1 element stiffness ``V B^T C B`` built here from the shape
 gradients (inverse of ``[1 x]``), central finite differences of the oracle forces and of the
@@ -253,8 +254,8 @@ def test_volume_damping_dissipates_the_volume_rate():
 
 @pytest.mark.parametrize(
     "parallel",
-    # the parallel driver gave wrong forces in 3 of ~8 full-suite runs on the loaded machine
-    # and never alone (springmodel/spring_kernel.py, "Known fault"); serial is the default
+    # the parallel drivers of these four variants compile ~4 s more; the parallel path is
+    # checked by default in test_parallel_kernels.py
     [False, pytest.param(True, marks=pytest.mark.slow)],
 )
 @pytest.mark.parametrize(

@@ -2,11 +2,12 @@
 
 With ``volume = "axes"``, ``torsion = "energy"``, ``calibration = "exact"`` (and
 ``coupling = true`` for the transversely isotropic scenes) the small-strain spring model *is*
-the P1 model (DESIGN §4b); at 1e-3 of the scene's load only geometric nonlinearity is left
+the P1 model (docs/theory.rst#the-exact-element-is-the-p1-element); at 1e-3 of the scene's load only
+geometric nonlinearity is left
 (relative size ~ 1e-3 x deflection / length, measured 2e-6 on the cantilever and 3e-5 on the
 sag, whose P1 neo-Hookean solution is 10x closer), so the relative L2 difference must be
 below the issue's 1e-4. (At 1e-4 of the load the static solver cannot reach its relative
-tolerance 1e-8: the forces are at round-off.) The seed model is 8-35% off on the same
+tolerance 1e-8: the forces are at round-off.) The specification's element is 8-35% off on the same
 scenes, so the bound fails on any calibration error. The reference is the FEM package's P1
 (linear or transverse-linear law), an independent code path (scikit-fem assembly).
 """

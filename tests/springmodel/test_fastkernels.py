@@ -158,7 +158,6 @@ def test_rest_cosines_are_read_when_not_zero(skewed, torsion):
     check(el, x, v, options)
 
 
-@pytest.mark.slow  # known intermittent fault of the parallel driver: spring_kernel.py docstring
 def test_parallel_matches_oracle_and_is_deterministic(mesh_state):
     _, el, x, v = mesh_state
     options = FAST[1]
@@ -197,7 +196,8 @@ def test_volume_stiffness_update_and_energy(mesh_state):
 
 
 def test_compact_constants(mesh_state):
-    # orthonormal frames: c0 is round-off (DESIGN §4b) and is not stored; the seed variant
+    # orthonormal frames: c0 is round-off (docs/theory.rst#axis-vectors-are-parallel-to-the-frame)
+    # and is not stored; the seed variant
     # reads 9 + 3 + 6 + 2 constants and 4 int32 ids
     _, el, _, _ = mesh_state
     assert not needs_c0(el)

@@ -2,7 +2,8 @@
 
 Independent references: central finite differences of the numpy oracle forces
 (springmodel.springs.internal_forces), rigid-motion invariants, the P1 FEM element stiffness
-``V B^T C B`` of a regular tet (DESIGN §4), scipy's own COO -> CSR assembly, and the fused
+``V B^T C B`` of a regular tet (docs/calibration.rst#analytic-calibration), scipy's own COO -> CSR
+assembly, and the fused
 force kernel of a SpringModel.
 """
 
@@ -206,7 +207,8 @@ def p1_stiffness(X: np.ndarray, E: float, nu: float) -> np.ndarray:
 
 @pytest.mark.parametrize("nu", [0.0, 0.3, 0.45])
 def test_regular_tet_at_rest_equals_p1_fem(nu):
-    """DESIGN §4: with orthonormal axes and an isotropic radial tensor the analytically
+    """docs/calibration.rst#analytic-calibration: with orthonormal axes and an isotropic radial
+    tensor the analytically
     calibrated energy variant is the isotropic P1 element."""
     rng = np.random.default_rng(int(nu * 100))
     X = np.array([[1.0, 1, 1], [-1, 1, -1], [1, -1, -1], [-1, -1, 1]])

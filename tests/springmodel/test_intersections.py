@@ -143,7 +143,7 @@ def check_invariants(x: np.ndarray, frames: np.ndarray, tol: np.ndarray | float)
         # the designated face is the hit face, or the hit is on an edge shared with it
         other = np.take_along_axis(C[:, :, j], face[:, None], axis=1)[:, 0]
         assert ((rc.faces[:, j] == face) | (other <= tol)).all()
-    # DESIGN §4 identity: C[i, 2l] - C[i, 2l+1] = grad N_i . zeta_l^0
+    # docs/theory.rst#the-fast-kernel-identity identity: C[i, 2l] - C[i, 2l+1] = grad N_i . zeta_l^0
     zeta = axis_vectors(pts, tets, C)
     Gref = reference_gradients(x)
     rhs = np.einsum("kic,klc->kil", Gref, zeta)
@@ -321,7 +321,8 @@ def test_coefficients_do_not_depend_on_axis_lengths(jittered_mesh):
 
 
 def test_axis_gradients_reproduce_axis_vectors(jittered_mesh):
-    """Fast-kernel form: zeta_l = sum_i G[i, l] x_i equals q_2l - q_2l+1 (DESIGN §4)."""
+    """Fast-kernel form: zeta_l = sum_i G[i, l] x_i equals q_2l - q_2l+1
+    (docs/theory.rst#the-fast-kernel-identity)."""
     pts, tets, frames = jittered_mesh
     C = intersection_coefficients(pts, tets, frames)
     G = axis_gradients(C)
