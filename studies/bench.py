@@ -1,19 +1,24 @@
-"""``springfem bench forces|fem|step``: kernel speeds, FEM assembly/solve, explicit steps.
+"""``springfem bench forces|fem|step|threads``: kernel speeds, FEM assembly/solve, explicit steps.
 
 Timing rules (:mod:`studies.timing`): every case runs in every round, in a shuffled order;
 figures are medians over the rounds of wall and CPU time, ratios are medians of per-round
 ratios; the machine's load average is printed beside them (other processes on a shared
-machine change every number, DESIGN §8).
+machine change every number, docs/verification.rst#how-speed-is-measured).
 
 ``forces``
     On a box of about ``--tets`` tets (default 500k), for each precision (``float64``,
     ``mixed``, ``float32``): the spring kernel of the scene's variant and the explicit P1
     neo-Hookean and linear FEM kernels, serial and on all threads, and the numpy spring
     oracle; ``--variants`` adds every spring variant (serial) and the stiffened exact element
-    (kernel + :mod:`springmodel.stiffening_kernel`, float64). Each kernel's ratio to the
-    neo-Hookean FEM kernel of the same precision and threads, its bytes read per element and
-    the bandwidth-bound limit (a measured read bandwidth / bytes per element). NVIDIA Warp is
-    timed as a peer when installed (it is skipped with a note when not).
+    (kernel + :mod:`springmodel.stiffening_kernel`, float64) with its parts
+    (:mod:`studies.bench_stiffening`). Each kernel's ratio to the neo-Hookean FEM kernel of
+    the same precision and threads, its bytes read per element and the bandwidth-bound limit
+    (a measured read bandwidth / bytes per element); whether the spring kernel's threads rule
+    picks the faster at this size. NVIDIA Warp is timed as a peer when installed (it is
+    skipped with a note when not).
+``threads``
+    :func:`studies.bench_threads.bench_threads`: serial and parallel force passes at sizes
+    from 1k tets up to ``--tets``, and whether the kernels' threads rule picks the faster.
 ``fem``
     :func:`reference_fem.bench`: assembly, solve, scikit-fem defaults, one Newton iteration.
 ``step``
@@ -24,55 +29,32 @@ machine change every number, DESIGN §8).
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
-import sys
-import time
 
 import numpy as np
 
 from springmodel.options import SpringOptions
 
-from .bench_print import print_forces, print_step
-from .bench_stiffening import stiffened_case
-from .timing import interleaved, load_average, median, median_ratio, stream_bandwidth
+from .bench_stiffening import stiffening_parts
+from .timing import (
+    deformed_state,
+    interleaved,
+    load_average,
+    machine,
+    median,
+    median_ratio,
+    stream_bandwidth,
+)
 
 # Passive OpenMP waiting (spinning threads steal a shared machine's cores), set before the
 # OpenMP runtime starts, unless the user chose.
 os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 
-DEFAULT_TETS = {"forces": 500_000, "fem": 100_000, "step": 100_000}
+DEFAULT_TETS = {"forces": 500_000, "fem": 100_000, "step": 100_000, "threads": 300_000}
 PRECISIONS = ("float64", "mixed", "float32")
 #: Explicit steps (and force passes) per timing in ``bench step``.
 STEP_COUNT = 10
 _FEM_BYTES = {"float64": 10 * 8 + 16, "mixed": 10 * 4 + 16, "float32": 10 * 4 + 16}
-
-
-def machine() -> dict:
-    """Threads, numba threading layer and load average: the context of every timing."""
-    import numba
-
-    try:
-        layer = numba.threading_layer()
-    except ValueError:  # no parallel function has run yet
-        layer = "not initialised"
-    return {
-        "cpus": os.cpu_count(),
-        "numba_threads": numba.get_num_threads(),
-        "threading_layer": layer,
-        "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY", "default"),
-        "load_average": load_average(),
-    }
-
-
-def _state(points: np.ndarray, seed: int = 0) -> np.ndarray:
-    """A deformed state: a smooth stretch plus noise of 1 % of the mesh spacing."""
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    h = float(np.min(hi - lo)) / max(2.0, round((points.shape[0]) ** (1 / 3)))
-    rng = np.random.default_rng(seed)
-    x = points * np.array([1.02, 0.99, 0.995])
-    return x + 0.01 * h * rng.standard_normal(points.shape)
 
 
 def spring_variants() -> list[SpringOptions]:
@@ -156,13 +138,14 @@ def bench_forces(
     from springmodel import springs
     from springmodel.elements import build_spring_elements
     from springmodel.model import variant_label
+    from springmodel.spring_kernel import PARALLEL_MIN_ELEMENTS as min_par
     from springmodel.spring_kernel import SpringKernel
 
     scene = bench_scene(n_tets)
     mesh, options = scene.mesh, SpringOptions.of(scene)
     m = mesh.n_tets
     el = build_spring_elements(mesh.points, mesh.tets, scene.frames, options, scene.material)
-    x = _state(mesh.points)
+    x = deformed_state(mesh.points)
     out = np.empty_like(x)
     cases, meta = {}, {}
     for p in precisions:
@@ -205,7 +188,8 @@ def bench_forces(
                     "fem": f"FEM neo-Hookean {p} 1",
                 }
     if variants and "float64" in precisions:
-        name, cases[name], meta[name] = stiffened_case(scene, mesh, x, out)
+        for name, call, info in stiffening_parts(scene, mesh, x, out):
+            cases[name], meta[name] = call, info
     cases["spring numpy oracle"] = lambda: springs.internal_forces(x, None, el, options)
     meta["spring numpy oracle"] = {"kernel": "spring-oracle", "precision": "float64",
                                    "threads": "1", "bytes": None,
@@ -233,8 +217,11 @@ def bench_forces(
     info = machine()
     info["load_average_before"] = load_before
     info["load_average_after"] = load_average()
+    rule = {"default_parallel": SpringKernel(el, options).parallel, "min_elements": min_par}
+    rule["speedup"] = ratios.get(f"threads_speedup[{seed[:-2]} all]")
     return {
         "benchmark": "forces",
+        "threads_rule": rule,
         "n_tets": m,
         "n_nodes": mesh.n_points,
         "rounds": repeats,
@@ -305,7 +292,7 @@ def bench_step(n_tets: int = 100_000, repeats: int = 5, steps: int = STEP_COUNT)
         "explicit P1 FEM neo-Hookean, serial": ExplicitFem(scene, parallel=False),
         "explicit P1 FEM neo-Hookean, parallel": ExplicitFem(scene, parallel=True),
     }
-    x = _state(scene.mesh.points)
+    x = deformed_state(scene.mesh.points)
     cases = {}
     for name, s in systems.items():
         plain = WithoutEnergy(s)
@@ -355,43 +342,3 @@ def bench_step(n_tets: int = 100_000, repeats: int = 5, steps: int = STEP_COUNT)
         },
         "machine": info,
     }
-
-
-def cmd_bench(args: argparse.Namespace) -> int:
-    """Entry point of ``springfem bench``."""
-    from springfem.errors import InputError
-
-    what = args.what
-    n = args.tets if args.tets is not None else DEFAULT_TETS[what]
-    repeats = int(getattr(args, "repeats", 7) or 7)
-    if n < 6:
-        raise InputError(f"--tets must be at least 6, got {n}")
-    if repeats < 1:
-        raise InputError(f"--repeats must be at least 1, got {repeats}")
-    as_json = bool(getattr(args, "json", False))
-    if what == "forces":
-        res = bench_forces(n, repeats, variants=bool(getattr(args, "variants", False)))
-        if not as_json:
-            print_forces(res)
-    elif what == "step":
-        res = bench_step(n, repeats)
-        if not as_json:
-            print_step(res)
-    elif what == "fem":
-        from reference_fem import bench
-        from reference_fem.bench import _print as print_fem
-
-        t0 = time.perf_counter()
-        res = bench(n, verbose=False)
-        res["machine"] = machine()
-        res["seconds"] = time.perf_counter() - t0
-        if not as_json:
-            print_fem(res, file=sys.stdout)  # its default stream is bound at import time
-            print(f"  machine load average {res['machine']['load_average']}")
-    else:  # argparse restricts the choices
-        raise InputError(f"unknown benchmark {what!r}; valid: forces, fem, step")
-    if as_json:
-        from springfem.files import jsonable as _jsonable
-
-        print(json.dumps(_jsonable(res), indent=2, sort_keys=True))
-    return 0

@@ -1,4 +1,4 @@
-"""Printing of ``springfem bench forces|step`` results (:mod:`studies.bench`).
+"""Printing of ``springfem bench forces|step|threads`` results (:mod:`studies.bench`).
 
 Examples
 --------
@@ -58,7 +58,7 @@ def print_forces(res: dict, file=None) -> None:
     q = res["ratios"]
     print(
         f"  /FEM: median per-round time ratio to the neo-Hookean FEM kernel of the same "
-        f"precision and threads (> 1: slower); oracle / seed kernel "
+        f"precision and threads (> 1: slower); oracle / specification kernel "
         f"{_f(q.get('oracle_over_seed_float64'), '.1f')}x (kernel == oracle to "
         f"{res['kernel_vs_oracle_max_rel_diff']:.1e})",
         file=file,
@@ -71,6 +71,16 @@ def print_forces(res: dict, file=None) -> None:
                 f"{_f(eff, '.2f')} (1 = threads add no work)",
                 file=file,
             )
+    rule = res.get("threads_rule")
+    if rule and rule["speedup"] is not None:
+        faster = rule["speedup"] > 1.0
+        verdict = "agrees" if faster == rule["default_parallel"] else "DISAGREES"
+        print(
+            f"  threads rule (springmodel.spring_kernel: parallel from {rule['min_elements']} "
+            f"elements): {'parallel' if rule['default_parallel'] else 'serial'} at "
+            f"{res['n_tets']} tets; measured {rule['speedup']:.2f}x: the rule {verdict}",
+            file=file,
+        )
     for note in res["notes"]:
         print(f"  note: {note}", file=file)
 
@@ -104,5 +114,45 @@ def print_step(res: dict, file=None) -> None:
         f"  spring / explicit-FEM cost per step: {q['spring_over_fem_serial']:.2f} serial, "
         f"{q['spring_over_fem_parallel']:.2f} parallel (> 1: the spring model is slower); "
         f"update = step - forces per round (same round)",
+        file=file,
+    )
+
+
+def print_threads(res: dict, file=None) -> None:
+    """Print a :func:`studies.bench_threads.bench_threads` result as a table.
+
+    Parameters
+    ----------
+    res
+        The result dict.
+    file
+        Stream (default ``sys.stdout``).
+    """
+    file = file or sys.stdout
+    mach = res["machine"]
+    print(
+        f"bench threads: {res['rounds']} interleaved rounds, float64; {mach['cpus']} CPUs, "
+        f"{mach['numba_threads']} numba threads ({mach['threading_layer']}, OMP_WAIT_POLICY "
+        f"{mach['omp_wait_policy']}); load average {mach['load_average_before']} before, "
+        f"{mach['load_average_after']} after",
+        file=file,
+    )
+    print(
+        f"  {'tets':>8} {'kernel':<18} {'M/s 1 thread':>12} {'M/s all':>9} {'speed-up':>8} "
+        f"{'CPU 1/all':>9}",
+        file=file,
+    )
+    for r in res["rows"]:
+        print(
+            f"  {r['tets']:>8} {r['kernel']:<18} {r['mtets_per_s_serial']:>12.2f} "
+            f"{r['mtets_per_s_parallel']:>9.2f} {r['speedup']:>8.2f} {r['cpu_ratio']:>9.2f}",
+            file=file,
+        )
+    rule = res["rule"]
+    print(
+        f"  speed-up: median per-round serial/parallel wall time (> 1: threads faster); rule "
+        f"(springmodel.spring_kernel): parallel from {rule['min_elements']} elements "
+        f"(default {'on' if rule['parallel_by_default'] else 'off'}): "
+        f"{'agrees' if rule['agrees'] else 'DISAGREES'} with the measurement",
         file=file,
     )

@@ -6,22 +6,13 @@ the reference, volume change, reactions, wall time and convergence.
 Its output (sentences, figures, the ``springfem compare`` command) is in
 :mod:`studies.compare_output`.
 
-Models (names used in tables and figures; :mod:`studies.compare_models`)
------------------------------------------------------------------------
-``spring``  the spring model with the scene's ``[spring]`` options;
-``P1``, ``P2``  linear (small-strain) FEM with the scene's linear law (``linear`` or
-``transverse-linear``; ``linear`` with ``E, nu`` for a neo-Hookean scene); for a
-finite-strain tissue law (Guccione, Holzapfel–Ogden) the scene's own law: P2 with the
-scene's formulation (mixed Taylor–Hood when incompressible), P1 in the displacement
-formulation with the scene's ``kappa`` or the spring model's incompressible penalty;
-``P1-NH``, ``P2-NH``  neo-Hookean FEM (the scene's formulation), run when the scene's law is
-neo-Hookean or its strains are large (:data:`LARGE_STRAIN`); never for a tissue law.
+The models are those of :mod:`studies.models` (``spring``, ``P1``, ``P2``, and ``P1-NH``,
+``P2-NH`` when the scene's law is neo-Hookean or its strains are large,
+:data:`LARGE_STRAIN`; never for a tissue law); any registered model may be asked for.
 """
 
 from __future__ import annotations
 
-import time
-import tomllib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -33,21 +24,16 @@ from springfem.mesh import displacement_gradients
 from springfem.scene import Scene
 
 from . import metrics
-from .compare_models import (  # noqa: F401 - re-exported: compare's model names and solve
-    MODELS,
-    SPRING_PARALLEL_MIN_TETS,
-    is_tissue,
-    linear_law,
-    model_scene,
-    model_settings,
-    p1_penalty,
-    solve_model,
-    tissue_note,
-)
-from .partial import partial_row, partial_solution
+from .models import get as get_model
+from .models import is_tissue, tissue_note
+from .models import run as run_model
+from .partial import partial_row
 from .solve import Solution
 
-REFERENCE_PREFERENCE = ("P2-NH", "P2", "P1-NH", "P1")
+#: The models a comparison runs by default (neo-Hookean ones when strains are large).
+MODELS = ("spring", "P1", "P2", "P1-NH", "P2-NH")
+
+REFERENCE_PREFERENCE = ("P2-NH", "P2", "P1-NH", "P1", "fem")
 LARGE_STRAIN = 0.05  # max |principal Green-Lagrange strain| of the P1 linear solution
 COMPONENTS = "xyz"
 
@@ -117,44 +103,6 @@ class Comparison:
 # ------------------------------------------------------------------------------ solving
 
 
-def bundled_scene(name: str, divisions: Sequence[int] | None = None) -> dict:
-    """The table of a bundled scene, optionally with other box ``divisions``.
-
-    Build the scene with :func:`springfem.scene.scene_from_dict`; change a value by
-    editing the returned dict (it is a fresh copy).
-
-    Parameters
-    ----------
-    name
-        A bundled scene (``cantilever``, ``sag``, ...).
-    divisions
-        Box divisions replacing the scene's ``mesh.divisions`` (``None``: keep them).
-
-    Returns
-    -------
-    dict
-        The scene table as read from its TOML file.
-
-    Raises
-    ------
-    InputError
-        If ``divisions`` is given but the scene's mesh is not a generated box.
-
-    Examples
-    --------
-    >>> bundled_scene("cantilever", [20, 2, 2])["mesh"]["divisions"]
-    [20, 2, 2]
-    """
-    from .cli import scene_path
-
-    data = tomllib.loads(scene_path(name).read_text(encoding="utf-8"))
-    if divisions is not None:
-        if "divisions" not in data.get("mesh", {}):
-            raise InputError(f"scene {name}: its mesh has no 'divisions' to replace")
-        data["mesh"]["divisions"] = [int(d) for d in divisions]
-    return data
-
-
 def max_principal_strain(scene: Scene, u: np.ndarray) -> float:
     """Max |principal Green–Lagrange strain| over the P1 elements for vertex field ``u``.
 
@@ -173,6 +121,7 @@ def compare_scene(
     strain_limit: float = LARGE_STRAIN,
     log: Callable[[str], None] | None = None,
     allow_no_reference: bool = False,
+    verbose: bool = False,
 ) -> Comparison:
     """Solve ``scene`` with the spring model and FEM and compare them.
 
@@ -191,6 +140,8 @@ def compare_scene(
     allow_no_reference
         When every finite-strain reference failed, return the comparison with no
         reference (``reference = ""``, errors NaN) instead of raising.
+    verbose
+        Each model's solver progress on stderr.
 
     Returns
     -------
@@ -211,20 +162,18 @@ def compare_scene(
     partial: dict[str, Solution] = {}
 
     def run(name: str) -> None:
-        t0 = time.perf_counter()
-        try:
-            solutions[name] = solve_model(scene, name)
-        except SolverError as exc:
-            failures[name] = str(exc)
-            kind = "spring" if name == "spring" else "fem"
-            stopped = partial_solution(scene, kind, exc, time.perf_counter() - t0)
-            if stopped is not None:
-                partial[name] = stopped
-            say(f"  {name:<6} FAILED: {exc}")
+        got = run_model(scene, name, verbose=verbose)
+        if not got.ok:
+            failures[name] = got.message
+            if got.status == "partial":
+                partial[name] = got.solution
+            say(f"  {name:<6} FAILED: {got.message}")
             return
-        say(f"  {name:<6} done in {time.perf_counter() - t0:.2f} s")
+        solutions[name] = got.solution
+        say(f"  {name:<6} done in {got.seconds:.2f} s")
 
     strain = float("nan")
+    asked = models is not None
     if models is None:
         run("P1")
         if "P1" in solutions:
@@ -248,13 +197,22 @@ def compare_scene(
         else:
             notes.append(f"small strains (max {strain:.2%} <= {strain_limit:.0%}): linear FEM")
         models = ["spring", "P1", "P2"] + (["P1-NH", "P2-NH"] if nh else [])
-    for name in models:
-        model_settings(scene, name)  # validate names before any expensive solve
+    else:
+        models = [get_model(n).name for n in models]  # one spelling, whatever was typed
+    for name in models:  # validate names before any expensive solve
+        why = get_model(name).applies(scene)
+        if why is not None:
+            raise InputError(why)
     for name in models:
         if name not in solutions and name not in failures:
             run(name)
     solutions = {n: solutions[n] for n in models if n in solutions}  # table order
     reference = choose_reference(models, solutions, failures, notes)
+    if asked and reference:
+        notes.append(
+            f"reference: {reference}, the finest FEM of the models asked for "
+            f"({', '.join(models)}; preference {' > '.join(REFERENCE_PREFERENCE)})"
+        )
     if reference is None:
         tried = [n for n in REFERENCE_PREFERENCE if n in models]
         if not any(n in solutions for n in tried):

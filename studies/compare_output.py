@@ -14,19 +14,14 @@ converged    yes  no
 
 from __future__ import annotations
 
-import argparse
-import json
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from springfem.files import jsonable as _jsonable
-from springfem.result import write_result
 from springfem.scene import Scene
 
-from . import compare, metrics
+from . import metrics
 from .compare import Comparison
 
 
@@ -250,83 +245,3 @@ def printable(df: pd.DataFrame, width: int = 24) -> str:
                 notes.append(f"[{len(notes) + 1}] {text}")
                 t.at[row, col] = f"[{len(notes)}]"
     return "\n".join([t.to_string(), *notes])
-
-
-def cmd_compare(args: argparse.Namespace) -> int:
-    """``springfem compare [SCENE] [--out DIR] [--json]``.
-
-    Parameters
-    ----------
-    args
-        Parsed arguments: ``scene``, ``out``, ``json``.
-
-    Returns
-    -------
-    int
-        Exit code: 0, or 3 when a model failed.
-    """
-    from .cli import scene_path
-    from .overrides import load_scene_with  # sweeps: --set
-    from .tables import write_table
-
-    scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))  # sweeps: --set
-    quiet = bool(getattr(args, "json", False))
-    out = Path(args.out) if args.out else Path("out") / f"compare-{scene.name}"
-
-    def log(msg: str) -> None:
-        print(msg, file=sys.stderr if quiet else sys.stdout, flush=True)
-
-    for note in scene.mesh.notes:
-        print(f"note: {note}", file=sys.stderr)
-    log(
-        f"{scene.name}: {scene.mesh.n_points} nodes, {scene.mesh.n_tets} tets, "
-        f"law {scene.material.law}"
-    )
-    cmp = compare.compare_scene(scene, log=log, allow_no_reference=True)
-    md = write_table(cmp.table, out / "compare")
-    for name, sol in cmp.solutions.items():
-        write_result(
-            out / name,
-            sol.result,
-            scene.mesh,
-            sol.u,
-            cell_data=sol.cell_data,
-            point_data={"error": cmp.error_field(name)} if cmp.reference else None,
-        )
-    for name, sol in cmp.partial.items():  # the state a failed model stopped at
-        write_result(out / name, sol.result, scene.mesh, sol.u, stem="partial")
-    png = None
-    try:
-        if cmp.reference:
-            png = render_comparison(cmp, out / "compare.png")
-    except Exception as exc:  # noqa: BLE001 - a missing OpenGL must not lose the table
-        print(f"springfem: warning: figure not rendered: {type(exc).__name__}: {exc}",
-              file=sys.stderr)  # fmt: skip
-    files = {"csv": str(md.with_suffix(".csv")), "markdown": str(md)}
-    if png is not None:
-        files["png"] = str(png)
-    if quiet:
-        payload = {
-            "scene": scene.name,
-            "reference": cmp.reference,
-            "max_principal_strain_p1": cmp.strain,
-            "notes": cmp.notes,
-            "failures": cmp.failures,
-            "summary": summary_lines(cmp),
-            "rows": cmp.table.to_dict(orient="records"),
-            "files": files,
-        }
-        print(json.dumps(_jsonable(payload), indent=2))
-    else:
-        print()
-        print(printable(cmp.table))
-        print()
-        for note in cmp.notes:
-            print(f"note: {note}")
-        print(f"reference: {cmp.reference or 'none (FAILED)'}")
-        for line in summary_lines(cmp):
-            print(line)
-        print("wrote " + ", ".join(files.values()) + f" and {out}/<model>/result.json + .vtu")
-    for name, msg in cmp.failures.items():
-        print(f"springfem: solver failure: {name}: {msg}", file=sys.stderr)
-    return 3 if cmp.failures else 0

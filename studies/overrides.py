@@ -203,8 +203,6 @@ def scene_with_overrides(
     SceneError
         From the scene validation, naming the ``--set`` whose key it reports.
     """
-    import reference_fem.options  # noqa: F401 - registers [fem] (validated with the scene)
-    import springmodel.options  # noqa: F401 - registers [spring]
     from springfem.scene import scene_from_dict
 
     assignments = list(assignments)

@@ -1,13 +1,18 @@
-"""The study registry: ``@study("name", Settings)`` and what a study returns.
+"""The study registry: ``@study("name", Settings, scenes)`` and what a study returns.
 
-A study is a function ``run(ctx, settings) -> StudyOutput`` registered with
-:func:`study`. ``settings`` is an instance of the study's frozen settings dataclass (grid
-sizes, meshes, loads), which has two presets, ``Settings.full()`` and ``Settings.quick()``;
-a test runs a study on a small grid by passing its own instance.
+A study is one function ``run(ctx, scenes, settings) -> StudyOutput`` of a context (where
+it writes, its case cache), a list of :class:`~studies.scenes.StudyScene` and its settings,
+registered with :func:`study`. ``settings`` is an instance of the study's frozen settings
+dataclass (grid sizes, load factors, levels), with two presets, ``Settings.full()`` and
+``Settings.quick()``; ``scenes(settings)`` gives the bundled scenes the report runs it on.
+``springfem study NAME --scene FILE`` runs the same function on the user's scene, unless
+the study says why it cannot (``user_scenes``). A test runs a study on a small grid by
+passing its own settings and scenes.
 
 Examples
 --------
 >>> from dataclasses import dataclass
+>>> from studies.scenes import StudyScene
 >>> @dataclass(frozen=True)
 ... class Tiny:
 ...     n: int = 1
@@ -15,11 +20,14 @@ Examples
 ...     def full(cls): return cls(4)
 ...     @classmethod
 ...     def quick(cls): return cls(2)
->>> @study("doctest-example", Tiny, register=False)
-... def run(ctx, settings):
-...     return StudyOutput(ctx.name, "example", headline={"n": settings.n})
->>> run.study.settings_for(quick=True)
-Tiny(n=2)
+>>> def bundled(settings):
+...     return [StudyScene.bundled("cantilever", {"mesh.divisions": [settings.n, 1, 1]})]
+>>> @study("doctest-example", Tiny, bundled, register=False)
+... def run(ctx, scenes, settings):
+...     return StudyOutput(ctx.name, "example", headline={"tets": scenes[0].build().mesh.n_tets})
+>>> spec = run.study
+>>> spec.settings_for(quick=True), spec.scenes(spec.settings_for(quick=True))[0].label
+(Tiny(n=2), 'cantilever')
 """
 
 from __future__ import annotations
@@ -33,6 +41,7 @@ from typing import Any
 from springfem.errors import InputError
 
 from .cache import CaseCache
+from .scenes import StudyScene
 
 
 @dataclass
@@ -107,12 +116,30 @@ class StudyOutput:
 
 @dataclass(frozen=True)
 class Study:
-    """A registered study: its name, run function, settings type and source file."""
+    """A registered study.
+
+    Attributes
+    ----------
+    name
+        Its name.
+    run
+        ``run(ctx, scenes, settings) -> StudyOutput``.
+    settings
+        Its settings dataclass (``full()``, ``quick()``).
+    scenes
+        ``scenes(settings)``: the bundled scenes of the report.
+    source
+        The study's source (a package folder or a module): part of its cache keys.
+    user_scenes
+        ``None`` when it runs on a user's scene (``--scene``), else why not.
+    """
 
     name: str
-    run: Callable[[StudyContext, Any], StudyOutput]
+    run: Callable[[StudyContext, list[StudyScene], Any], StudyOutput]
     settings: type
+    scenes: Callable[[Any], list[StudyScene]]
     source: Path
+    user_scenes: str | None = None
 
     def settings_for(self, quick: bool) -> Any:
         """The preset settings: ``settings.quick()`` or ``settings.full()``.
@@ -134,8 +161,14 @@ class Study:
 REGISTRY: dict[str, Study] = {}
 
 
-def study(name: str, settings: type, register: bool = True) -> Callable:
-    """Register ``run(ctx, settings)`` as the study ``name``.
+def study(
+    name: str,
+    settings: type,
+    scenes: Callable[[Any], list[StudyScene]],
+    register: bool = True,
+    user_scenes: str | None = None,
+) -> Callable:
+    """Register ``run(ctx, scenes, settings)`` as the study ``name``.
 
     Parameters
     ----------
@@ -143,8 +176,12 @@ def study(name: str, settings: type, register: bool = True) -> Callable:
         The study's name (``springfem study NAME``; dashes and underscores are the same).
     settings
         Its settings dataclass, with classmethods ``full()`` and ``quick()``.
+    scenes
+        ``scenes(settings)``: the bundled scenes it runs on in the report.
     register
         Add it to :data:`REGISTRY` (``False``: only attach the :class:`Study`).
+    user_scenes
+        ``None`` if it runs on a user's scene, else the reason it cannot (one line).
 
     Returns
     -------
@@ -153,7 +190,9 @@ def study(name: str, settings: type, register: bool = True) -> Callable:
     """
 
     def decorate(fn: Callable) -> Callable:
-        spec = Study(name, fn, settings, Path(inspect.getfile(fn)))
+        source = Path(inspect.getfile(fn))
+        source = source.parent if source.name == "__init__.py" else source
+        spec = Study(name, fn, settings, scenes, source, user_scenes)
         if register:
             if name in REGISTRY and REGISTRY[name].run is not fn:
                 raise ValueError(f"study {name!r} is registered twice")
@@ -187,68 +226,3 @@ def get_study(name: str) -> Study:
         valid = ", ".join(s.replace("_", "-") for s in REGISTRY)
         raise InputError(f"unknown study {name!r}; valid studies: {valid}")
     return REGISTRY[key]
-
-
-def scene_settings(spec: Study, table: dict, path: str, quick: bool) -> Any:
-    """The settings that run study ``spec`` on one user scene (``study NAME --scene FILE``).
-
-    A study supports it with a classmethod ``Settings.for_scene(table, path, quick)``; one
-    that cannot run on an arbitrary scene says why in ``Settings.NO_SCENE``.
-
-    Parameters
-    ----------
-    spec
-        The study.
-    table
-        The scene table (``--set`` overrides applied).
-    path
-        The scene file (anchors relative mesh paths).
-    quick
-        The quick preset (fewer levels or points).
-
-    Returns
-    -------
-    object
-        An instance of the study's settings.
-
-    Raises
-    ------
-    InputError
-        If the study cannot run on a given scene, or not on this one (the message says why).
-    """
-    make = getattr(spec.settings, "for_scene", None)
-    if make is None:
-        why = getattr(spec.settings, "NO_SCENE", "it runs only on its own scenes")
-        raise InputError(f"study {spec.name.replace('_', '-')} cannot run on --scene: {why}")
-    return make(table, path, quick)
-
-
-def mesh_digest(table: dict, path: str | None) -> str:
-    """SHA-256 of the mesh file a scene table names ('' for a generated mesh).
-
-    Cases keyed by a scene table then change when the mesh file changes.
-
-    Parameters
-    ----------
-    table
-        The scene table.
-    path
-        The scene file (relative mesh paths are relative to its folder).
-
-    Returns
-    -------
-    str
-        The hex digest, or ``""``.
-    """
-    import hashlib
-
-    mesh = table.get("mesh", {})
-    if not isinstance(mesh, dict) or "file" not in mesh:
-        return ""
-    f = Path(mesh["file"])
-    if not f.is_absolute() and path is not None:
-        f = Path(path).parent / f
-    try:
-        return hashlib.sha256(f.read_bytes()).hexdigest()
-    except OSError:
-        return ""  # the scene validation names the missing file

@@ -1,24 +1,25 @@
-"""``springfem study NAME`` and ``springfem report``: run registered studies.
+"""Run registered studies (``springfem study NAME``) and the report (``springfem report``).
 
-A study is a function ``run(ctx, settings) -> StudyOutput`` registered with
-:func:`studies.registry.study`; importing its module registers it. Each study writes CSV +
+A study is a function ``run(ctx, scenes, settings) -> StudyOutput`` registered with
+:func:`studies.registry.study`; importing its module registers it. It runs on its bundled
+scenes or on the scenes it is given (a user's, ``--scene``). Each study writes CSV +
 Markdown tables and PNG figures into ``<out>/<name>/`` and caches every finished case
 (see :mod:`studies.cache`), so an interrupted report resumes where it stopped.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 from pathlib import Path
 
-from springfem.errors import InputError
 from springfem.files import atomic_write_text, remove_stale_temp_files
 from springfem.files import jsonable as _jsonable
 
 from .cache import CaseCache, source_fingerprint
-from .registry import REGISTRY, StudyContext, StudyOutput, get_study, scene_settings
+from .html import write_index, write_output
+from .registry import REGISTRY, StudyContext, StudyOutput, get_study
+from .scenes import StudyScene
 
 # Importing a study module registers it; the import order is the report's order.
 # isort: off
@@ -113,6 +114,8 @@ def run_study(
     settings: object | None = None,
     workers: int | None = None,
     scheduler: str | None = None,
+    scenes: list[StudyScene] | None = None,
+    command: str | None = None,
 ) -> StudyOutput:
     """Run one study and write its tables, figures and ``headline.json`` under ``out/<name>``.
 
@@ -131,6 +134,11 @@ def run_study(
     workers, scheduler
         Run the cases on a local Dask cluster of ``workers`` processes or on the cluster of
         ``scheduler`` (default: in-process); see :mod:`studies.executor`.
+    scenes
+        The scenes (default: the study's bundled scenes for ``settings``).
+    command
+        The command that regenerates the run (for the HTML page; default the bundled
+        study's).
 
     Returns
     -------
@@ -143,14 +151,14 @@ def run_study(
     import springfem
     import springmodel
 
-    source = spec.source.parent if spec.source.name == "__init__.py" else spec.source
+    here = Path(__file__).parent
     code = source_fingerprint(
         Path(springfem.__file__).parent,  # the core's solvers, meshes and loads shape results
         Path(springmodel.__file__).parent,
         Path(reference_fem.__file__).parent,
-        source,
-        Path(__file__).parent / "metrics.py",
-        Path(__file__).parent / "compare.py",
+        spec.source,
+        *sorted(here.glob("*.py")),  # the models, comparisons and metrics every study uses
+        here / "scenes",
     )
     if workers is None and scheduler is None:
         cache = CaseCache(root / ".cache", spec.name, fingerprint=code)
@@ -159,11 +167,14 @@ def run_study(
     ctx = StudyContext(spec.name, root / spec.name, quick, cache, progress)
     remove_stale_temp_files(ctx.out)  # tables/figures of a run killed mid-write
     t0 = time.perf_counter()
-    result = spec.run(ctx, settings if settings is not None else spec.settings_for(quick))
+    settings = settings if settings is not None else spec.settings_for(quick)
+    result = spec.run(ctx, scenes if scenes is not None else spec.scenes(settings), settings)
     result.seconds = time.perf_counter() - t0
     atomic_write_text(
         ctx.path("headline.json"), json.dumps(_jsonable(result.headline), indent=2, sort_keys=True)
     )
+    flag = " --quick" if quick else ""
+    write_output(ctx.out, result, command or f"springfem study {spec.name.replace('_', '-')}{flag}")
     return result
 
 
@@ -189,65 +200,6 @@ def default_out(out: str | None, quick: bool) -> Path:
     'elsewhere'
     """
     return Path(out) if out else Path("reports") / ("quick" if quick else "")
-
-
-def cmd_study(args: argparse.Namespace) -> int:
-    """``springfem study NAME [--quick] [--out DIR] [--scene FILE] [--set K=V] [--workers N]``.
-
-    Runs one study (on the bundled scenes, or on ``--scene`` with ``--set`` overrides where
-    the study supports it) and prints what it found.
-
-    Parameters
-    ----------
-    args
-        Parsed options ``name``, ``quick``, ``out``, ``scene``, ``set``, ``workers``,
-        ``scheduler``.
-
-    Returns
-    -------
-    int
-        The exit code (0).
-
-    Raises
-    ------
-    InputError
-        If the study cannot run on the given scene (the message says why), or ``--set``
-        is given without ``--scene``.
-    """
-    spec = get_study(args.name)
-    sets = list(getattr(args, "set", None) or [])
-    scene = getattr(args, "scene", None)
-    settings = None
-    out = default_out(args.out, args.quick)
-    if scene is not None:
-        from .cli import scene_path
-        from .overrides import (
-            apply_overrides,
-            parse_assignment,
-            read_scene_table,
-            scene_with_overrides,
-        )
-
-        path = scene_path(scene).resolve()
-        assignments = [parse_assignment(a) for a in sets]
-        scene_with_overrides(read_scene_table(path), assignments, path)  # errors now, not later
-        table = apply_overrides(read_scene_table(path), assignments)
-        settings = scene_settings(spec, table, str(path), args.quick)
-        if args.out is None:
-            out = Path("out") / f"study-{path.stem}"
-    elif sets:
-        raise InputError("--set needs --scene (the bundled studies run their own scenes)")
-    res = run_study(spec.name, out, args.quick, settings=settings,
-                    workers=getattr(args, "workers", None),
-                    scheduler=getattr(args, "scheduler", None))  # fmt: skip
-    print(f"{res.title} ({res.seconds:.1f} s)")
-    for line in res.findings:
-        print(f"  - {line}")
-    for t in res.tables:
-        print(f"  table:  {t.path}")
-    for f in res.figures:
-        print(f"  figure: {f.path}")
-    return 0
 
 
 def _rel(path: Path, root: Path) -> str:
@@ -310,6 +262,9 @@ def write_report(outputs: list[StudyOutput], root: Path, quick: bool) -> Path:
         root / ("headline-quick.json" if quick else "headline.json"),
         json.dumps(_jsonable(headline), indent=2, sort_keys=True) + "\n",
     )
+    write_index(root, "springfem report: the spring model against FEM on the same meshes",
+                f"Generated by springfem report{flag}; REPORT.md beside this page holds the "
+                "same text.")  # fmt: skip
     return path
 
 
@@ -338,23 +293,3 @@ def run_report(
         outputs.append(run_study(name, out, quick))
     write_report(outputs, Path(out), quick)
     return outputs
-
-
-def cmd_report(args: argparse.Namespace) -> int:
-    """``springfem report [--quick] [--out DIR]``: run every study and write the report.
-
-    Parameters
-    ----------
-    args
-        Parsed options ``quick``, ``out``.
-
-    Returns
-    -------
-    int
-        The exit code (0).
-    """
-    out = default_out(args.out, args.quick)
-    outputs = run_report(out, args.quick)
-    total = sum(o.seconds for o in outputs)
-    print(f"wrote {out / 'REPORT.md'} ({len(outputs)} studies, {total:.0f} s)")
-    return 0

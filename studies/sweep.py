@@ -23,8 +23,6 @@ Examples
 
 from __future__ import annotations
 
-import argparse
-import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -39,7 +37,7 @@ from springfem.files import safe_filename
 from .cache import CaseCache, case_key, source_fingerprint
 from .executor import run_tasks
 from .sweep_case import run_case
-from .sweep_file import SweepSpec, load_sweep
+from .sweep_file import SweepSpec
 from .sweep_table import sweep_figures, sweep_table, write_tables
 
 
@@ -201,22 +199,3 @@ def summary_lines(run: SweepRun) -> list[str]:
             f"  {m:<10} {what}; median solve {d['wall_time'].median():.3g} s ({len(d)} ok)"
         )
     return lines
-
-
-def cmd_sweep(args: argparse.Namespace) -> int:
-    """``springfem sweep SWEEP.toml [--out DIR] [--workers [N] | --scheduler ADDRESS]``."""
-    spec = load_sweep(args.file, sets=getattr(args, "set", None))
-    run = run_sweep(spec, args.out, workers=args.workers, scheduler=args.scheduler)
-    print(
-        f"sweep {spec.name}: {len(spec.cases)} cases x {len(spec.models)} models "
-        f"({run.computed} computed, {run.cached} cached) in {run.seconds:.1f} s; "
-        f"reference {spec.reference}"
-    )
-    for line in summary_lines(run):
-        print(line)
-    print("wrote " + ", ".join(str(f) for f in run.files) + f" and {run.out / 'cases'}/")
-    bad = run.failed
-    for _, row in bad.iterrows():
-        print(f"springfem: solver failure: case {row['case']} {row['model']}: {row['status']}"
-              f"{': ' + row['message'] if row['message'] else ''}", file=sys.stderr)  # fmt: skip
-    return 3 if len(bad) else 0

@@ -17,10 +17,10 @@ numba compilation when the compile cache is cold), ``nodes``, ``tets``.
 Examples
 --------
 >>> from studies.sweep_file import parse_sweep
->>> spec = parse_sweep({"scene": "cantilever", "models": ["fem-p1"],
+>>> spec = parse_sweep({"scene": "cantilever", "models": ["P1"],
 ...                     "grid": {"mesh.divisions": [[4, 1, 1]]}})
 >>> [(r["model"], r["status"], r["rel_l2"]) for r in run_case(spec.task(0))["rows"]]
-[('fem-p1', 'ok', 0.0)]
+[('P1', 'ok', 0.0)]
 """
 
 from __future__ import annotations
@@ -28,11 +28,9 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from springfem.errors import SolverError
-
 from . import metrics
+from .models import run as run_model
 from .overrides import scene_with_overrides
-from .sweep_file import SWEEP_MODELS
 
 NAN = float("nan")
 _SOLVED_HERE: set[str] = set()  # models already solved in this process (compiled kernels)
@@ -52,8 +50,6 @@ def run_case(task: dict[str, Any]) -> dict[str, Any]:
     dict
         ``{"values": ..., "rows": [one row per model], "seconds": case wall time}``.
     """
-    from .compare import solve_model
-
     t0 = time.perf_counter()
     scene = scene_with_overrides(task["scene"], task["values"].items(), path=task["scene_path"])
     models, reference = task["models"], task["reference"]
@@ -61,10 +57,11 @@ def run_case(task: dict[str, Any]) -> dict[str, Any]:
     solutions, failures = {}, {}
     warm = {m: m in _SOLVED_HERE for m in order}
     for m in order:
-        try:
-            solutions[m] = solve_model(scene, SWEEP_MODELS[m])
-        except SolverError as exc:
-            failures[m] = str(exc)
+        got = run_model(scene, m)
+        if got.ok:
+            solutions[m] = got.solution
+        else:
+            failures[m] = got.message
         _SOLVED_HERE.add(m)
     ref = solutions.get(reference)
     rows = []

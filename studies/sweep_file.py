@@ -4,8 +4,8 @@
 
     name = "cantilever-nu"                     # optional; default: the file's stem
     scene = "cantilever"                       # a bundled name or a path relative to this file
-    models = ["spring", "fem-p1", "fem-p2"]    # also "fem-p1-nh", "fem-p2-nh" (neo-Hookean)
-    reference = "fem-p2"                       # optional; default: the finest FEM listed
+    models = ["spring", "P1", "P2"]            # any model of studies.models ("P1-NH", ...)
+    reference = "P2"                           # optional; default: the finest FEM listed
     [grid]                                     # every combination (or [[cases]] tables)
     "material.nu" = [0.3, 0.45]
     "mesh.divisions" = [[20, 2, 2], [40, 4, 4]]
@@ -16,10 +16,10 @@ the file is read, so a bad key or value is reported before anything is solved.
 
 Examples
 --------
->>> spec = parse_sweep({"scene": "cantilever", "models": ["spring", "fem-p1"],
+>>> spec = parse_sweep({"scene": "cantilever", "models": ["spring", "p1"],
 ...                     "grid": {"material.nu": [0.3, 0.45], "spring.torsion": ["cosine"]}})
->>> spec.reference, spec.keys, [c["material.nu"] for c in spec.cases]
-('fem-p1', ('material.nu', 'spring.torsion'), [0.3, 0.45])
+>>> spec.models, spec.reference, spec.keys, [c["material.nu"] for c in spec.cases]
+(('spring', 'P1'), 'P1', ('material.nu', 'spring.torsion'), [0.3, 0.45])
 """
 
 from __future__ import annotations
@@ -34,18 +34,11 @@ from typing import Any
 
 from springfem.errors import InputError, SceneError
 
+from . import models as registry
 from .overrides import apply_overrides, parse_assignment, read_scene_table, scene_with_overrides
+from .scenes import scene_path as bundled
 
-SWEEP_MODELS = {
-    "spring": "spring",
-    "fem-p1": "P1",
-    "fem-p2": "P2",
-    "fem-p1-nh": "P1-NH",
-    "fem-p2-nh": "P2-NH",
-}
-"""Sweep model name -> model name of :func:`studies.compare.solve_model`."""
-
-REFERENCE_PREFERENCE = ("fem-p2-nh", "fem-p2", "fem-p1-nh", "fem-p1")
+REFERENCE_PREFERENCE = ("P2-NH", "P2", "P1-NH", "P1")
 """The finest FEM first (P2 before P1; neo-Hookean, valid at any strain, before linear)."""
 
 TOP_KEYS = ("name", "scene", "models", "reference", "grid", "cases")
@@ -62,7 +55,7 @@ class SweepSpec:
     scene_path
         The scene file; ``scene_data`` is its raw table.
     models
-        Sweep model names (keys of :data:`SWEEP_MODELS`), the reference included.
+        Model names of :mod:`studies.models`, the reference included.
     reference
         The model every other one is compared with.
     keys
@@ -163,21 +156,27 @@ def parse_sweep(
     if not isinstance(scene, str):
         raise fail('scene: missing or not a string (a bundled name or a path, e.g. "sag")')
     scene_path = _scene_file(scene, base, fail)
-    models = data.get("models", ["spring", "fem-p1", "fem-p2"])
+    models = data.get("models", ["spring", "P1", "P2"])
     if not isinstance(models, list) or not models or not all(isinstance(m, str) for m in models):
         raise fail("models: must be a non-empty list of model names")
-    for m in models:
-        if m not in SWEEP_MODELS:
-            raise fail(f"models: unknown model {m!r}; valid: {', '.join(SWEEP_MODELS)}")
+    try:
+        models = [registry.get(m).name for m in models]
+    except InputError as exc:
+        raise fail(f"models: {exc}") from None
     if len(set(models)) != len(models):
         raise fail("models: a model is listed twice")
     reference = data.get("reference")
     if reference is None:
         reference = next((m for m in REFERENCE_PREFERENCE if m in models), None)
         if reference is None:
-            raise fail('no FEM model listed: add one to models or set reference = "fem-p2"')
-    elif reference not in REFERENCE_PREFERENCE:
-        raise fail(f"reference: {reference!r} is not one of {', '.join(REFERENCE_PREFERENCE)}")
+            raise fail('no FEM model listed: add one to models or set reference = "P2"')
+    else:
+        try:
+            reference = registry.get(reference).name
+        except InputError as exc:
+            raise fail(f"reference: {exc}") from None
+        if registry.get(reference).kind != "fem":
+            raise fail(f"reference: {reference!r} is not a FEM model")
     if reference not in models:
         models = [*models, reference]
     keys, cases = _cases(data, fail)
@@ -197,8 +196,6 @@ def _scene_file(scene: str, base: Path, fail) -> Path:
     p = base / scene
     if p.is_file():
         return p
-    from .cli import scene_path as bundled
-
     try:
         return bundled(scene)
     except InputError as exc:

@@ -114,3 +114,30 @@ def stream_bandwidth(megabytes: int = 256, repeats: int = 5) -> float:
 def load_average() -> list[float]:
     """The machine's 1, 5 and 15 minute load averages (``os.getloadavg``)."""
     return [round(v, 2) for v in os.getloadavg()]
+
+
+def machine() -> dict:
+    """Threads, numba threading layer and load average: the context of every timing."""
+    import numba
+
+    try:
+        layer = numba.threading_layer()
+    except ValueError:  # no parallel function has run yet
+        layer = "not initialised"
+    return {
+        "cpus": os.cpu_count(),
+        "numba_threads": numba.get_num_threads(),
+        "threading_layer": layer,
+        "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY", "default"),
+        "load_average": load_average(),
+    }
+
+
+def deformed_state(points: np.ndarray, seed: int = 0) -> np.ndarray:
+    """A deformed state to time force passes at: a smooth stretch plus noise of 1 % of the
+    mesh spacing."""
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    h = float(np.min(hi - lo)) / max(2.0, round((points.shape[0]) ** (1 / 3)))
+    rng = np.random.default_rng(seed)
+    x = points * np.array([1.02, 0.99, 0.995])
+    return x + 0.01 * h * rng.standard_normal(points.shape)

@@ -29,7 +29,8 @@ def test_python_api_example_runs(capsys):
     # VTU round trip: the file holds the displacement that was solved (meshio reads it back)
     back = meshio.read(ns["vtu_path"])
     np.testing.assert_allclose(back.point_data["displacement"], ns["spring_energy"].u, rtol=1e-12)
-    # the seed spring model's documented model error on this mesh (DESIGN §4: +7.7% softer
-    # than P1 at the tip); 10% is the accuracy goal the spring model was built to (issue 4)
+    # the specification's spring element's documented model error on this mesh
+    # (docs/theory.rst#model-error-and-discretisation-error: +7.7% softer
+    # than P1 at the tip); 10% is the accuracy goal the spring model was built to
     tip_fem, tip_spring = ns["fem"].result.probes["tip"][2], ns["spring"].result.probes["tip"][2]
     assert 0.0 < tip_spring / tip_fem - 1.0 < 0.10

@@ -1,22 +1,26 @@
 """Study ``ablation``: "model no more than a scene needs".
 
-For every bundled scene (coarse meshes in the quick settings) the spring model is solved with its
-parts switched on one by one:
+For every scene (the bundled ones, coarse meshes in the quick settings, or the user's
+``--scene``) the spring model is solved with its parts switched on one by one:
 
-============================  ===========================================================
-``axial``                     axial springs only (torsion off, volume off)
-``axial+volume``              + barycentric volume springs, no torsion (enough for a stretch
-                              along the axes?)
-``axial+cosine``              + torsion springs, the spec's cosine law (2.44–2.45)
-``axial+energy``              + torsion springs, the energy-consistent law
-``axial+cosine+volume``       + barycentric volume springs
-``axial+energy+volume``       + barycentric volume springs
-``+LMS (abs)``                axial+energy+volume with sign-consistent LMS; LMS acts once
-                              per time step, so this variant needs a dynamic solver:
-                              dynamic relaxation (kinetic damping) from rest
-``+volume (nnls cal.)``       axial+energy+volume with the per-element least-squares
-                              calibration instead of the analytic one
-============================  ===========================================================
+========================================  =================================================
+``spring-axial``                          axial springs only (torsion off, volume off)
+``spring-axial+volume``                   + barycentric volume springs, no torsion (enough
+                                          for a stretch along the axes?)
+``spring-axial+cosine``                   + torsion springs, the spec's cosine law
+                                          (2.44–2.45)
+``spring-axial+energy``                   + torsion springs, the energy-consistent law
+``spring-axial+cosine+volume``            + barycentric volume springs
+``spring-axial+energy+volume``            + barycentric volume springs
+``spring-axial+energy+volume+lms-abs``    with sign-consistent LMS; LMS acts once per time
+                                          step, so this variant needs a dynamic solver:
+                                          dynamic relaxation (kinetic damping) from rest
+``spring-axial+energy+volume+nnls``       with the per-element least-squares calibration
+                                          instead of the analytic one
+``spring-exact-no-coupling``              the exact element (axis-volume, energy torsion,
+                                          exact calibration) without coupling springs
+``spring-exact+coupling``                 the exact element with Poisson-coupling springs
+========================================  =================================================
 
 Model error is the relative L2 error of the vertex displacements against FEM P1 (the scene's
 law) on the same mesh; total error (against a converged solution) is the convergence
@@ -37,7 +41,7 @@ The study is split into :mod:`.cases` (variants, settings, one solve), :mod:`.ta
 Examples
 --------
 >>> list(VARIANTS)[:2]
-['axial', 'axial+volume']
+['spring-axial', 'spring-axial+volume']
 """
 
 from __future__ import annotations
@@ -45,6 +49,7 @@ from __future__ import annotations
 import pandas as pd
 
 from ..registry import StudyContext, StudyOutput, study
+from ..scenes import StudyScene
 from .cases import (
     ALL_VARIANTS,
     DR_TOL,
@@ -53,12 +58,13 @@ from .cases import (
     TIME_TIE,
     TOLERANCE,
     VARIANTS,
+    VERSION,
     Settings,
-    ablation_scene,
+    bundled_scenes,
     fem_case,
     model_error,
+    reference_model,
     spring_case,
-    variant_options,
 )
 from .figures import error_cost_figure
 from .findings import report_findings
@@ -72,24 +78,25 @@ __all__ = [
     "TOLERANCE",
     "VARIANTS",
     "Settings",
-    "ablation_scene",
+    "bundled_scenes",
     "cheapest_adequate",
     "fem_case",
     "model_error",
     "run",
     "spring_case",
-    "variant_options",
 ]
 
 
-@study("ablation", Settings)
-def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
+@study("ablation", Settings, bundled_scenes)
+def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
     """Run the ablation study (see the module docstring).
 
     Parameters
     ----------
     ctx
         Output folder, cache and preset.
+    scenes
+        The scenes.
     settings
         Meshes and step budget.
 
@@ -99,22 +106,18 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
         Findings, the ablation and winners tables, the error-vs-cost figure, headline.
     """
     rows, fem_times, notes = [], {}, []
-    for name, d in settings.scenes().items():
-        div = list(d) if d is not None else None
-        user = settings.scene_fields()
-        fem = ctx.cache.run(
-            [{"scene": name, "divisions": div, "model": "fem-p1", **user}],
-            fem_case,
-            ctx.progress,
-            name,
-        )[0]
+    for s in scenes:
+        name = s.label
+        ref = reference_model(s.build()).name
+        fem = ctx.cache.run([s.case("ablation", VERSION, model=ref)], fem_case, ctx.progress, name)[
+            0
+        ]
         if fem["status"] != "ok":
             notes.append(f"{name}: the FEM P1 reference fails ({fem['message']}).")
             continue
         fem_times[name] = fem["time"]
         cases = [
-            {"scene": name, "divisions": div, "variant": v, "dr_steps": settings.dr_steps, **user}
-            for v in ALL_VARIANTS
+            s.case("ablation", VERSION, variant=v, dr_steps=settings.dr_steps) for v in ALL_VARIANTS
         ]
         res = ctx.cache.run(cases, spring_case, ctx.progress, name)
         rows += result_rows(name, cases, res, fem["u"])
@@ -123,7 +126,8 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
     findings, counts = report_findings(df, winners, fem_times, settings.dr_steps, notes)
     return StudyOutput(
         name=ctx.name,
-        title="Ablation: model no more than a scene needs",
+        title="Ablation: model no more than a scene needs"
+        + ("" if not scenes or not scenes[0].user else f" ({scenes[0].label})"),
         findings=findings,
         tables=[ablation_table(ctx, df, fem_times), winners_table(ctx, winners)],
         figures=[error_cost_figure(ctx, df, winners, fem_times)],

@@ -4,46 +4,66 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from springfem.errors import SolverError, SpringFemError
-from springfem.scene import Scene, scene_from_dict
-from springmodel.options import LMSOptions, SpringOptions
+from springfem.errors import SpringFemError
+from springfem.scene import Scene
 
-from ..compare import bundled_scene
+from .. import models
 from ..metrics import median_time, relative_l2_error
+from ..scenes import COMPARISON_SCENES, StudyScene, case_scene, comparison_scenes
 
-#: Variants in order of the parts they switch on: label -> changes to ``[spring]``.
-VARIANTS: dict[str, dict[str, Any]] = {
-    "axial": {"torsion": "off", "volume": False},
-    "axial+volume": {"torsion": "off", "volume": True},
-    "axial+cosine": {"torsion": "cosine", "volume": False},
-    "axial+energy": {"torsion": "energy", "volume": False},
-    "axial+cosine+volume": {"torsion": "cosine", "volume": True},
-    "axial+energy+volume": {"torsion": "energy", "volume": True},
-    "+LMS (abs)": {"torsion": "energy", "volume": True, "lms": "abs"},
-    "+volume (nnls cal.)": {"torsion": "energy", "volume": True, "calibration": "nnls"},
-}
-#: The exact spring element of issue 10 (DESIGN §4b): axis-volume + energy torsion + the
-#: closed-form calibration, and with the Poisson-coupling springs (anisotropic materials).
-EXACT_VARIANTS: dict[str, dict[str, Any]] = {
-    "exact": {"torsion": "energy", "volume": "axes", "calibration": "exact"},
-    "exact+coupling": {
-        "torsion": "energy",
-        "volume": "axes",
-        "calibration": "exact",
-        "coupling": True,
-    },
-}
-#: Every variant, the seed model's parts first (the order breaks ties towards fewer parts).
-ALL_VARIANTS: dict[str, dict[str, Any]] = {**VARIANTS, **EXACT_VARIANTS}
+
+def _variant(name: str, label: str, **changes: Any) -> tuple[str, models.Model]:
+    return name, models.spring_variant(name, label, **changes)
+
+
+#: Variants in order of the parts they switch on: name -> model.
+VARIANTS: dict[str, models.Model] = dict(
+    [
+        _variant("spring-axial", "axial springs only", torsion="off", volume=False),
+        _variant("spring-axial+volume", "+ volume springs", torsion="off", volume=True),
+        _variant("spring-axial+cosine", "+ cosine torsion", torsion="cosine", volume=False),
+        _variant("spring-axial+energy", "+ energy torsion", torsion="energy", volume=False),
+        _variant(
+            "spring-axial+cosine+volume", "cosine torsion + volume", torsion="cosine", volume=True
+        ),
+        _variant(
+            "spring-axial+energy+volume", "energy torsion + volume", torsion="energy", volume=True
+        ),
+        _variant(
+            "spring-axial+energy+volume+lms-abs",
+            "+ sign-consistent LMS (dynamic relaxation)",
+            torsion="energy",
+            volume=True,
+            lms="abs",
+        ),
+        _variant(
+            "spring-axial+energy+volume+nnls",
+            "+ least-squares calibration",
+            torsion="energy",
+            volume=True,
+            calibration="nnls",
+        ),
+    ]
+)
+#: The exact spring element: axis-volume + energy torsion + the closed-form calibration,
+#: without and with the Poisson-coupling springs (which anisotropic materials need).
+EXACT_VARIANTS: dict[str, models.Model] = dict(
+    [
+        _variant("spring-exact-no-coupling", "exact element without coupling", **models.EXACT),
+        _variant(
+            "spring-exact+coupling", "exact element + coupling", coupling=True, **models.EXACT
+        ),  # fmt: skip
+    ]
+)
+#: Every variant, the specification's parts first (the order breaks ties towards fewer).
+ALL_VARIANTS: dict[str, models.Model] = {**VARIANTS, **EXACT_VARIANTS}
 #: Bundled scenes.
-SCENE_NAMES = ("cantilever", "stretch-fiber", "stretch-cross", "sag")
-#: The cantilever on other meshes: a jittered Delaunay mesh and elongated (2:1:1) cells.
-EXTRA_SCENES = ("cantilever-unstructured", "cantilever-elongated")
+SCENE_NAMES = tuple(COMPARISON_SCENES)
 #: A variant is adequate when its model error is at most (1 + TOLERANCE) x the best one's.
 TOLERANCE = 0.10
 #: Solve times within this fraction of the fastest count as a tie (timer noise).
@@ -54,6 +74,7 @@ MAX_ERROR = 0.10
 NEWTON = {"tol": 1e-8, "max_iter": 25, "max_cutbacks": 4}
 #: Dynamic relaxation (LMS variant): residual tolerance and step budget.
 DR_TOL = 1e-6
+VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -96,99 +117,20 @@ class Settings:
         extra = {"cantilever-unstructured": (20, 2, 2), "cantilever-elongated": (10, 2, 2)}
         return cls(divisions=coarse, dr_steps=4000, extra=extra)
 
-    scene: dict | None = None
-    scene_path: str | None = None
 
-    def scenes(self) -> dict[str, tuple[int, int, int] | None]:
-        """Scene name -> divisions, the bundled scenes first, then :data:`EXTRA_SCENES`."""
-        if self.scene is not None:
-            return {self.scene_label(): None}
-        return {**self.divisions, **self.extra}
-
-    def scene_label(self) -> str:
-        """The user scene's name (its ``name``, else the file's stem)."""
-        from pathlib import Path
-
-        return str(self.scene.get("name") or Path(self.scene_path or "scene").stem)
-
-    def scene_fields(self) -> dict[str, Any]:
-        """What a case of the user scene carries: its table, file and mesh digest."""
-        if self.scene is None:
-            return {}
-        from ..registry import mesh_digest
-
-        return {
-            "table": self.scene,
-            "path": self.scene_path,
-            "mesh_digest": mesh_digest(self.scene, self.scene_path),
-        }
-
-    @classmethod
-    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
-        """Every variant on one user scene (``study ablation --scene FILE``).
-
-        Parameters
-        ----------
-        table
-            The scene table.
-        path
-            The scene file.
-        quick
-            4000 instead of 8000 relaxation steps for the LMS variant.
-
-        Returns
-        -------
-        Settings
-        """
-        return cls(divisions={}, extra={}, dr_steps=4000 if quick else 8000, scene=table,
-                   scene_path=path)  # fmt: skip
-
-
-# ------------------------------------------------------------------------------ scene
-
-
-def ablation_scene(name: str, divisions: tuple[int, int, int] | None = None) -> Scene:
-    """A bundled scene, optionally on a different box mesh.
+def bundled_scenes(settings: Settings) -> list[StudyScene]:
+    """The bundled scenes on the settings' meshes, then the cantilever's other meshes.
 
     Parameters
     ----------
-    name
-        A bundled scene.
-    divisions
-        Box divisions (``None``: the bundled mesh).
+    settings
+        The study's settings.
 
     Returns
     -------
-    Scene
-        ``cantilever-unstructured``: the cantilever on a jittered Delaunay mesh with the
-        grid ``divisions``; ``cantilever-elongated``: the cantilever on ``divisions``.
+    list of StudyScene
     """
-    if name in EXTRA_SCENES:
-        from ..study_accuracy.variants import jittered_box
-
-        data = bundled_scene("cantilever", divisions)
-        data["name"] = name
-        if name == "cantilever-unstructured":
-            data["mesh"] = jittered_box(tuple(data["mesh"]["size"]), tuple(divisions), seed=0)
-        return scene_from_dict(data)
-    return scene_from_dict(bundled_scene(name, divisions))
-
-
-def variant_options(scene: Scene, variant: str) -> SpringOptions:
-    """The scene's spring options with a variant's parts (see :data:`VARIANTS`)."""
-    changes = dict(ALL_VARIANTS[variant])
-    rule = changes.pop("lms", None)
-    if rule is not None:
-        changes["lms"] = LMSOptions(rule=rule)
-    return replace(SpringOptions.of(scene), **changes)
-
-
-def case_scene(case: dict[str, Any]) -> Scene:
-    """The scene of a case: a user scene's ``table`` (``study ablation --scene``), else
-    :func:`ablation_scene` of its name and divisions."""
-    if "table" in case:
-        return scene_from_dict(case["table"], path=case.get("path"))
-    return ablation_scene(case["scene"], case["divisions"])
+    return comparison_scenes(settings.divisions, settings.extra)
 
 
 # ------------------------------------------------------------------------------ cases
@@ -209,22 +151,25 @@ def _timed(fn, repeat_below: float = 0.5, repeats: int = 3) -> tuple[Any, float]
     return out, dt
 
 
-def fem_case(case: dict[str, Any]) -> dict[str, Any]:
-    """FEM P1 reference of a scene: vertex displacements and wall time."""
-    import reference_fem
+def reference_model(scene: Scene) -> models.Model:
+    """The same-mesh FEM reference: P1 with the scene's law (``P1-NH`` for neo-Hookean)."""
+    return models.P1_NH if scene.material.law == "neo-hookean" else models.P1
 
+
+def fem_case(case: dict[str, Any]) -> dict[str, Any]:
+    """The same-mesh FEM reference of a scene: vertex displacements and wall time."""
     scene = case_scene(case)
-    try:
-        sol, wall = _timed(lambda: reference_fem.solve(scene, order=1))
-    except SolverError as exc:
-        return {"status": "fails", "message": str(exc)[:200]}
-    return {"status": "ok", "u": sol.u_vertices.tolist(), "time": wall, "law": sol.result.law}
+    got = models.run(scene, reference_model(scene), lambda m, s: _timed(lambda: m.solve(s)))
+    if not got.ok:
+        return {"status": "fails", "message": got.message[:200]}
+    sol, wall = got.solution
+    return {"status": "ok", "u": sol.u.tolist(), "time": wall, "law": sol.result.law}
 
 
 def spring_case(case: dict[str, Any]) -> dict[str, Any]:
     """One spring variant on one scene: solution and cost.
 
-    ``case``: ``scene``, ``divisions`` (``None`` = bundled mesh), ``variant`` and
+    ``case``: the scene's case keys, ``variant`` (a model name of :data:`ALL_VARIANTS`) and
     ``dr_steps`` (dynamic-relaxation budget of the LMS variant). Returns ``status``
     (``ok``/``fails``), ``message``, ``u`` (vertex displacements, nested lists; also the
     last state of a non-converged dynamic relaxation), ``solve_time``, ``build_time``,
@@ -235,7 +180,7 @@ def spring_case(case: dict[str, Any]) -> dict[str, Any]:
     from springmodel.model import SpringModel
 
     scene = case_scene(case)
-    opts = variant_options(scene, case["variant"])
+    opts = ALL_VARIANTS[case["variant"]].spring_options(scene)
     t0 = time.perf_counter()
     try:
         model = SpringModel(scene, opts, parallel=False)
@@ -260,14 +205,17 @@ def spring_case(case: dict[str, Any]) -> dict[str, Any]:
         info.k_ratio = fresh.elements.k_volume / fresh.elements.k_volume0
         return info
 
-    try:
+    def timed(m, s):
         # a singular tangent (axial springs only) makes the Krylov fallback divide by zero
         # before the solver reports the failure: silence numpy's warnings, keep the error
         with np.errstate(all="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            info, wall = _timed(solve, repeat_below=0.5 if opts.lms is None else 0.0)
-    except SolverError as exc:
-        return {**out, "status": "fails", "message": str(exc)[:200]}
+            return _timed(solve, repeat_below=0.5 if opts.lms is None else 0.0)
+
+    got = models.run(scene, case["variant"], solve=timed)
+    if not got.ok:
+        return {**out, "status": "fails", "message": got.message[:200]}
+    info, wall = got.solution
     out.update(
         status="ok" if info.converged else "fails",
         message="" if info.converged else (info.message or "not converged")[:200],

@@ -107,7 +107,7 @@ def error_cost_figure(
         "Model error against static solve time for each spring variant (hollow: the "
         "last state of a run that did not converge; variants that fail outright are "
         "named in the panel); circled: the cheapest variant within "
-        f"{TOLERANCE:.0%} of the best error among the seed model's parts (black) and with "
+        f"{TOLERANCE:.0%} of the best error among the specification's parts (black) and with "
         "the exact element included (red). FEM P1 has the scene's law (linear except the "
         f"sag). Cheapest adequate (error): {summary}.",
     )

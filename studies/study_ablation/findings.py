@@ -65,12 +65,12 @@ def report_findings(
         return f"{name} {fmt[0]} → {fmt[1]}"
 
     buys = [
-        ("torsion (energy)", "axial", "axial+energy"),
-        ("volume springs", "axial+energy", "axial+energy+volume"),
-        ("LMS (abs)", "axial+energy+volume", "+LMS (abs)"),
-        ("nnls calibration", "axial+energy+volume", "+volume (nnls cal.)"),
-        ("exact element", "axial+energy+volume", "exact"),
-        ("coupling springs", "exact", "exact+coupling"),
+        ("torsion (energy)", "spring-axial", "spring-axial+energy"),
+        ("volume springs", "spring-axial+energy", "spring-axial+energy+volume"),
+        ("LMS (abs)", "spring-axial+energy+volume", "spring-axial+energy+volume+lms-abs"),
+        ("nnls calibration", "spring-axial+energy+volume", "spring-axial+energy+volume+nnls"),
+        ("exact element", "spring-axial+energy+volume", "spring-exact-no-coupling"),
+        ("coupling springs", "spring-exact-no-coupling", "spring-exact+coupling"),
     ]
     findings.insert(
         0,
@@ -82,15 +82,15 @@ def report_findings(
         n
         for n in names
         for g in [df[df.scene == n].set_index("variant")]
-        if g.loc["axial", "status"] == "ok" == g.loc["axial+energy", "status"]
-        and abs(g.loc["axial+energy", "error"] - g.loc["axial", "error"])
-        <= 1e-3 * g.loc["axial", "error"]
+        if g.loc["spring-axial", "status"] == "ok" == g.loc["spring-axial+energy", "status"]
+        and abs(g.loc["spring-axial+energy", "error"] - g.loc["spring-axial", "error"])
+        <= 1e-3 * g.loc["spring-axial", "error"]
     ]
     if same:
         g = df.set_index(["scene", "variant"])
         pairs = ", ".join(
-            f"{n} {g.loc[(n, 'axial+volume'), 'error']:.3g} vs "
-            f"{g.loc[(n, 'axial+energy+volume'), 'error']:.3g}"
+            f"{n} {g.loc[(n, 'spring-axial+volume'), 'error']:.3g} vs "
+            f"{g.loc[(n, 'spring-axial+energy+volume'), 'error']:.3g}"
             for n in same
         )
         findings.append(
@@ -100,7 +100,7 @@ def report_findings(
             f"{pairs}. On these meshes the radial tensor of an element is anisotropic, so "
             "the volume spring couples normal strain to shear, which only torsion resists."
         )
-    ax_fail = df[(df.variant == "axial") & (df.status != "ok")].scene.tolist()
+    ax_fail = df[(df.variant == "spring-axial") & (df.status != "ok")].scene.tolist()
     findings.append(
         "Axial springs alone carry no shear: "
         + (
@@ -110,7 +110,7 @@ def report_findings(
         )
         + "; where they solve, they ignore the material's Poisson coupling."
     )
-    lms = df[df.variant == "+LMS (abs)"]
+    lms = df[df.variant == "spring-axial+energy+volume+lms-abs"]
     if len(lms):
         findings.append(
             f"LMS needs a dynamic solver: dynamic relaxation from rest (at most {dr_steps} "
@@ -127,7 +127,7 @@ def report_findings(
             "FEM P1."
         )
     for name in names:
-        g = df[(df.scene == name) & df.variant.isin(VARIANTS)]  # the seed model's parts
+        g = df[(df.scene == name) & df.variant.isin(VARIANTS)]  # the specification's parts
         headline[f"n_fail_{name}"] = float((g.status != "ok").sum())
     findings += exact_findings(winners)
     return findings, headline
@@ -161,8 +161,9 @@ def exact_findings(winners: pd.DataFrame) -> list[str]:
         return []
     return [
         "With the exact element among the candidates the cheapest adequate model (error "
-        f"within {TOLERANCE:.0%} of the best) changes: " + "; ".join(parts) + ". The seed "
-        "model's variants are no longer adequate anywhere: their error is the calibration's. "
+        f"within {TOLERANCE:.0%} of the best) changes: " + "; ".join(parts) + ". The "
+        "specification's variants are no longer adequate anywhere: their error is the "
+        "calibration's. "
         "The reference is P1 with the scene's law: for a linear material (all scenes but the "
         "sag) the exact element's remainder is the geometric nonlinearity of the "
         "finite-strain spring model (the accuracy study measures it against P1 neo-Hookean: "

@@ -19,6 +19,9 @@ from .cases import (
     model_error,
 )
 
+#: The headline key of each exact variant's error.
+HEADLINE_KEYS = {"spring-exact-no-coupling": "exact", "spring-exact+coupling": "exact_coupling"}
+
 
 def cheapest_adequate(
     df: pd.DataFrame, tolerance: float = TOLERANCE, max_error: float | None = None
@@ -127,7 +130,7 @@ def winners_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, float]]:
     wrows = []
     ladder = [v for v in VARIANTS if "nnls" not in v]  # the parts of the spec, analytic cal.
     for name, g_all in df.groupby("scene", sort=False):
-        g = g_all[g_all.variant.isin(VARIANTS)]  # the seed model's parts (as before)
+        g = g_all[g_all.variant.isin(VARIANTS)]  # the specification's element's parts (as before)
         best = g[g.status == "ok"].sort_values("error")
         win = cheapest_adequate(g)
         if win is None:
@@ -179,10 +182,9 @@ def winners_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, float]]:
             for v in EXACT_VARIANTS:
                 row = g_all[g_all.variant == v]
                 if len(row) and row.status.iloc[0] == "ok":
-                    key = v.replace("+", "_")
-                    headline[f"{key}_error_{name}"] = float(row.error.iloc[0])
+                    headline[f"{HEADLINE_KEYS[v]}_error_{name}"] = float(row.error.iloc[0])
         headline[f"best_error_{name}"] = round(float(best.error.iloc[0]), 4)
-        full = g[g.variant == "axial+energy+volume"]
+        full = g[g.variant == "spring-axial+energy+volume"]
         if len(full) and full.status.iloc[0] == "ok":
             headline[f"full_error_{name}"] = round(float(full.error.iloc[0]), 4)
     winners = pd.DataFrame(wrows)

@@ -1,27 +1,29 @@
-"""Study ``accuracy``: how wrong is the spring model on the bundled scenes, and why.
+"""Study ``accuracy``: how wrong is the spring model on a scene, and why.
 
-Per scene (bending = ``cantilever``, stretch along fibers = ``stretch-fiber``, across =
-``stretch-cross``, sag under gravity = ``sag``) the comparison of :mod:`studies.compare`
-is run and three errors are separated (DESIGN §4):
+Per scene (bundled: bending = ``cantilever``, stretch along fibers = ``stretch-fiber``,
+across = ``stretch-cross``, sag under gravity = ``sag``, and the cantilever on unstructured
+and elongated meshes; or the user's ``--scene``) the comparison of :mod:`studies.compare`
+is run and three errors are separated (the manual's "model and discretisation error"):
 
 - *model error*: spring vs P1 FEM on the same mesh with the reference's law (what the spring
   element itself gets wrong);
 - *total error*: spring vs the reference (P2, neo-Hookean P2 for large strains);
 - *discretisation error*: P1 vs the reference (what the mesh alone costs a P1 element).
 
-Probe displacements are also checked against analytic values where they exist
-(Timoshenko for the cantilever, ``sigma L / E`` for the uniaxial stretches).
+Probe displacements are also checked against a scene's closed-form reference where it has
+one (:mod:`studies.analytic`: Timoshenko for the cantilever, ``sigma L / E`` for the
+uniaxial stretches).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..compare import (
-    MODELS,
-)
+from .. import analytic
+from ..compare import MODELS
 from ..compare_output import error_figure, figure_fields
 from ..registry import Figure, StudyContext, StudyOutput, Table, study
+from ..scenes import StudyScene
 from ..tables import write_table
 from .cases import (
     DISCRETISATION_HEADLINE,
@@ -29,8 +31,7 @@ from .cases import (
     EXACT_KINDS,
     SCENES,
     Settings,
-    analytic_probe,
-    case_scene,
+    bundled_scenes,
     nan_float,
     scene_case,
     work,
@@ -39,17 +40,19 @@ from .figures import bar_figure, field_conclusion
 from .findings import report_findings
 from .tables import error_table, probe_table
 
-__all__ = ["DISCRETISATION_HEADLINE", "SCENES", "Settings", "analytic_probe", "run", "work"]
+__all__ = ["DISCRETISATION_HEADLINE", "SCENES", "Settings", "bundled_scenes", "run", "work"]
 
 
-@study("accuracy", Settings)
-def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
+@study("accuracy", Settings, bundled_scenes)
+def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
     """Run the accuracy study (see the module docstring).
 
     Parameters
     ----------
     ctx
         Output folder, cache and preset.
+    scenes
+        The scenes (those serving ``figure`` get an error-field figure).
     settings
         Meshes.
 
@@ -58,10 +61,12 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
     StudyOutput
         Findings, two tables, the bar chart and the error-field figures, headline errors.
     """
-    names = settings.scenes()
-    cases = [scene_case(n, settings) for n in names]
+    names = [s.label for s in scenes]
+    cases = [scene_case(s, settings) for s in scenes]
     results = ctx.cache.run(cases, work, progress=ctx.progress, desc="accuracy")
-    scenes = {c["scene"]: case_scene(c) for c in cases}
+    built = {s.label: s.build() for s in scenes}
+    refs = {s.label: analytic.reference(s, built[s.label]) for s in scenes}
+    lateral = {s.label: analytic.LATERAL.get(s.analytic or "") for s in scenes}
     res = dict(zip(names, results, strict=True))
 
     errors = error_table(res)
@@ -73,7 +78,7 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
         "error / largest reference displacement.",
     )
 
-    probes = probe_table(res, scenes)
+    probes = probe_table(res, refs, lateral)
     t_probe = Table(
         write_table(probes, ctx.path("accuracy_probes")),
         "Main probe displacement component per scene: analytic value (Timoshenko beam, "
@@ -84,14 +89,14 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
 
     # -- figures -------------------------------------------------------------------------
     figures = [bar_figure(ctx, errors, probes)]
-    for name in settings.figure_scenes:
+    for name in (s.label for s in scenes if s.serves("figure")):
         r = res.get(name, {})
         if "u" not in r:
             continue
         fields = {n: np.asarray(r["u"][n], float) for n in MODELS if n in r["u"]}
         fields, note = figure_fields(fields, r["reference"])
         path = error_figure(
-            scenes[name],
+            built[name],
             fields,
             r["reference"],
             ctx.path(f"error_field_{name}.png"),
@@ -103,7 +108,7 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
             Figure(
                 path,
                 f"{name}: deformed meshes coloured by the displacement error against "
-                f"{r['reference']} (one colour scale). " + field_conclusion(scenes[name], r, e),
+                f"{r['reference']} (one colour scale). " + field_conclusion(built[name], r, e),
             )
         )
 
@@ -122,7 +127,8 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
             headline[f"{kind}_l2_{key}"] = value
     return StudyOutput(
         name=ctx.name,
-        title="Accuracy: spring model vs FEM per scene (model, total, discretisation error)",
+        title="Accuracy: spring model vs FEM per scene (model, total, discretisation error)"
+        + ("" if not scenes[0].user else f" on {names[0]}"),
         findings=findings,
         tables=[t_err, t_probe],
         figures=figures,

@@ -1,45 +1,25 @@
-"""Cases of the accuracy study: settings, the scene cases and the work of one case."""
+"""Cases of the accuracy study: settings, the bundled scenes and the work of one case."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
+from .. import models
+from ..compare import Comparison, compare_scene, max_principal_strain
+from ..scenes import COMPARISON_SCENES, StudyScene, case_scene, comparison_scenes
 
-from springfem.errors import SolverError
-from springfem.scene import Scene, scene_from_dict
-
-from .. import metrics
-from ..compare import (
-    Comparison,
-    bundled_scene,
-    compare_scene,
-    max_principal_strain,
-    solve_model,
-)
-from ..registry import mesh_digest
-from ..solve import Solution
-from .variants import exact_options, jittered_box
-
-SCENES = ("cantilever", "stretch-fiber", "stretch-cross", "sag")
-
+SCENES = tuple(COMPARISON_SCENES)
 
 DISCRETISATION_HEADLINE = ("cantilever", "sag")  # P1 is exact on the uniaxial stretches
-
 
 ERROR_KINDS = ("model", "total", "discretisation")
 
 
-#: The cantilever on other meshes: unstructured (jittered Delaunay) and elongated cells.
-EXTRA_SCENES = ("cantilever-unstructured", "cantilever-elongated")
-
-
-#: Errors of the exact variant and the seed model's against the finite-strain P1.
+#: Errors of the exact element and the specification's against the finite-strain P1.
 EXACT_KINDS = ("exact_model", "exact_model_nh", "exact_total", "model_nh")
 
-
-VERSION = 2
+VERSION = 3
 
 
 @dataclass(frozen=True)
@@ -49,9 +29,15 @@ class Settings:
     Parameters
     ----------
     divisions
-        Scene name -> box divisions (``None``: the bundled scene's own mesh).
+        Bundled scene name -> box divisions (``None``: the bundled scene's own mesh).
     figure_scenes
-        Scenes that get an error-field figure (their vertex fields are kept).
+        Bundled scenes that get an error-field figure (their vertex fields are kept); a
+        user's scene always gets one.
+    extra
+        The cantilever on other meshes: ``cantilever-unstructured`` (jittered Delaunay tets
+        of a grid of these divisions), ``cantilever-elongated`` (these box divisions).
+    exact
+        Also solve the exact spring element (and the finite-strain P1 it is exact against).
     """
 
     divisions: dict[str, tuple[int, int, int] | None] = field(
@@ -65,25 +51,11 @@ class Settings:
         }
     )
     exact: bool = True
-    scene: dict | None = None
-    scene_path: str | None = None
 
     @classmethod
     def full(cls) -> Settings:
         """The bundled scenes' meshes, the unstructured cantilever and 20 x 4 x 4 cells."""
         return cls()
-
-    def scene_label(self) -> str:
-        """The user scene's name (its ``name``, else the file's stem)."""
-        from pathlib import Path
-
-        return str(self.scene.get("name") or Path(self.scene_path or "scene").stem)
-
-    def scenes(self) -> tuple[str, ...]:
-        """The scene names this run compares (one: ``"scene"``, for ``--scene``)."""
-        if self.scene is not None:
-            return (self.scene_label(),)
-        return tuple(self.divisions) + tuple(self.extra)
 
     @classmethod
     def quick(cls) -> Settings:
@@ -98,34 +70,39 @@ class Settings:
             extra={"cantilever-unstructured": (20, 2, 2), "cantilever-elongated": (10, 2, 2)},
         )
 
-    @classmethod
-    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
-        """Settings that compare the models on one user scene (``study --scene FILE``).
 
-        Parameters
-        ----------
-        table
-            The scene table.
-        path
-            The scene file.
-        quick
-            Unused (the user's mesh is the mesh).
-
-        Returns
-        -------
-        Settings
-        """
-        made = cls(divisions={}, extra={}, scene=table, scene_path=path)
-        return replace(made, figure_scenes=(made.scene_label(),))
-
-
-def scene_case(name: str, settings: Settings) -> dict[str, Any]:
-    """The cache case of one scene: its full TOML text decides the result.
+def bundled_scenes(settings: Settings) -> list[StudyScene]:
+    """The bundled scenes on the settings' meshes, then the cantilever's extra meshes.
 
     Parameters
     ----------
-    name
-        A bundled scene name.
+    settings
+        The study's settings.
+
+    Returns
+    -------
+    list of StudyScene
+        Roles ``compare`` (and ``figure`` for :attr:`Settings.figure_scenes`).
+
+    Examples
+    --------
+    >>> [s.label for s in bundled_scenes(Settings.quick())][-2:]
+    ['cantilever-unstructured', 'cantilever-elongated']
+    """
+
+    def roles(name: str) -> tuple[str, ...]:
+        return ("compare", "figure") if name in settings.figure_scenes else ("compare",)
+
+    return comparison_scenes(settings.divisions, settings.extra, roles)
+
+
+def scene_case(scene: StudyScene, settings: Settings) -> dict[str, Any]:
+    """The cache case of one scene: its table decides the result.
+
+    Parameters
+    ----------
+    scene
+        The scene.
     settings
         The study's settings.
 
@@ -134,53 +111,9 @@ def scene_case(name: str, settings: Settings) -> dict[str, Any]:
     dict
         The JSON-able case.
     """
-    jitter = None
-    user = settings.scene is not None
-    if user:
-        data = dict(settings.scene)
-    elif name in settings.extra:
-        data = bundled_scene("cantilever", settings.extra[name])
-        data["name"] = name
-        if name == "cantilever-unstructured":
-            jitter = {"divisions": list(settings.extra[name]), "seed": 0}
-    else:
-        data = bundled_scene(name, settings.divisions[name])
-    case = {
-        "study": "accuracy",
-        "version": VERSION,
-        "scene": name,
-        "table": data,
-        "fields": name in settings.figure_scenes,
-    }
-    if jitter is not None:
-        case["jittered"] = jitter
-    if user:
-        case["path"] = settings.scene_path
-        case["mesh_digest"] = mesh_digest(data, settings.scene_path)
-    if settings.exact:
-        case["exact"] = True
-    return case
-
-
-def case_scene(case: dict[str, Any]) -> Scene:
-    """The scene of a case (the unstructured cantilever gets its jittered Delaunay mesh).
-
-    Parameters
-    ----------
-    case
-        A case of :func:`scene_case`.
-
-    Returns
-    -------
-    Scene
-    """
-    data = dict(case["table"])
-    if "jittered" in case:
-        j = case["jittered"]
-        data["mesh"] = jittered_box(
-            tuple(data["mesh"]["size"]), tuple(j["divisions"]), seed=j["seed"]
-        )
-    return scene_from_dict(data, path=case.get("path"))
+    return scene.case(
+        "accuracy", VERSION, fields=scene.serves("figure"), exact=bool(settings.exact)
+    )
 
 
 def summarize(cmp: Comparison, fields: bool = False) -> dict[str, Any]:
@@ -219,42 +152,20 @@ def summarize(cmp: Comparison, fields: bool = False) -> dict[str, Any]:
 
 
 def work(case: dict[str, Any]) -> dict[str, Any]:
-    """Run the comparison of one scene case."""
+    """Run the comparison of one scene case (and the exact element where asked)."""
     scene = case_scene(case)
     cmp = compare_scene(scene)
     if case.get("exact"):
-        from springmodel.model import solve_spring
-
-        exact = scene.with_options(spring=exact_options(scene))
-        try:
-            sol = solve_spring(exact)
-            cmp.solutions["spring-exact"] = Solution(sol.result, sol.u, dict(sol.cell_data))
-        except SolverError as exc:
-            cmp.failures["spring-exact"] = str(exc)
-        if "P1-NH" not in cmp.solutions and scene.material.law != "transverse-linear":
-            try:  # the finite-strain P1: the exact element's model error proper
-                cmp.solutions["P1-NH"] = solve_model(scene, "P1-NH")
-            except SolverError as exc:
-                cmp.failures["P1-NH"] = str(exc)
+        extra = ["spring-exact"]
+        if "P1-NH" not in cmp.solutions and models.P1_NH.applies(scene) is None:
+            extra.append("P1-NH")  # the finite-strain P1: the exact element's model error
+        for name in extra:
+            got = models.run(scene, name)
+            if got.ok:
+                cmp.solutions[name] = got.solution
+            else:
+                cmp.failures[name] = got.message
     return summarize(cmp, fields=case["fields"])
-
-
-def analytic_probe(name: str, scene: Scene) -> tuple[str, int, float, str] | None:
-    """``(probe, component, value, source)`` of an analytic probe displacement, if any."""
-    raw = scene.raw
-    lo, hi = scene.mesh.bounding_box()
-    size = [float(x) for x in hi - lo]  # also for a mesh passed in (no "size" key)
-    load = np.asarray(raw["load"][0]["value"], float)
-    mat = scene.material
-    if name.startswith("cantilever"):  # also the unstructured and elongated meshes
-        force = abs(load[2]) * size[1] * size[2]
-        w = metrics.timoshenko_tip_deflection(force, *size, mat.E, mat.nu)
-        return "tip", 2, float(np.sign(load[2]) * w), "Timoshenko"
-    if name in ("stretch-fiber", "stretch-cross"):
-        E = mat.E_fiber if name == "stretch-fiber" else mat.E_cross
-        label = "σ/E_fiber" if name == "stretch-fiber" else "σ/E_cross"
-        return "corner", 0, float(load[0] / E * size[0]), f"{label} · L"
-    return None
 
 
 def nan_float(v: Any) -> float:

@@ -106,7 +106,7 @@ def report_findings(
 
 
 def shape_sentence(e: pd.DataFrame) -> str:
-    """How the seed and the exact model errors depend on the cantilever's element shapes."""
+    """How the specification's and the exact element's errors depend on the element shapes."""
     meshes = [n for n in ("cantilever", "cantilever-unstructured", "cantilever-elongated")
               if n in e.index]  # fmt: skip
     if len(meshes) < 2:
@@ -114,7 +114,8 @@ def shape_sentence(e: pd.DataFrame) -> str:
     seed = ", ".join(f"{n} {e.at[n, 'model err L2']:.1%}" for n in meshes)
     exact = max(e.at[n, "exact model nh err L2"] for n in meshes)
     return (
-        f" The same cantilever on other meshes: the seed model's error depends on the element "
+        f" The same cantilever on other meshes: the specification's element's error depends on "
+        "the element "
         f"shapes ({seed}), the exact element's does not (at most {exact:.1e} against P1 "
         "neo-Hookean on each)."
     )
@@ -146,7 +147,8 @@ def exact_findings(e: pd.DataFrame) -> list[str]:
         f.append(
             "With the exact element (axis-volume + energy torsion + exact calibration) the "
             "model error against the finite-strain P1 (neo-Hookean, same mesh) drops from the "
-            f"seed model's to: {parts}. Against linear P1 the exact element is {linear} off: "
+            f"specification's element's to: {parts}. Against linear P1 the exact element is "
+            f"{linear} off: "
             "the geometric nonlinearity of the finite-strain spring model, not model error; "
             "the neo-Hookean comparison is the model error proper." + shape_sentence(e)
         )

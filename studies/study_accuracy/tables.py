@@ -7,10 +7,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from springfem.scene import Scene
-
 from ..compare import COMPONENTS
-from .cases import ERROR_KINDS, EXACT_KINDS, analytic_probe, nan_float
+from .cases import ERROR_KINDS, EXACT_KINDS, nan_float
 
 
 def error_table(res: dict[str, dict]) -> pd.DataFrame:
@@ -52,15 +50,19 @@ def error_table(res: dict[str, dict]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def probe_table(res: dict[str, dict], scenes: dict[str, Scene]) -> pd.DataFrame:
+def probe_table(
+    res: dict[str, dict], refs: dict[str, tuple | None], lateral: dict[str, int | None]
+) -> pd.DataFrame:
     """The main probe component per scene: analytic value, spring, P1, reference, ratios.
 
     Parameters
     ----------
     res
         Scene name -> case result.
-    scenes
-        Scene name -> the solved scene (for the analytic probe values).
+    refs
+        Scene name -> its closed-form reference (:func:`studies.analytic.reference`).
+    lateral
+        Scene name -> the transverse (Poisson) component shown beside it, if any.
 
     Returns
     -------
@@ -69,9 +71,9 @@ def probe_table(res: dict[str, dict], scenes: dict[str, Scene]) -> pd.DataFrame:
     """
     prow = []
     for name in res:
-        r, scene = res[name], scenes[name]
+        r = res[name]
         ref = r["reference"]
-        an = analytic_probe(name, scene)
+        an = refs[name]
         if not an and not r["probes"][ref]:
             continue  # a user scene without probes
         probe = an[0] if an else next(iter(r["probes"][ref]))
@@ -100,7 +102,7 @@ def probe_table(res: dict[str, dict], scenes: dict[str, Scene]) -> pd.DataFrame:
         )
         row["spring / analytic − 1"] = row["spring (m)"] / row["analytic (m)"] - 1 if an else np.nan
         # lateral (Poisson) response at the same probe, for the stretches
-        lat = 1 if name == "stretch-fiber" else 2 if name == "stretch-cross" else None
+        lat = lateral[name]
         if lat is not None:
             ls = nan_float(r["probes"]["spring"][probe][lat])
             lr = nan_float(r["probes"][ref][probe][lat])

@@ -1,109 +1,134 @@
-"""Study ``anisotropy``: effective modulus of a transversely isotropic block against fiber angle.
+"""Study ``anisotropy``: the spring model's response along and across the fibre.
 
-The bundled ``stretch-fiber`` scene (a cube of transversely isotropic material, E_f = 30 kPa,
-E_c = 10 kPa, G_f = 5 kPa, ν_fc = 0.3, ν_c = 0.4) with its fiber rotated by θ in the x-y plane
-(fiber ``(cos θ, sin θ, 0)``, sheet ``(-sin θ, cos θ, 0)``) and pulled along x by a uniform
-traction σ on ``x_max``. The scene's boundary conditions only remove rigid motion: the
-``x_min`` face is held in x alone (it slides in y and z), the origin is pinned in y and z and
-the corner ``(0, L, 0)`` in z. A homogeneous strain with any shear is compatible with them
-(the body rotates rigidly so that ``x_min`` stays at x = 0), so the state is uniaxial
-stress, the coupled shear ``γ_xy`` is free, and the off-axis formula
+On every scene, under its own loads, the spring model (analytic and nnls calibration, and
+the exact element with Poisson-coupling springs) and FEM P1 and P2 with the scene's law;
+each model's displacement error against P2 (total) and against P1 on the same mesh (model
+error) is split into the fibre direction and across it, at every vertex (the fibre ``f``
+there: the principal direction of ``sum f f^T`` over the tets around it, so a fibre's sign
+does not matter): ``e·f`` and ``e - (e·f) f``, relative to ``||u_ref||``; and the fibre
+strain ``f·εf`` and the mean cross-fibre normal strain per tet. The study needs a law with
+a fibre and the fibre stated in ``[axes]``; it refuses another scene in one line.
+
+A scene with the off-axis closed form (:func:`studies.analytic.off_axis_modulus`) also
+gives the effective modulus. The bundled report runs the ``stretch-fiber`` block (E_f =
+30 kPa, E_c = 10 kPa, G_f = 5 kPa, ν_fc = 0.3, ν_c = 0.4) with its fibre rotated by θ in the
+x-y plane and pulled along x by a traction σ on ``x_max``. Its boundary conditions only
+remove rigid motion (``x_min`` held in x alone, the origin pinned in y and z, the corner
+``(0, L, 0)`` in z), so the state is uniaxial stress with the coupled shear ``γ_xy`` free,
+and the off-axis formula
 
     1/E(θ) = cos⁴θ/E_f + sin⁴θ/E_c + (1/G_f − 2ν_fc/E_f) sin²θ cos²θ
 
-is exact for the continuum and for P1/P2 (a homogeneous field is in both spaces).
+is exact for the continuum and for P1/P2 (a homogeneous field is in both spaces). Measured:
+``E_eff = σ / ε_xx`` with ``ε_xx`` the mean x displacement of the ``x_max`` vertices over L,
+and the shear coupling ``γ_xy / ε_xx`` of a least-squares affine fit of the displacements,
+against the rotated compliance (:func:`studies.analytic.off_axis_strain`).
 
-Measured: ``E_eff = σ / ε_xx`` with ``ε_xx`` the mean x displacement of the ``x_max`` nodes
-over L, for the spring model (analytic and nnls calibration), FEM P1 and P2; and the shear
-coupling ``γ_xy / ε_xx`` from a least-squares affine fit of the nodal displacements,
-against the rotated compliance.
-
-The study is split into :mod:`.cases` (scene, off-axis formula, one measurement,
-settings), :mod:`.tables`, :mod:`.figures` and :mod:`.findings`.
-
-On a user's scene (``springfem study anisotropy --scene FILE``) the study runs as described in
-:mod:`.scene`.
+The study is split into :mod:`.cases` (settings, scenes, one solve, the measures),
+:mod:`.tables`, :mod:`.figures` and :mod:`.findings`.
 
 Examples
 --------
->>> round(off_axis_modulus(fiber_scene(0.0, 1).material, 0.0))
-30000
+>>> [s.label for s in bundled_scenes(Settings.quick())]
+['stretch-fiber 0°', 'stretch-fiber 30°', 'stretch-fiber 60°', 'stretch-fiber 90°']
 """
 
 from __future__ import annotations
 
+from springfem.errors import InputError
+
 from ..registry import StudyContext, StudyOutput, study
+from ..scenes import StudyScene, require
 from .cases import (
     MODELS,
     Settings,
     affine_fit,
-    applied_stress,
-    compliance_voigt,
-    fiber_scene,
-    fiber_table,
-    modulus_case,
-    off_axis_modulus,
-    off_axis_strain,
+    bundled_scenes,
+    fibre_block,
+    grid,
+    refusal,
+    solve_case,
+    split_errors,
+    stretch_measures,
+    vertex_fibres,
 )
 from .figures import modulus_figure
-from .findings import report_findings
-from .tables import modulus_frame, modulus_table, ratio_frame, ratio_table, worst_errors
+from .findings import modulus_findings, split_findings
+from .tables import frames, modulus_table, ratio_frame, ratio_table, split_table, worst_errors
 
 __all__ = [
     "MODELS",
     "Settings",
     "affine_fit",
-    "applied_stress",
-    "compliance_voigt",
-    "fiber_scene",
-    "fiber_table",
-    "modulus_case",
-    "off_axis_modulus",
-    "off_axis_strain",
+    "bundled_scenes",
+    "fibre_block",
+    "refusal",
     "run",
+    "solve_case",
+    "split_errors",
+    "stretch_measures",
+    "vertex_fibres",
 ]
 
 
-@study("anisotropy", Settings)
-def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
+@study("anisotropy", Settings, bundled_scenes)
+def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
     """Run the anisotropy study (see the module docstring).
 
     Parameters
     ----------
     ctx
         Output folder, cache and preset.
+    scenes
+        The scenes (each needs a law with a fibre and ``[axes]``).
     settings
-        Angles and mesh.
+        Angles and mesh of the bundled blocks (unused for other scenes).
 
     Returns
     -------
     StudyOutput
-        Findings, modulus and ratio tables, the modulus figure, headline errors.
-    """
-    if settings.scene is not None:
-        from .scene import run_on_scene
+        Findings, the error-split table (and on the blocks with a closed form the modulus
+        and ratio tables and the modulus figure), headline errors.
 
-        return run_on_scene(ctx, settings)
-    n = settings.n
-    scene0 = fiber_scene(0.0, n)
-    mat = scene0.material
-    sigma = applied_stress(scene0)
-    cases = []
-    for label, (kind, setting) in MODELS.items():
-        for a in settings.angles:
-            c = {"angle": a, "n": n, "model": kind}
-            c["calibration" if kind == "spring" else "order"] = setting
-            cases.append((label, c))
-    res = ctx.cache.run([c for _, c in cases], modulus_case, ctx.progress, "angles")
-    df = modulus_frame(cases, res, mat, sigma)
-    ratios, ratio_an = ratio_frame(df, mat)
-    spring_err, worst_angle = worst_errors(df)
-    findings, headline = report_findings(df, ratios, ratio_an, mat, spring_err, worst_angle)
+    Raises
+    ------
+    InputError
+        If a scene has no fibre (one line, before any solve).
+    """
+    require(scenes, ctx.name)
+    for s in scenes:
+        why = refusal(s)
+        if why is not None:
+            raise InputError(f"study anisotropy cannot run on --scene: {why}")
+    cases = grid(scenes)
+    results = ctx.cache.run(cases, solve_case, ctx.progress, "models")
+    split, modulus, failed = frames(scenes, cases, results)
+    findings, headline = [], {}
+    tables, figures = [], []
+    if len(modulus):
+        scene = next(s for s in scenes if s.label == modulus.scene.iloc[0]).build()
+        sigma, n_tets = float(scene.loads[0].value[0]), scene.mesh.n_tets
+        ratios, ratio_an = ratio_frame(modulus)
+        worst, worst_angle = worst_errors(modulus)
+        f, h = modulus_findings(modulus, ratios, ratio_an, scene.material, worst, worst_angle)
+        findings, headline = findings + f, {**headline, **h}
+        tables += [modulus_table(ctx, modulus, sigma, n_tets), ratio_table(ctx, ratios)]
+        figures.append(
+            modulus_figure(ctx, modulus, scene.material, sigma, n_tets, worst, worst_angle)
+        )
+    findings += split_findings(split, failed)[0]
+    # the error split is the headline of the scenes without a closed form
+    open_split = split[~split.scene.isin(set(modulus.scene) if len(modulus) else set())]
+    if len(open_split):
+        headline.update(split_findings(open_split, failed)[1])
+    tables.append(split_table(ctx, split))
     return StudyOutput(
         name=ctx.name,
-        title="Anisotropy: effective modulus against fiber angle",
+        title="Anisotropy: response along and across the fibre ("
+        + ", ".join(dict.fromkeys(s.table.get("name") or s.label for s in scenes))
+        + ")",
         findings=findings,
-        tables=[modulus_table(ctx, df, mat, sigma, n), ratio_table(ctx, ratios)],
-        figures=[modulus_figure(ctx, df, mat, sigma, n, spring_err, worst_angle)],
+        tables=tables,
+        figures=figures,
         headline=headline,
     )

@@ -1,241 +1,289 @@
-"""Cases of the anisotropy study: the rotated-fiber scene, the off-axis formula, one
-modulus measurement, the settings."""
+"""Cases of the anisotropy study: the settings, the rotated-fibre blocks, which scenes it
+runs on, one solve, and the measures read off the displacements."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from springfem.errors import SolverError
-from springfem.scene import Material, Scene, scene_from_dict
-from springmodel.options import SpringOptions
+from springfem.mesh import displacement_gradients
+from springfem.scene import Scene
 
-from ..compare import bundled_scene
+from .. import models
+from ..scenes import StudyScene, case_scene
 
-#: Models compared: label -> (kind, setting).
-MODELS: dict[str, tuple[str, Any]] = {
-    "spring (analytic cal.)": ("spring", "analytic"),
-    "spring (nnls cal.)": ("spring", "nnls"),
-    # the exact element of issue 10 with Poisson coupling (transversely isotropic material)
-    "spring (exact + coupling)": ("spring", "exact"),
-    "FEM P1": ("fem", 1),
-    "FEM P2": ("fem", 2),
-}
-MARKERS = {
-    "spring (analytic cal.)": "o",
-    "spring (nnls cal.)": "s",
-    "spring (exact + coupling)": "*",
-    "FEM P1": "x",
-    "FEM P2": "+",
-}
-#: Spring options of the exact calibration: axis-volume, energy torsion, coupling springs.
-EXACT = {"volume": "axes", "torsion": "energy", "coupling": True}
+STUDY, VERSION = "anisotropy", 2
 
-
-# ------------------------------------------------------------------------------ scene
+#: The spring model with the scene's options on the analytic and on the per-element
+#: least-squares calibration; ``spring-exact`` adds the Poisson-coupling springs.
+SPRING_ANALYTIC = models.spring_variant(
+    "spring-analytic", "spring model, analytic calibration", calibration="analytic"
+)
+SPRING_NNLS = models.spring_variant(
+    "spring-nnls", "spring model, nnls calibration", calibration="nnls"
+)
+#: The models compared; errors are measured against the references P2 (total) and P1 on the
+#: same mesh (model error).
+MODELS = ("spring-analytic", "spring-nnls", "spring-exact", "P1", "P2")
+REFERENCES = ("P2", "P1")
+MARKERS = dict(zip(MODELS, "os*x+"))
+#: Laws with a fibre: what the study needs.
+ANISOTROPIC = ("transverse-linear", "guccione", "holzapfel-ogden")
 
 
-def fiber_table(angle_deg: float, n: int = 6) -> dict[str, Any]:
-    """The table of ``stretch-fiber`` with the fiber at ``angle_deg`` in the x-y plane on an
-    ``n³`` box.
+@dataclass(frozen=True)
+class Settings:
+    """Fibre angles and mesh of the bundled rotated blocks.
 
     Parameters
     ----------
-    angle_deg
-        Fiber angle from x, in degrees.
+    angles
+        Fibre angles θ (degrees) in the x-y plane; 0 and 90 give the anisotropy ratio.
+    n
+        Divisions per side of the block.
+    """
+
+    angles: tuple[float, ...] = tuple(float(a) for a in np.arange(0.0, 90.1, 7.5))
+    n: int = 6
+
+    @classmethod
+    def full(cls) -> Settings:
+        """Every 7.5° on a 6³ block."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> Settings:
+        """0, 30, 60, 90° on a 3³ block."""
+        return cls(angles=(0.0, 30.0, 60.0, 90.0), n=3)
+
+
+def fibre_block(angle: float, n: int) -> StudyScene:
+    """The bundled ``stretch-fiber`` block on ``n³`` hexahedra with its fibre at ``angle``
+    degrees from x in the x-y plane (fibre ``(cos θ, sin θ, 0)``, sheet
+    ``(-sin θ, cos θ, 0)``), pulled along x; its reference is the off-axis formula.
+
+    Parameters
+    ----------
+    angle
+        Fibre angle (degrees).
     n
         Divisions per side.
 
     Returns
     -------
-    dict
-        The table for :func:`springfem.scene.scene_from_dict`.
+    StudyScene
 
     Examples
     --------
-    >>> fiber_table(90.0, 2)["axes"]["sheet"][0]
+    >>> fibre_block(90.0, 2).table["axes"]["sheet"][0]
     -1.0
     """
-    data = bundled_scene("stretch-fiber", (n, n, n))
-    th = np.radians(angle_deg)
+    th = np.radians(angle)
     c, s = float(np.cos(th)), float(np.sin(th))
-    data["axes"]["fiber"] = [c, s, 0.0]
-    data["axes"]["sheet"] = [-s, c, 0.0]
-    return data
+    sets = {"mesh.divisions": [n] * 3, "axes.fiber": [c, s, 0.0], "axes.sheet": [-s, c, 0.0]}
+    label = f"stretch-fiber {angle:g}°"
+    return StudyScene.bundled("stretch-fiber", sets, label=label, analytic="off-axis")
 
 
-def fiber_scene(angle_deg: float, n: int = 6) -> Scene:
-    """The scene of :func:`fiber_table`.
+def bundled_scenes(settings: Settings) -> list[StudyScene]:
+    """The rotated blocks of the settings' angles.
 
     Parameters
     ----------
-    angle_deg, n
-        As for :func:`fiber_table`.
+    settings
+        The settings.
 
     Returns
     -------
-    Scene
+    list of StudyScene
     """
-    return scene_from_dict(fiber_table(angle_deg, n))
+    return [fibre_block(a, settings.n) for a in settings.angles]
 
 
-def applied_stress(scene: Scene) -> float:
-    """The x traction on ``x_max`` (Pa)."""
-    return float(scene.loads[0].value[0])
+def refusal(scene: StudyScene) -> str | None:
+    """Why the study cannot run on ``scene`` (``None``: it can).
+
+    Parameters
+    ----------
+    scene
+        The scene.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> refusal(StudyScene("ball", {"material": {"law": "linear"}})).split(":")[0]
+    'scene ball has isotropic material (law linear)'
+    """
+    law = str(scene.table.get("material", {}).get("law", "linear"))
+    if law not in ANISOTROPIC:
+        return (
+            f"scene {scene.label} has isotropic material (law {law}): anisotropy needs a "
+            f"fibre-reinforced law ({', '.join(ANISOTROPIC)}) with its fibre direction from "
+            "[axes]"
+        )
+    if "axes" not in scene.table:
+        return (
+            f"scene {scene.label} has no [axes] section (its fibre would be the default x "
+            "axis): anisotropy needs the fibre direction stated (uniform, helix, rule-based "
+            "or cells)"
+        )
+    return None
 
 
-# --------------------------------------------------------------------------- analytic
+def grid(scenes: list[StudyScene]) -> list[dict[str, Any]]:
+    """One case per scene and model.
+
+    Parameters
+    ----------
+    scenes
+        The study's scenes.
+
+    Returns
+    -------
+    list of dict
+    """
+    return [s.case(STUDY, VERSION, model=m) for s in scenes for m in MODELS]
 
 
-def compliance_voigt(mat: Material) -> np.ndarray:
-    """6×6 compliance (Voigt xx, yy, zz, yz, xz, xy; engineering shear) in the material frame
-    (axis 0 = fiber), as the FEM reference builds it."""
-    from springfem.materials import transverse_compliance
-
-    return transverse_compliance(
-        mat.E_fiber, mat.E_cross, mat.nu_fiber_cross, mat.nu_cross, mat.G_fiber
-    )
+def solve_case(case: dict[str, Any]) -> dict[str, Any]:
+    """Vertex displacements of one model on one scene: ``status``, ``u``, ``message``."""
+    got = models.run(case_scene(case), case["model"])
+    if not got.ok:
+        return {"status": got.status, "message": got.message[:200]}
+    return {"status": "ok", "u": np.asarray(got.u)}
 
 
-_VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
-
-
-def off_axis_strain(mat: Material, angle_deg: float, stress: float) -> np.ndarray:
-    """Strain tensor (3×3) of uniaxial stress ``stress`` along x with the fiber at θ."""
-    S = compliance_voigt(mat)
-    S4 = np.zeros((3, 3, 3, 3))
-    for a, (i, j) in enumerate(_VOIGT):
-        for b, (k, l) in enumerate(_VOIGT):
-            w = (0.5 if i != j else 1.0) * (0.5 if k != l else 1.0)
-            for p, q in {(i, j), (j, i)}:
-                for r, t in {(k, l), (l, k)}:
-                    S4[p, q, r, t] = S[a, b] * w
-    th = np.radians(angle_deg)
-    R = np.array([[np.cos(th), -np.sin(th), 0.0], [np.sin(th), np.cos(th), 0.0], [0, 0, 1.0]])
-    # material frame axes are the columns of R: S_global = R R S4 R^T R^T
-    Sg = np.einsum("ia,jb,kc,ld,abcd->ijkl", R, R, R, R, S4)
-    sigma = np.zeros((3, 3))
-    sigma[0, 0] = stress
-    return np.einsum("ijkl,kl->ij", Sg, sigma)
-
-
-def off_axis_modulus(mat: Material, angle_deg: float) -> float:
-    """``E(θ)`` of the off-axis formula."""
-    th = np.radians(angle_deg)
-    c2, s2 = np.cos(th) ** 2, np.sin(th) ** 2
-    inv = (
-        c2**2 / mat.E_fiber
-        + s2**2 / mat.E_cross
-        + (1.0 / mat.G_fiber - 2.0 * mat.nu_fiber_cross / mat.E_fiber) * s2 * c2
-    )
-    return float(1.0 / inv)
-
-
-# ------------------------------------------------------------------------------ cases
+# ----------------------------------------------------------------------------- measures
 
 
 def affine_fit(points: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Small-strain tensor of the least-squares affine fit ``u ≈ A X + b``."""
+    """Small-strain tensor of the least-squares affine fit ``u ≈ A X + b``.
+
+    Parameters
+    ----------
+    points, u
+        ``(n, 3)`` positions and displacements.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(3, 3)``.
+    """
     X = np.column_stack([points, np.ones(len(points))])
     coef, *_ = np.linalg.lstsq(X, u, rcond=None)
     A = coef[:3].T  # A[i, j] = du_i / dX_j
     return 0.5 * (A + A.T)
 
 
-def modulus_case(case: dict[str, Any]) -> dict[str, Any]:
-    """Effective modulus of one model at one fiber angle.
+def stretch_measures(scene: Scene, u: np.ndarray) -> dict[str, float]:
+    """The block's response to its pull along x.
 
-    ``case``: ``angle`` (degrees), ``n`` (divisions per side), ``model`` (``spring`` or
-    ``fem``), ``calibration`` (spring) or ``order`` (FEM). Returns ``E_eff``,
-    ``eps_xx`` (mean x strain of the ``x_max`` face), ``gamma_xy``/``eps_fit`` (affine fit),
-    ``status`` and, on failure, ``message``.
+    Parameters
+    ----------
+    scene
+        The block.
+    u
+        ``(n, 3)`` vertex displacements.
+
+    Returns
+    -------
+    dict
+        ``E_eff = σ / ε_xx`` (``ε_xx``: mean x displacement of the ``x_max`` vertices over
+        the length), ``eps_xx``, and ``gamma_xy``, ``eps_fit_xx`` of the affine fit.
     """
-    scene = fiber_scene(case["angle"], case["n"])
-    try:
-        if case["model"] == "spring":
-            from springmodel.model import solve_spring
-
-            extra = EXACT if case["calibration"] == "exact" else {}
-            opts = replace(SpringOptions.of(scene), calibration=case["calibration"], **extra)
-            u = solve_spring(scene, opts, parallel=False).u
-        else:
-            import reference_fem
-
-            u = reference_fem.solve(scene, order=case["order"]).u_vertices
-    except SolverError as exc:
-        return {"status": "fails", "message": str(exc)[:200], "E_eff": float("nan")}
     pts = scene.mesh.points
     L = float(pts[:, 0].max() - pts[:, 0].min())
     face = np.isclose(pts[:, 0], pts[:, 0].max())
     eps_xx = float(u[face, 0].mean() / L)
     eps = affine_fit(pts, u)
+    sigma = float(scene.loads[0].value[0])
     return {
-        "status": "ok",
-        "E_eff": applied_stress(scene) / eps_xx,
+        "E_eff": sigma / eps_xx,
         "eps_xx": eps_xx,
         "gamma_xy": float(2.0 * eps[0, 1]),
         "eps_fit_xx": float(eps[0, 0]),
     }
 
 
-@dataclass(frozen=True)
-class Settings:
-    """Fiber angles and mesh of the anisotropy study.
+def vertex_fibres(tets: np.ndarray, frames: np.ndarray, n_points: int) -> np.ndarray:
+    """Fibre direction per vertex: principal eigenvector of ``sum f f^T`` over its tets.
 
     Parameters
     ----------
-    angles
-        Fiber angles θ (degrees); 0 and 90 give the anisotropy ratio.
-    n
-        Divisions per side of the cube.
-    scene, scene_path
-        A user scene table and its file (``study anisotropy --scene``; see :mod:`.scene`).
+    tets
+        ``(m, 4)`` vertex ids.
+    frames
+        ``(m, 3, 3)`` element frames (row 0: fibre).
+    n_points
+        Number of vertices.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, 3)`` unit vectors (sign arbitrary).
+
+    Examples
+    --------
+    >>> fr = np.tile(np.eye(3), (2, 1, 1)); fr[1, 0] *= -1  # the same fibre, opposite signs
+    >>> np.abs(vertex_fibres(np.array([[0, 1, 2, 3], [1, 2, 3, 4]]), fr, 5)).round(6)[1]
+    array([1., 0., 0.])
     """
+    f = frames[:, 0, :]
+    T = np.zeros((n_points, 3, 3))
+    for j in range(tets.shape[1]):
+        np.add.at(T, tets[:, j], f[:, :, None] * f[:, None, :])
+    return np.linalg.eigh(T)[1][:, :, -1]
 
-    angles: tuple[float, ...] = tuple(float(a) for a in np.arange(0.0, 90.1, 7.5))
-    n: int = 6
-    scene: dict | None = None
-    scene_path: str | None = None
 
-    @classmethod
-    def full(cls) -> Settings:
-        """Every 7.5° on a 6³ cube."""
-        return cls()
+def _axis_strains(scene: Scene, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """Per tet: the fibre strain ``f·εf``, the mean cross-fibre normal strain, and the L2
+    norm of the strain tensors."""
+    m = scene.mesh
+    G = displacement_gradients(m.points, m.tets, u)
+    eps = 0.5 * (G + np.transpose(G, (0, 2, 1)))
+    proj = np.einsum("kli,kij,klj->kl", scene.frames, eps, scene.frames)
+    return proj[:, 0], 0.5 * (proj[:, 1] + proj[:, 2]), float(np.linalg.norm(eps))
 
-    @classmethod
-    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
-        """The fibre / cross-fibre error split on a user scene (see :mod:`.scene`).
 
-        Parameters
-        ----------
-        table
-            The scene table.
-        path
-            The scene file.
-        quick
-            Unused (the user's mesh is the mesh).
+def split_errors(scene: Scene, u: np.ndarray, u_ref: np.ndarray) -> dict[str, float]:
+    """Fibre / cross-fibre split of the displacement and strain error of ``u`` vs ``u_ref``.
 
-        Returns
-        -------
-        Settings
+    At every vertex the error ``e = u - u_ref`` splits into ``e·f`` and ``e - (e·f) f``
+    (``f``: :func:`vertex_fibres`), each relative to ``||u_ref||`` (they add in quadrature
+    to the total); the strains are those of the P1 interpolation per tet, and the errors of
+    the fibre strain and of the mean cross-fibre normal strain are relative to the L2 norm
+    of the reference's strain tensors (a projected strain may vanish where the tensor
+    does not: under a pull at an angle to the fibre, the cross-fibre mean changes sign).
 
-        Raises
-        ------
-        InputError
-            If the scene's material is isotropic (the message says what is needed).
-        """
-        from springfem.errors import InputError
+    Parameters
+    ----------
+    scene
+        The scene (mesh and element frames).
+    u, u_ref
+        ``(n, 3)`` vertex displacements.
 
-        from .scene import refusal
-
-        why = refusal(table, path)
-        if why is not None:
-            raise InputError(f"study anisotropy cannot run on --scene: {why}")
-        return cls(scene=table, scene_path=path)
-
-    @classmethod
-    def quick(cls) -> Settings:
-        """0, 30, 60, 90° on a 3³ cube."""
-        return cls(angles=(0.0, 30.0, 60.0, 90.0), n=3)
+    Returns
+    -------
+    dict
+        ``fibre``, ``cross``, ``total`` (displacement), ``strain_fibre``, ``strain_cross``
+        (L2 errors of the strain fields relative to the reference's strain).
+    """
+    m = scene.mesh
+    f = vertex_fibres(m.tets, scene.frames, m.n_points)
+    e = u - u_ref
+    ef = np.sum(e * f, axis=1)
+    ec = e - ef[:, None] * f
+    norm = np.linalg.norm(u_ref)
+    (mf, mc, _), (rf, rc, strain) = _axis_strains(scene, u), _axis_strains(scene, u_ref)
+    return {
+        "fibre": float(np.linalg.norm(ef) / norm),
+        "cross": float(np.linalg.norm(ec) / norm),
+        "total": float(np.linalg.norm(e) / norm),
+        "strain_fibre": float(np.linalg.norm(mf - rf) / strain),
+        "strain_cross": float(np.linalg.norm(mc - rc) / strain),
+    }

@@ -7,9 +7,10 @@ import pandas as pd
 
 from springfem.scene import Material
 
+from ..analytic import off_axis_modulus, off_axis_strain
 from ..registry import Figure, StudyContext
 from ..tables import save_figure
-from .cases import MARKERS, MODELS, off_axis_modulus, off_axis_strain
+from .cases import MARKERS, MODELS
 
 
 def modulus_figure(
@@ -17,7 +18,7 @@ def modulus_figure(
     df: pd.DataFrame,
     mat: Material,
     sigma: float,
-    n: int,
+    n_tets: int,
     spring_err: dict[str, float],
     worst_angle: dict[str, float],
 ) -> Figure:
@@ -29,8 +30,8 @@ def modulus_figure(
         Where to write.
     df
         The (model, angle) rows.
-    mat, sigma, n
-        Material, applied stress, divisions.
+    mat, sigma, n_tets
+        Material, applied stress, tets of the block.
     spring_err, worst_angle
         Largest error per model and its angle (for the caption).
 
@@ -54,14 +55,14 @@ def modulus_figure(
     )
     g_an = [2 * (e := off_axis_strain(mat, a, sigma))[0, 1] / e[0, 0] for a in th]
     axes[2].plot(th, g_an, "k-", lw=1.2, label="analytic (rotated compliance)")
-    for label in MODELS:
-        g = df[df.model == label].sort_values("angle")
+    for m in MODELS:
+        g = df[df.model == m].sort_values("angle")
         kw = {
-            "marker": MARKERS[label],
+            "marker": MARKERS[m],
             "ls": "none",
-            "label": label,
+            "label": m,
             "ms": 7,
-            "mfc": "none" if MARKERS[label] in "os" else None,
+            "mfc": "none" if MARKERS[m] in "os" else None,
         }
         axes[0].plot(g.angle, g.E_eff / 1e3, **kw)
         axes[1].plot(g.angle, 100 * g.rel_error, **{**kw, "ls": "-", "lw": 0.8})
@@ -74,16 +75,17 @@ def modulus_figure(
     axes[2].set_ylabel("γ_xy / ε_xx")
     axes[2].set_title("shear coupling (free: only rigid motion removed)")
     for a in axes:
-        a.set_xlabel("fiber angle θ (deg)")
+        a.set_xlabel("fibre angle θ (deg)")
         a.grid(alpha=0.3)
         a.legend(fontsize=7)
-    sa, sn = "spring (analytic cal.)", "spring (nnls cal.)"
+    sa, sn = "spring-analytic", "spring-nnls"
     return Figure(
         save_figure(fig, ctx.path("modulus_vs_angle.png")),
-        f"Effective modulus, its error and the shear coupling against fiber angle "
-        f"({n}³×6 tets). FEM P1 and P2 reproduce the off-axis formula to "
-        f"{max(spring_err['FEM P1'], spring_err['FEM P2']):.1e} (a homogeneous field is "
+        f"Effective modulus, its error and the shear coupling against fibre angle "
+        f"({n_tets} tets). FEM P1 and P2 reproduce the off-axis formula to "
+        f"{max(spring_err['P1'], spring_err['P2']):.1e} (a homogeneous field is "
         f"exact for both); the spring model deviates by up to "
         f"{spring_err[sa]:.1%} (analytic calibration, worst at {worst_angle.get(sa, 0):g}°)"
-        f" and {spring_err[sn]:.1%} (nnls, worst at {worst_angle.get(sn, 0):g}°).",
+        f", {spring_err[sn]:.1%} (nnls, worst at {worst_angle.get(sn, 0):g}°) and "
+        f"{spring_err['spring-exact']:.1%} (the exact element with coupling).",
     )

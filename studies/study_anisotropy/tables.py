@@ -1,4 +1,6 @@
-"""Tables of the anisotropy study: moduli per model and angle, the anisotropy ratio."""
+"""Tables of the anisotropy study: the fibre / cross-fibre error split of every scene, and
+on the scenes with the off-axis closed form the moduli per model and angle and the
+anisotropy ratio."""
 
 from __future__ import annotations
 
@@ -7,56 +9,124 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from springfem.scene import Material
+from springfem.errors import SolverError
 
+from ..analytic import fibre_angle, off_axis_strain, reference
 from ..registry import StudyContext, Table
+from ..scenes import StudyScene
 from ..tables import write_table
-from .cases import MODELS, off_axis_modulus, off_axis_strain
+from .cases import MODELS, REFERENCES, split_errors, stretch_measures
+
+SPLIT_COLUMNS = {
+    "fibre": "fibre err (displ.)",
+    "cross": "cross err (displ.)",
+    "total": "L2 err",
+    "strain_fibre": "fibre strain err",
+    "strain_cross": "cross strain err",
+}
 
 
-def modulus_frame(
-    cases: list[tuple[str, dict]], results: list[dict[str, Any]], mat: Material, sigma: float
-) -> pd.DataFrame:
-    """One row per (model, angle): E_eff, the off-axis value, error, shear coupling.
+def frames(
+    scenes: list[StudyScene], cases: list[dict[str, Any]], results: list[dict[str, Any]]
+) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, list[str]]]:
+    """The error-split rows of every scene and the modulus rows of the scenes with the
+    off-axis closed form.
 
     Parameters
     ----------
-    cases
-        ``(model label, case)`` pairs.
-    results
-        Their :func:`~.cases.modulus_case` results.
-    mat
-        The material.
-    sigma
-        The applied stress (Pa).
+    scenes
+        The scenes.
+    cases, results
+        The solves (:func:`~.cases.grid`, :func:`~.cases.solve_case`).
 
     Returns
     -------
-    DataFrame
+    split : DataFrame
+        One row per (scene, model, reference): :data:`SPLIT_COLUMNS`.
+    modulus : DataFrame
+        One row per (scene, model) with a closed form: angle, ``E_eff``, ``E_analytic``,
+        ``rel_error``, shear coupling and its closed form, status.
+    failed : dict
+        Scene -> the models that did not solve.
+
+    Raises
+    ------
+    SolverError
+        If a reference (P2 or P1) did not solve.
     """
-    rows = []
-    for (label, c), r in zip(cases, results):
-        a = c["angle"]
-        E_an = off_axis_modulus(mat, a)
-        eps_an = off_axis_strain(mat, a, sigma)
-        g_an = 2.0 * eps_an[0, 1] / eps_an[0, 0]
-        rows.append(
-            {
-                "model": label,
-                "angle": a,
-                "E_eff": r["E_eff"],
-                "E_analytic": E_an,
-                "rel_error": r["E_eff"] / E_an - 1.0,
-                "gamma_xy/eps_xx": r.get("gamma_xy", np.nan) / r.get("eps_xx", np.nan),
-                "gamma_xy/eps_xx analytic": g_an,
-                "status": r["status"],
-            }
-        )
-    df = pd.DataFrame(rows)
-    return df
+    split, modulus, failed = [], [], {}
+    for s in scenes:
+        scene = s.build()
+        res = {c["model"]: r for c, r in zip(cases, results, strict=True) if c["scene"] == s.label}
+        for ref in REFERENCES:
+            if res[ref]["status"] != "ok":
+                raise SolverError(f"{s.label}: the reference {ref} failed: {res[ref]['message']}")
+        failed[s.label] = [m for m in MODELS if res[m]["status"] != "ok"]
+        u = {m: np.asarray(r["u"], float) for m, r in res.items() if r["status"] == "ok"}
+        for m in u:
+            for against in REFERENCES:
+                if m == against or (m == "P2" and against == "P1"):
+                    continue
+                err = split_errors(scene, u[m], u[against])
+                split.append(
+                    {
+                        "scene": s.label,
+                        "model": m,
+                        "against": against,
+                        **{SPLIT_COLUMNS[k]: v for k, v in err.items()},
+                    }
+                )
+        closed = reference(s, scene)
+        if closed is None:
+            continue
+        _, component, value, _ = closed
+        extent = np.ptp(scene.mesh.points[:, component])
+        sigma = float(scene.loads[0].value[component])
+        E_an = sigma * extent / value
+        angle = round(fibre_angle(scene), 9)
+        eps_an = off_axis_strain(scene.material, angle, sigma)
+        for m in MODELS:
+            r = stretch_measures(scene, u[m]) if m in u else {}
+            modulus.append(
+                {
+                    "scene": s.label,
+                    "model": m,
+                    "angle": angle,
+                    "E_eff": r.get("E_eff", np.nan),
+                    "E_analytic": E_an,
+                    "rel_error": r.get("E_eff", np.nan) / E_an - 1.0,
+                    "gamma_xy/eps_xx": r.get("gamma_xy", np.nan) / r.get("eps_xx", np.nan),
+                    "gamma_xy/eps_xx analytic": 2.0 * eps_an[0, 1] / eps_an[0, 0],
+                    "status": res[m]["status"],
+                }
+            )
+    return pd.DataFrame(split), pd.DataFrame(modulus), failed
 
 
-def modulus_table(ctx: StudyContext, df: pd.DataFrame, mat: Material, sigma: float, n: int):
+def split_table(ctx: StudyContext, split: pd.DataFrame) -> Table:
+    """Write the error-split table.
+
+    Parameters
+    ----------
+    ctx
+        Where to write.
+    split
+        :func:`frames`' split rows.
+
+    Returns
+    -------
+    Table
+    """
+    return Table(
+        write_table(split, ctx.path("fibre_split")),
+        "Each model's displacement error against P2 and against same-mesh P1, split into "
+        "the fibre direction and across it (relative to ‖u_ref‖; the two add in quadrature "
+        "to the L2 error), and the L2 errors of the fibre strain f·εf and of the mean "
+        "cross-fibre normal strain per tet, relative to the reference's strain.",
+    )
+
+
+def modulus_table(ctx: StudyContext, df: pd.DataFrame, sigma: float, n_tets: int) -> Table:
     """Write the wide table of E_eff per model and angle.
 
     Parameters
@@ -64,72 +134,70 @@ def modulus_table(ctx: StudyContext, df: pd.DataFrame, mat: Material, sigma: flo
     ctx
         Where to write.
     df
-        :func:`modulus_frame`.
-    mat, sigma, n
-        Material, applied stress and divisions (for the caption).
+        :func:`frames`' modulus rows.
+    sigma, n_tets
+        Applied stress and tets of the blocks (for the caption).
 
     Returns
     -------
     Table
     """
     wide = df.pivot(index="angle", columns="model", values="E_eff")[list(MODELS)]
-    wide.insert(0, "analytic", [off_axis_modulus(mat, a) for a in wide.index])
-    for label in MODELS:
-        if label.startswith("spring"):
-            wide[f"{label} error"] = wide[label] / wide["analytic"] - 1.0
+    wide.insert(0, "analytic", df.groupby("angle")["E_analytic"].first())
+    for m in MODELS:
+        if m.startswith("spring"):
+            wide[f"{m} error"] = wide[m] / wide["analytic"] - 1.0
     wide = wide.reset_index().rename(columns={"angle": "θ (deg)"})
     return Table(
         write_table(wide, ctx.path("modulus")),
-        f"Effective modulus E_eff = σ/ε_xx (Pa) against fiber angle θ on the {n}³×6-tet "
-        f"cube (σ = {sigma:g} Pa): off-axis formula, spring model (analytic and nnls "
-        "calibration), FEM P1 and P2, and the spring model's relative error.",
+        f"Effective modulus E_eff = σ/ε_xx (Pa) against fibre angle θ on the {n_tets}-tet "
+        f"block (σ = {sigma:g} Pa): off-axis formula, spring model (analytic and nnls "
+        "calibration, exact element with coupling), FEM P1 and P2, and the spring models' "
+        "relative error.",
     )
 
 
-def ratio_frame(df: pd.DataFrame, mat: Material) -> tuple[pd.DataFrame, float]:
+def ratio_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, float]:
     """E(0°), E(90°) and their ratio per model, with the analytic row first.
 
     Parameters
     ----------
     df
-        :func:`modulus_frame`.
-    mat
-        The material.
+        :func:`frames`' modulus rows.
 
     Returns
     -------
     ratios : DataFrame
     ratio_an : float
-        The analytic ``E_f / E_c``.
+        The analytic ``E_f / E_c`` (``nan`` without both angles).
     """
 
-    def E_at(label: str, a: float) -> float:
-        g = df[(df.model == label) & (df.angle == a)]
-        return float(g.E_eff.iloc[0]) if len(g) else float("nan")
+    def at(m: str | None, a: float) -> float:
+        g = df[(df.model == (m or MODELS[0])) & (df.angle == a)]
+        return float(g["E_analytic" if m is None else "E_eff"].iloc[0]) if len(g) else np.nan
 
-    ratio_an = off_axis_modulus(mat, 0.0) / off_axis_modulus(mat, 90.0)
-    rrows = [
+    ratio_an = at(None, 0.0) / at(None, 90.0)
+    rows = [
         {
             "model": "analytic",
-            "E(0°)": mat.E_fiber,
-            "E(90°)": mat.E_cross,
+            "E(0°)": at(None, 0.0),
+            "E(90°)": at(None, 90.0),
             "E(0)/E(90)": ratio_an,
             "ratio error": 0.0,
         }
     ]
-    for label in MODELS:
-        e0, e90 = E_at(label, 0.0), E_at(label, 90.0)
-        rrows.append(
+    for m in MODELS:
+        e0, e90 = at(m, 0.0), at(m, 90.0)
+        rows.append(
             {
-                "model": label,
+                "model": m,
                 "E(0°)": e0,
                 "E(90°)": e90,
                 "E(0)/E(90)": e0 / e90,
                 "ratio error": (e0 / e90) / ratio_an - 1.0,
             }
         )
-    ratios = pd.DataFrame(rrows)
-    return ratios, ratio_an
+    return pd.DataFrame(rows), ratio_an
 
 
 def ratio_table(ctx: StudyContext, ratios: pd.DataFrame) -> Table:
@@ -148,7 +216,7 @@ def ratio_table(ctx: StudyContext, ratios: pd.DataFrame) -> Table:
     """
     return Table(
         write_table(ratios, ctx.path("anisotropy_ratio")),
-        "Stiffness along (0°) and across (90°) the fibers and the anisotropy ratio "
+        "Stiffness along (0°) and across (90°) the fibres and the anisotropy ratio "
         "E(0)/E(90) of each model against the analytic E_f/E_c.",
     )
 
@@ -159,18 +227,16 @@ def worst_errors(df: pd.DataFrame) -> tuple[dict[str, float], dict[str, float]]:
     Parameters
     ----------
     df
-        :func:`modulus_frame`.
+        :func:`frames`' modulus rows.
 
     Returns
     -------
-    spring_err, worst_angle : dict
+    worst, worst_angle : dict
     """
-    spring_err = {
-        label: float(np.nanmax(np.abs(df[df.model == label].rel_error))) for label in MODELS
-    }
+    worst = {m: float(np.nanmax(np.abs(df[df.model == m].rel_error))) for m in MODELS}
     worst_angle = {
-        label: float(df[df.model == label].set_index("angle").rel_error.abs().idxmax())
-        for label in MODELS
-        if df[df.model == label].rel_error.notna().any()
+        m: float(df[df.model == m].set_index("angle").rel_error.abs().idxmax())
+        for m in MODELS
+        if df[df.model == m].rel_error.notna().any()
     }
-    return spring_err, worst_angle
+    return worst, worst_angle

@@ -1,4 +1,9 @@
-"""Cases of the convergence study: settings, levels, one solve per case, extrapolation."""
+"""Cases of the convergence study: settings, the bundled bar, the plan of a scene, one solve.
+
+Every case is a :meth:`~studies.scenes.StudyScene.case` of the scene (its level-1 table)
+with ``model`` (a name of :mod:`studies.models`) and ``factor`` (its refinement level,
+:mod:`.levels`).
+"""
 
 from __future__ import annotations
 
@@ -7,129 +12,190 @@ from typing import Any
 
 import numpy as np
 
-from springfem.mesh import box_mesh
-from springfem.scene import scene_from_dict
+from .. import models
+from ..scenes import StudyScene
+from .levels import case_level, coarse_index, mean_edge, select_levels
 
-from ..compare import bundled_scene, solve_model
+VERSION = 2
 
-BASE = (10, 1, 1)
-
-
-SIZE = (0.1, 0.01, 0.01)
-
-
-MODELS = ("spring", "spring-exact", "P1", "P2")
-
-#: The exact spring element of issue 10 (DESIGN §4b), solved at the spring levels.
-EXACT = {"torsion": "energy", "volume": "axes", "calibration": "exact"}
-
-
-SPRING_TORSION = "energy"
-
-
-MIN_EXTRAPOLATION_ORDER = 0.8  # an extrapolation with a lower fitted order is not trusted
-
-
-VERSION = 1
+#: The spring model of the study (energy torsion: analytic Hessian), its cosine check and
+#: the exact element.
+SPRING, COSINE, EXACT = "spring-energy", "spring-cosine", "spring-exact"
+#: An extrapolation with a lower fitted order is not trusted.
+MIN_EXTRAPOLATION_ORDER = 0.8
 
 
 @dataclass(frozen=True)
 class Settings:
-    """Refinement levels of the convergence study (level ``k``: ``[10, 1, 1] * k``).
+    """Refinement levels of the convergence study (factors of the scene's own mesh).
 
     Parameters
     ----------
     levels
-        Levels of the spring model and P1.
+        Levels of the spring models and P1.
     p2_levels
         Levels of P2.
     ref
-        Level of the P2 reference solution.
+        Level of the P2 reference (a scene that cannot take it: its finest level).
     cosine_check_level
-        Level of the extra spring case with cosine torsion.
-    scene, scene_path
-        A user scene table and its file (``study convergence --scene``; see
-        :mod:`studies.study_convergence.scene`).
-    scene_levels
-        Refinement levels of the user scene (1: its own mesh).
+        Level of the cosine-torsion check (or the finest level below it that runs).
+    max_tets
+        Levels with more tets are left out (the two coarsest always run).
     """
 
     levels: tuple[int, ...] = (1, 2, 3, 4, 6, 8)
     p2_levels: tuple[int, ...] = (1, 2, 3, 4)
     ref: int = 8
     cosine_check_level: int = 4
-    scene: dict | None = None
-    scene_path: str | None = None
-    scene_levels: tuple[int, ...] = (1, 2, 3)
-
-    @classmethod
-    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
-        """Refinement of a user scene: levels 1-3 (quick: 1-2), each halving the mesh size.
-
-        Parameters
-        ----------
-        table
-            The scene table.
-        path
-            The scene file.
-        quick
-            Two levels instead of three (each level has 8x the tets).
-
-        Returns
-        -------
-        Settings
-        """
-        return cls(scene=table, scene_path=path, scene_levels=(1, 2) if quick else (1, 2, 3))
+    max_tets: int = 40_000
 
     @classmethod
     def full(cls) -> Settings:
-        """Levels 1-8, reference P2 at k = 8."""
+        """Levels 1-8, reference P2 at 8."""
         return cls()
 
     @classmethod
     def quick(cls) -> Settings:
-        """Levels 1-4, reference P2 at k = 4."""
-        return cls(levels=(1, 2, 3, 4), p2_levels=(1, 2, 3), ref=4)
+        """Levels 1-4, reference P2 at 4."""
+        return cls(levels=(1, 2, 3, 4), p2_levels=(1, 2, 3), ref=4, max_tets=5_000)
 
 
-def divisions(k: int) -> list[int]:
-    return [b * k for b in BASE]
+def fem_models(law: str) -> tuple[str, str]:
+    """The FEM models of a scene: P1 and P2 with its law (neo-Hookean FEM for a neo-Hookean
+    scene, else the small-strain law or a tissue law's own).
 
+    Parameters
+    ----------
+    law
+        The scene's material law.
 
-def coarse_vertices() -> np.ndarray:
-    """Vertices of the level-1 mesh: contained in every level's mesh."""
-    return box_mesh(SIZE, BASE, "six").points
+    Returns
+    -------
+    tuple of str
+        ``(P1 model, P2 model)``.
 
-
-def case(model: str, k: int, torsion: str | None = None) -> dict[str, Any]:
-    """The cache case of one model at level ``k`` (the scene table decides everything).
-
-    ``torsion`` overrides the spring model's torsion law (default :data:`SPRING_TORSION`).
+    Examples
+    --------
+    >>> fem_models("neo-hookean"), fem_models("transverse-linear")
+    (('P1-NH', 'P2-NH'), ('P1', 'P2'))
     """
-    data = bundled_scene("cantilever", divisions(k))
-    if model == "spring":
-        data.setdefault("spring", {})["torsion"] = torsion or SPRING_TORSION
-    if model == "spring-exact":
-        data.setdefault("spring", {}).update(EXACT)
-    return {"study": "convergence", "version": VERSION, "model": model, "k": k, "table": data}
+    return ("P1-NH", "P2-NH") if law == "neo-hookean" else ("P1", "P2")
 
 
-def work(c: dict[str, Any]) -> dict[str, Any]:
-    """Solve one level with one model: tip displacement and the coarse-vertex field."""
-    from scipy.spatial import cKDTree
+def bundled_scenes(settings: Settings) -> list[StudyScene]:
+    """The cantilever bar (0.1 × 0.01 × 0.01 m, end shear) on ``[10, 1, 1]`` hexahedra, six
+    tets each, with Timoshenko's tip deflection as its closed-form reference.
 
-    scene = scene_from_dict(c["table"])
-    sol = solve_model(scene, "spring" if c["model"] == "spring-exact" else c["model"])
-    dist, idx = cKDTree(scene.mesh.points).query(coarse_vertices())
-    if dist.max() > 1e-9 * max(SIZE):
-        raise AssertionError("coarse vertices are not vertices of the refined mesh")
-    r = sol.result
+    Parameters
+    ----------
+    settings
+        The settings (the levels refine this mesh).
+
+    Returns
+    -------
+    list of StudyScene
+
+    Examples
+    --------
+    >>> [s.build().mesh.n_tets for s in bundled_scenes(Settings())]
+    [60]
+    """
+    return [StudyScene.bundled("cantilever", {"mesh.divisions": [10, 1, 1]}, analytic="timoshenko")]
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What runs on one scene: its levels, the reference and the cosine check.
+
+    Attributes
+    ----------
+    scene
+        The scene (level 1).
+    fem
+        Its P1 and P2 models (:func:`fem_models`).
+    levels, p2_levels
+        Levels of the spring models and P1, and of P2 (without the reference level).
+    ref, cosine
+        Levels of the P2 reference and of the cosine-torsion check.
+    notes
+        Levels of the settings the scene does not run, and why.
+    n_tets, h1
+        Tets and mean edge length of level 1.
+    """
+
+    scene: StudyScene
+    fem: tuple[str, str]
+    levels: tuple[int, ...]
+    p2_levels: tuple[int, ...]
+    ref: int
+    cosine: int
+    notes: tuple[str, ...]
+    n_tets: int
+    h1: float
+
+    @property
+    def models(self) -> tuple[str, ...]:
+        """The models of the tables: the spring models, P1 and P2."""
+        return (SPRING, EXACT, *self.fem)
+
+    def case(self, model: str, factor: int) -> dict[str, Any]:
+        """The cache case of ``model`` on level ``factor``."""
+        return self.scene.case("convergence", VERSION, model=model, factor=factor)
+
+    def cases(self) -> list[dict[str, Any]]:
+        """Every case of the plan: levels, P2 levels, the cosine check, the reference last."""
+        p1, p2 = self.fem
+        out = [self.case(m, k) for m in (SPRING, p1, EXACT) for k in self.levels]
+        out += [self.case(p2, k) for k in self.p2_levels]
+        return [*out, self.case(COSINE, self.cosine), self.case(p2, self.ref)]
+
+
+def plan(s: StudyScene, q: Settings) -> Plan:
+    """The levels a scene runs (see :func:`.levels.select_levels`).
+
+    Parameters
+    ----------
+    s
+        The scene.
+    q
+        The settings.
+
+    Returns
+    -------
+    Plan
+
+    Examples
+    --------
+    >>> p = plan(bundled_scenes(Settings())[0], Settings())
+    >>> p.levels, p.p2_levels, p.ref, p.cosine
+    ((1, 2, 3, 4, 6, 8), (1, 2, 3, 4), 8, 4)
+    """
+    scene = s.build()
+    mesh = scene.mesh
+    wanted = {*q.levels, *q.p2_levels, q.ref}
+    kept, notes = select_levels(s.table, mesh.n_tets, sorted(wanted), q.max_tets)
+    levels = tuple(k for k in q.levels if k in kept)
+    ref = q.ref if q.ref in kept else max(kept)
+    below = [k for k in levels if k <= q.cosine_check_level]
+    cosine = max(below) if below else levels[0]
+    p2 = tuple(k for k in q.p2_levels if k in kept and k != ref)
+    fem = fem_models(scene.material.law)
+    return Plan(s, fem, levels, p2, ref, cosine, tuple(notes), mesh.n_tets, mean_edge(mesh))
+
+
+def work(case: dict[str, Any]) -> dict[str, Any]:
+    """Solve one level with one model: its probes and its field at the level-1 vertices."""
+    scene = case_level(case)
+    got = models.run(scene, case["model"])
+    out = {"status": got.status, "tets": scene.mesh.n_tets, "message": got.message[:240]}
+    if not got.ok:
+        return out
+    r = got.solution.result
     return {
-        "h": SIZE[1] / c["k"],
-        "tets": scene.mesh.n_tets,
+        **out,
         "dofs": r.counts.get("dofs", 3 * scene.mesh.n_points),
-        "tip": r.probes["tip"],
-        "u_coarse": sol.u[idx],
+        "probes": r.probes,
+        "u_coarse": np.asarray(got.u)[coarse_index(case, scene.mesh)],
         "wall": r.wall_time,
     }
 

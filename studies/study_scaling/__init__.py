@@ -27,12 +27,14 @@ Examples
 from __future__ import annotations
 
 from ..registry import StudyContext, StudyOutput, study
+from ..scenes import StudyScene
 from .cases import (
     REPEATS,
     STATIC_METHODS,
     TORSION,
     Settings,
     bench_table,
+    bundled_scenes,
     grids,
     static_case,
     step_case,
@@ -54,14 +56,23 @@ __all__ = [
 ]
 
 
-@study("scaling", Settings)
-def run(ctx: StudyContext, p: Settings) -> StudyOutput:
+#: Why the study does not run on a user's scene.
+NO_USER_SCENES = (
+    "it times generated box meshes of chosen sizes (a cost curve), not one scene; "
+    "`springfem bench` times a model"
+)
+
+
+@study("scaling", Settings, bundled_scenes, user_scenes=NO_USER_SCENES)
+def run(ctx: StudyContext, scenes: list[StudyScene], p: Settings) -> StudyOutput:
     """Run the scaling study (see the module docstring).
 
     Parameters
     ----------
     ctx
         Output folder, cache and preset.
+    scenes
+        The benchmark blocks (roles ``step`` and ``static``).
     p
         Tet counts.
 
@@ -70,7 +81,7 @@ def run(ctx: StudyContext, p: Settings) -> StudyOutput:
     StudyOutput
         Findings, step/solve/slope tables, the scaling figure, headline slopes.
     """
-    step_cases, static_cases = grids(p)
+    step_cases, static_cases = grids(scenes, p)
     steps = ctx.cache.run(step_cases, step_case, ctx.progress, "explicit steps")
     static = ctx.cache.run(static_cases, static_case, ctx.progress, "static solves")
     sdf, tdf = frames(steps, static_cases, static)

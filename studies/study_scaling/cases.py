@@ -8,10 +8,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from springfem.scene import scene_from_dict
-from springmodel.options import SpringOptions
+
+from .. import models
+from ..scenes import StudyScene, case_scene
 
 TORSION = "energy"
 REPEATS = 5
+VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -27,12 +30,6 @@ class Settings:
     neo_max
         Largest tet count of the neo-Hookean Newton solve.
     """
-
-    #: Why ``study NAME --scene FILE`` is refused (the registry prints it).
-    NO_SCENE = (
-        "it times generated box meshes of chosen sizes (a cost curve), not one scene; "
-        "`springfem bench` times a model"
-    )
 
     step: tuple[int, ...] = (1_000, 3_000, 10_000, 30_000, 100_000, 200_000)
     static: tuple[int, ...] = (1_000, 3_000, 10_000, 30_000, 100_000)
@@ -81,8 +78,25 @@ def bench_table(n_tets: int = 100_000) -> dict:
     }
 
 
-def _scene(n_tets: int):
-    return scene_from_dict(bench_table(n_tets))
+def bench_scene(n_tets: int, role: str) -> StudyScene:
+    """The benchmark block of about ``n_tets`` tets as a study scene serving ``role``."""
+    table = bench_table(n_tets)
+    return StudyScene(table["name"], table, roles=(role,), params={"n_tets": n_tets})
+
+
+def bundled_scenes(p: Settings) -> list[StudyScene]:
+    """The blocks of the explicit-step (``step``) and static-solve (``static``) series.
+
+    Parameters
+    ----------
+    p
+        The study's settings.
+
+    Returns
+    -------
+    list of StudyScene
+    """
+    return [bench_scene(n, "step") for n in p.step] + [bench_scene(n, "static") for n in p.static]
 
 
 def _clock():
@@ -95,18 +109,15 @@ def _since(t):
 
 def step_case(case: dict) -> dict:
     """Set-up and per-step cost of the spring model and the explicit P1 FEM (serial)."""
-    from reference_fem.explicit import ExplicitFem
-    from springmodel.model import SpringModel
-
     from ..bench import step_costs
     from ..timing import median, median_ratio
 
-    scene = _scene(case["n_tets"])
+    scene = case_scene(case)
     t = _clock()
-    spring = SpringModel(scene, parallel=False)
+    spring = models.SPRING.system(scene)
     spring_setup = _since(t)
     t = _clock()
-    fem = ExplicitFem(scene, parallel=False)
+    fem = models.P1_NH.system(scene)  # the explicit P1 FEM, neo-Hookean
     fem_setup = _since(t)
     steps = int(np.clip(2_000_000 // scene.mesh.n_tets, 5, 200))
     systems = {"spring": spring, "fem": fem}
@@ -128,15 +139,16 @@ def step_case(case: dict) -> dict:
 
 
 def _static_solve(scene, method: str):
+    """A static solve by a model of :data:`STATIC_METHODS` (the spring model: static Newton)."""
     if method == "spring":
         from springmodel.model import solve_spring
 
-        return solve_spring(
-            scene, replace(SpringOptions.of(scene), solver="static", tol=1e-8), parallel=False
-        )
+        opts = replace(models.SPRING.spring_options(scene), solver="static", tol=1e-8)
+        return solve_spring(scene, opts, parallel=False)
     import reference_fem
 
-    return reference_fem.solve(scene, order=1, law=method.removeprefix("fem-"))
+    fem_scene, order, law = models.get(method).fem_settings(scene)
+    return reference_fem.solve(fem_scene, order=order, law=law)
 
 
 _WARM: set[str] = set()
@@ -146,9 +158,9 @@ def static_case(case: dict) -> dict:
     """One static solve (from the scene, set-up included) by one method."""
     method = case["method"]
     if method not in _WARM:  # imports and compilation are not part of the cost
-        _static_solve(_scene(100), method)
+        _static_solve(scene_from_dict(bench_table(100)), method)
         _WARM.add(method)
-    scene = _scene(case["n_tets"])
+    scene = case_scene(case)
     t = _clock()
     sol = _static_solve(scene, method)
     wall, cpu = _since(t)
@@ -169,16 +181,18 @@ def static_case(case: dict) -> dict:
 
 STATIC_METHODS = {
     "spring": "spring model, static Newton",
-    "fem-linear": "FEM P1 linear, static",
-    "fem-neo-hookean/coupled": "FEM P1 neo-Hookean, Newton",
+    "P1": "FEM P1 linear, static",
+    "P1-NH": "FEM P1 neo-Hookean, Newton",
 }
 
 
-def grids(p: Settings) -> tuple[list[dict], list[dict]]:
+def grids(scenes: list[StudyScene], p: Settings) -> tuple[list[dict], list[dict]]:
     """The explicit-step and static-solve cases.
 
     Parameters
     ----------
+    scenes
+        The blocks (roles ``step``, ``static``).
     p
         The study's settings.
 
@@ -189,19 +203,15 @@ def grids(p: Settings) -> tuple[list[dict], list[dict]]:
         ``p.neo_max`` tets).
     """
     step_cases = [
-        {
-            "kind": "step",
-            "n_tets": n,
-            "repeats": REPEATS,
-            "torsion": TORSION,
-            "scene": "bench_scene",
-        }
-        for n in p.step
+        s.case("scaling", VERSION, kind="step", repeats=REPEATS, torsion=TORSION)
+        for s in scenes
+        if s.serves("step")
     ]
     static_cases = [
-        {"kind": "static", "n_tets": n, "method": m, "torsion": TORSION, "scene": "bench_scene"}
-        for n in p.static
+        s.case("scaling", VERSION, kind="static", method=m, torsion=TORSION)
+        for s in scenes
+        if s.serves("static")
         for m in STATIC_METHODS
-        if not (m.startswith("fem-neo") and n > p.neo_max)
+        if not (m == "P1-NH" and s.params["n_tets"] > p.neo_max)
     ]
     return step_cases, static_cases

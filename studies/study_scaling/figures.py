@@ -60,7 +60,7 @@ def scaling_figure(
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     ax = axes[1]
-    colours = {"spring": "tab:red", "fem-linear": "tab:blue", "fem-neo-hookean/coupled": "tab:cyan"}
+    colours = {"spring": "tab:red", "P1": "tab:blue", "P1-NH": "tab:cyan"}
     for m, label in STATIC_METHODS.items():
         g = tdf[tdf["method"] == m]
         rate = slope["static_" + m.split("/")[0]]

@@ -48,14 +48,12 @@ def report_findings(
     parts = [f"{STATIC_METHODS[m]} {big.loc[m, 'cpu_s']:.1f} s" for m in big.index]
     findings.append(
         f"A static solve scales like N^{slope['static_spring']:.2f} (spring Newton), "
-        f"N^{slope['static_fem-linear']:.2f} (FEM P1 linear) and "
-        f"N^{slope['static_fem-neo-hookean']:.2f} (FEM P1 neo-Hookean Newton); at "
+        f"N^{slope['static_P1']:.2f} (FEM P1 linear) and "
+        f"N^{slope['static_P1-NH']:.2f} (FEM P1 neo-Hookean Newton); at "
         f"{int(tdf['tets'].max())} tets: {', '.join(parts)}."
     )
-    both = tdf.pivot(index="tets", columns="method", values="cpu_s").dropna(
-        subset=["spring", "fem-linear"]
-    )
-    ratio = both["spring"] / both["fem-linear"]
+    both = tdf.pivot(index="tets", columns="method", values="cpu_s").dropna(subset=["spring", "P1"])
+    ratio = both["spring"] / both["P1"]
     worst = int(ratio.idxmax())
     solver_at = tdf[(tdf["method"] == "spring") & (tdf["tets"] == worst)]["linear_solver"].iloc[0]
     findings.append(

@@ -81,7 +81,7 @@ def slopes(sdf: pd.DataFrame, tdf: pd.DataFrame) -> dict[str, float]:
     }
     for m in STATIC_METHODS:
         g = tdf[tdf["method"] == m]
-        slope[f"static_{m.split('/')[0]}"] = fitted_rate(g["tets"], g["cpu_s"])
+        slope[f"static_{m}"] = fitted_rate(g["tets"], g["cpu_s"])
     return slope
 
 

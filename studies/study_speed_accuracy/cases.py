@@ -1,259 +1,272 @@
-"""Cases of the speed-accuracy study: settings, the cantilever scenes, one timed solve."""
+"""Cases of the speed-accuracy study: settings, the methods, the points of a scene, one
+timed solve.
+
+A method is a model of :mod:`studies.models` and a solution method, named
+``"<model> <solution>"`` (``spring-exact static``, ``P1-NH explicit``):
+
+- ``static``: FEM models' own solve; spring models by static Newton (relative residual
+  :data:`STATIC_TOL`);
+- ``implicit``: backward-Euler pseudo-time stepping to rest, ``dt`` a multiple of the
+  critical step (spring models);
+- ``explicit``: dynamic relaxation to rest (:func:`springfem.mechanics.explicit_static`,
+  kinetic damping) of the model's mechanical system (a spring model, or the explicit P1
+  FEM of ``P1-NH``).
+
+Every case is a :meth:`~studies.scenes.StudyScene.case` of the scene with ``model``,
+``solution``, ``factor`` (the refinement level, :mod:`studies.study_convergence.levels`)
+and ``setting``.
+"""
 
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
-from springfem.errors import SolverError
-from springfem.scene import Scene, scene_from_dict
-from springmodel.options import SpringOptions
+from springfem.errors import InputError, SolverError
+from springfem.result import Result
+from springfem.scene import Scene
 
-from ..compare import bundled_scene
-from ..metrics import timoshenko_tip_deflection
+from .. import models
+from ..scenes import StudyScene
+from ..solve import Solution
+from ..study_convergence import cases as convergence
+from ..study_convergence.levels import case_level, coarse_index
 
-#: The spring model's torsion law here: the energy-consistent one (conservative, so static
-#: Newton has an analytic Hessian and explicit dynamics conserve energy).
-TORSION = "energy"
-#: Static / implicit tolerances (relative residual).
+VERSION = 2
+#: Static and implicit tolerances (relative residual).
 STATIC_TOL = 1e-8
 IMPLICIT_TOL = 1e-6
 STEP_REPEATS = 7
 STEP_COUNT = 20
-
-FEM_STATIC = {
-    "fem-p1-linear": (1, "linear"),
-    "fem-p1-neo-hookean": (1, "neo-hookean/coupled"),
-    "fem-p2-linear": (2, "linear"),
-    "fem-p2-neo-hookean": (2, "neo-hookean/coupled"),
-}
-#: The exact spring element of issue 10 (DESIGN §4b).
-EXACT = {"volume": "axes", "torsion": "energy", "calibration": "exact"}
-#: Methods of the exact element (points added to the seed model's).
-EXACT_METHODS = ("spring-exact-static", "spring-exact-explicit")
-LABELS = {
-    "spring-exact-static": "exact spring element, static Newton",
-    "spring-exact-explicit": "exact spring element, explicit to rest",
-    "spring-static": "spring, static Newton",
-    "spring-implicit": "spring, implicit to rest",
-    "spring-explicit": "spring, explicit to rest",
-    "fem-explicit-p1-neo-hookean": "explicit P1 FEM (neo-Hookean), to rest",
-    "fem-p1-linear": "FEM P1 linear, static",
-    "fem-p1-neo-hookean": "FEM P1 neo-Hookean, static",
-    "fem-p2-linear": "FEM P2 linear, static",
-    "fem-p2-neo-hookean": "FEM P2 neo-Hookean, static",
-}
-STYLE = {  # marker, colour
-    "spring-exact-static": ("*", "tab:brown"),
-    "spring-exact-explicit": ("*", "tab:gray"),
-    "spring-static": ("o", "tab:red"),
-    "spring-implicit": ("o", "tab:orange"),
-    "spring-explicit": ("o", "tab:pink"),
-    "fem-explicit-p1-neo-hookean": ("^", "tab:purple"),
-    "fem-p1-linear": ("s", "tab:blue"),
-    "fem-p1-neo-hookean": ("s", "tab:cyan"),
-    "fem-p2-linear": ("D", "tab:green"),
-    "fem-p2-neo-hookean": ("D", "tab:olive"),
-}
+#: The spring model (energy torsion: conservative, so static Newton has an analytic Hessian
+#: and explicit dynamics conserve energy) and the exact element.
+SPRING, EXACT = "spring-energy", "spring-exact"
+#: The static FEM models (those that apply to the scene's law).
+FEM_STATIC = ("P1", "P1-NH", "P2", "P2-NH")
+#: The FEM model of the explicit runs (the explicit P1 FEM).
+EXPLICIT_FEM = "P1-NH"
 
 
 @dataclass(frozen=True)
 class Settings:
-    """Meshes and solver settings of the speed-accuracy study.
+    """Levels and solver settings of the speed-accuracy study.
 
     Parameters
     ----------
-    meshes
-        ``(nx, ny)`` cantilever meshes (``nx × ny × ny`` hexahedra) of the points.
+    levels
+        Refinement factors of the scene's mesh, one point per method each.
     reference
-        ``(nx, ny)`` of the fine P2 reference.
+        The level of the reference (a scene that cannot take it: its finest level).
     explicit
         ``(tol, dt_safety)`` settings of the explicit runs.
     implicit
-        Time-step factor of the implicit runs -> largest ``(nx, ny)`` it runs on.
-    scene, scene_path
-        A user scene table and its file (``study speed-accuracy --scene``; see :mod:`.scene`).
-    scene_levels, scene_costly_levels
-        Refinement levels of the user scene (1: its own mesh), and those of the costly
-        points (explicit runs, neo-Hookean FEM).
+        Time-step factor of the implicit runs -> the largest level it runs on.
+    max_tets
+        Levels with more tets are left out (the two coarsest always run).
     """
 
-    meshes: tuple[tuple[int, int], ...] = ((10, 1), (20, 2), (40, 4))
-    reference: tuple[int, int] = (60, 6)
+    levels: tuple[int, ...] = (1, 2, 4)
+    reference: int = 6
     explicit: tuple[tuple[float, float], ...] = ((1e-3, 0.3), (1e-6, 0.3), (1e-6, 0.5))
-    implicit: dict[float, tuple[int, int]] = field(
-        default_factory=lambda: {100.0: (20, 2), 1e4: (40, 4)}
-    )
-    scene: dict | None = None
-    scene_path: str | None = None
-    scene_levels: tuple[int, ...] = (1, 2, 3)
-    scene_costly_levels: tuple[int, ...] = (1, 2)
+    implicit: dict[float, int] = field(default_factory=lambda: {100.0: 2, 1e4: 4})
+    max_tets: int = 40_000
 
     @classmethod
     def full(cls) -> Settings:
-        """Three meshes up to 40 × 4 × 4, reference 60 × 6 × 6."""
+        """Levels 1, 2, 4 and the reference at 6."""
         return cls()
 
     @classmethod
-    def for_scene(cls, table: dict, path: str | None = None, quick: bool = False) -> Settings:
-        """Every method on a user scene's refinement levels (see :mod:`.scene`).
-
-        Parameters
-        ----------
-        table
-            The scene table.
-        path
-            The scene file.
-        quick
-            Levels 1-2 (costly points on level 1) instead of 1-3 (costly points on 1-2).
-
-        Returns
-        -------
-        Settings
-        """
-        if quick:
-            return cls(scene=table, scene_path=path, scene_levels=(1, 2),
-                       scene_costly_levels=(1,))  # fmt: skip
-        return cls(scene=table, scene_path=path)
-
-    @classmethod
     def quick(cls) -> Settings:
-        """Two meshes, reference 40 × 4 × 4."""
-        return cls(
-            meshes=((10, 1), (20, 2)),
-            reference=(40, 4),
-            explicit=((1e-6, 0.5),),
-            implicit={100.0: (10, 1), 1e4: (20, 2)},  # dt factor -> largest mesh
-        )
+        """Levels 1, 2 and the reference at 4, one explicit setting."""
+        return cls(levels=(1, 2), reference=4, explicit=((1e-6, 0.5),),
+                   implicit={100.0: 1, 1e4: 2}, max_tets=5_000)  # fmt: skip
 
 
-def cantilever_table(nx: int, ny: int) -> dict:
-    """The bundled cantilever scene's table with ``nx x ny x ny`` hexahedra.
+def bundled_scenes(settings: Settings) -> list[StudyScene]:
+    """The convergence study's bar (:func:`studies.study_convergence.bundled_scenes`): its
+    levels 1, 2, 4 and the reference 6 are 10x1x1, 20x2x2, 40x4x4 and 60x6x6 hexahedra.
 
     Parameters
     ----------
-    nx, ny
-        Hexahedra along the beam and across it.
+    settings
+        The settings.
 
     Returns
     -------
-    dict
-        The table for :func:`springfem.scene.scene_from_dict`.
-
-    Examples
-    --------
-    >>> cantilever_table(6, 1)["mesh"]["divisions"]
-    [6, 1, 1]
+    list of StudyScene
     """
-    return bundled_scene("cantilever", (nx, ny, ny))
+    return convergence.bundled_scenes(convergence.Settings())
 
 
-def _scene(case: dict) -> Scene:
-    scene = scene_from_dict(case["scene"])
-    return scene.with_options(spring=replace(SpringOptions.of(scene), torsion=TORSION))
+def reference_model(law: str) -> str:
+    """P2 with the scene's law (:func:`studies.study_convergence.cases.fem_models`)."""
+    return convergence.fem_models(law)[1]
 
 
-def timoshenko_tip(scene: Scene) -> float:
-    """Timoshenko tip deflection (m, positive down) of the cantilever scene."""
-    lo, hi = scene.mesh.bounding_box()
-    L, b, h = (hi - lo).tolist()
-    traction = scene.loads[0].value
-    force = float(-traction[2]) * b * h
-    return timoshenko_tip_deflection(force, L, b, h, scene.material.E, scene.material.nu)
+def method_name(model: str, solution: str) -> str:
+    """A method's one spelling: the registry's model name and the solution method."""
+    return f"{model} {solution}"
 
 
-def _solve(scene: Scene, method: str, setting: dict) -> tuple[np.ndarray, dict]:
-    """Run one method on a scene: vertex displacement and solver facts."""
-    if method in FEM_STATIC:
-        import reference_fem
+def explicit_fem_refusal(scene: Scene) -> str | None:
+    """Why the explicit P1 FEM cannot run the scene (``None``: it can)."""
+    m = models.get(EXPLICIT_FEM)
+    why = m.applies(scene)
+    if why is None:
+        try:
+            m.system(scene)
+        except InputError as exc:
+            why = str(exc)
+    return why
 
-        order, law = FEM_STATIC[method]
-        sol = reference_fem.solve(scene, order=order, law=law)
-        return sol.u_vertices, {"iterations": sol.result.iterations}
+
+def points(s: StudyScene, scene: Scene, levels: list[int], q: Settings) -> list[dict]:
+    """Every (method, level, setting) point of a scene.
+
+    Parameters
+    ----------
+    s
+        The scene.
+    scene
+        It built (level 1).
+    levels
+        The levels it runs.
+    q
+        The settings.
+
+    Returns
+    -------
+    list of dict
+    """
+    fem = [m for m in FEM_STATIC if models.get(m).applies(scene) is None]
+    explicit_fem = explicit_fem_refusal(scene) is None
+    out = []
+    for k in levels:
+
+        def add(model: str, solution: str, **setting: float) -> None:
+            out.append(point_case(s, model, solution, k, setting))  # noqa: B023
+
+        for m in fem:
+            add(m, "static")
+        add(SPRING, "static", tol=STATIC_TOL)
+        add(EXACT, "static", tol=STATIC_TOL)
+        for factor, largest in q.implicit.items():
+            if k <= largest:
+                add(SPRING, "implicit", dt_factor=factor, tol=IMPLICIT_TOL)
+        for tol, safety in q.explicit:
+            add(SPRING, "explicit", tol=tol, dt_safety=safety)
+            if explicit_fem:
+                add(EXPLICIT_FEM, "explicit", tol=tol, dt_safety=safety)
+        tol, safety = q.explicit[-1]  # the exact element: the last explicit setting only
+        add(EXACT, "explicit", tol=tol, dt_safety=safety)
+    return out
+
+
+def point_case(s: StudyScene, model: str, solution: str, factor: int, setting: dict) -> dict:
+    """The cache case of one point."""
+    return s.case("speed_accuracy", VERSION, kind="point", model=model, solution=solution,
+                  factor=factor, setting=setting)  # fmt: skip
+
+
+def _trajectory(scene: Scene, m: models.Model, u: np.ndarray, facts: dict) -> Solution:
+    """A :class:`Solution` of a run to rest: its probes and solver facts."""
+    res = Result(
+        scene=scene.name,
+        model=m.kind,
+        element=m.name,
+        law=scene.material.law,
+        counts={"nodes": scene.mesh.n_points, "tets": scene.mesh.n_tets},
+        probes=scene.probe_displacements(u),
+        volume={},
+        reactions={},
+        wall_time=float("nan"),
+        converged=True,
+        iterations=int(facts.get("iterations", 0)),
+        info=facts,
+    )
+    return Solution(res, u)
+
+
+def solver(solution: str, setting: dict):
+    """``solve(model, scene) -> Solution`` of a solution method (for :func:`models.run`).
+
+    Parameters
+    ----------
+    solution
+        ``static``, ``implicit`` or ``explicit``.
+    setting
+        Its settings (``tol``, ``dt_factor``, ``dt_safety``).
+
+    Returns
+    -------
+    callable
+    """
     from springfem.mechanics import explicit_static, implicit, stable_time_step
 
-    exact = EXACT if method.startswith("spring-exact") else {}
-    if method in ("spring-static", "spring-exact-static"):
+    def static(m: models.Model, scene: Scene) -> Solution:
+        if m.kind == "fem":
+            return m.solve(scene)
         from springmodel.model import solve_spring
 
-        opts = replace(SpringOptions.of(scene), solver="static", tol=STATIC_TOL, **exact)
+        opts = replace(m.spring_options(scene), solver="static", tol=setting["tol"])
         sol = solve_spring(scene, opts, parallel=None)
-        return sol.u, {"iterations": sol.result.iterations}
-    if method == "fem-explicit-p1-neo-hookean":
-        from reference_fem.explicit import ExplicitFem
+        return Solution(sol.result, sol.u)
 
-        system = ExplicitFem(scene, law="neo-hookean")
-    else:
-        from springmodel.model import SpringModel
+    def to_rest(m: models.Model, scene: Scene) -> Solution:
+        system = m.system(scene)
+        if solution == "implicit":
+            dt = setting["dt_factor"] * stable_time_step(system)[0]
+            traj = implicit(system, dt=dt, steps=5000, equilibrium_tol=setting["tol"])
+            if not traj.converged:
+                raise SolverError(traj.message, state=traj.x - system.x0)
+            facts = {"steps": traj.steps, "iterations": traj.iterations}
+            return _trajectory(scene, m, traj.x - system.x0, facts)
+        info = explicit_static(system, tol=setting["tol"], dt_safety=setting["dt_safety"],
+                               max_steps=400_000)  # fmt: skip
+        return _trajectory(scene, m, info.x - system.x0, {"steps": info.steps, "dt": info.dt})
 
-        opts = replace(SpringOptions.of(scene), **exact) if exact else None
-        system = SpringModel(scene, opts, parallel=None)
-    if method == "spring-implicit":
-        dt = setting["dt_factor"] * stable_time_step(system)[0]
-        traj = implicit(system, dt=dt, steps=5000, equilibrium_tol=IMPLICIT_TOL)
-        if not traj.converged:
-            raise SolverError(traj.message, state=traj.x - system.x0)
-        return traj.x - system.x0, {"steps": traj.steps, "iterations": traj.iterations}
-    info = explicit_static(
-        system, tol=setting["tol"], dt_safety=setting["dt_safety"], max_steps=400_000
-    )
-    return info.x - system.x0, {"steps": info.steps, "dt": info.dt}
+    return static if solution == "static" else to_rest
 
 
-_WARM: set[str] = set()
+_WARM: set[tuple[str, str]] = set()
 
 
-def _warm_up(method: str, setting: dict) -> None:
-    """Run a method once on a tiny mesh so compilation and imports are not timed."""
-    if method in _WARM:
+def _warm_up(model: str, solution: str, setting: dict) -> None:
+    """Run a method once on a tiny bar so compilation and imports are not timed."""
+    if (model, solution) in _WARM:
         return
-    tiny = {"scene": cantilever_table(4, 1)}
+    tiny = StudyScene.bundled("cantilever", {"mesh.divisions": [4, 1, 1]}).build()
     loose = dict(setting, tol=1e-2) if "tol" in setting else setting
-    try:
-        _solve(_scene(tiny), method, loose)
-    except SolverError:
-        pass
-    _WARM.add(method)
+    models.run(tiny, model, solve=solver(solution, loose))
+    _WARM.add((model, solution))
 
 
-def point_case(case: dict) -> dict:
-    """One (method, mesh, setting) point: wall time from the scene to the answer, tip."""
-    scene = _scene(case)
-    _warm_up(case["method"], case["setting"])
-    t0, c0 = time.perf_counter(), time.process_time()
-    try:
-        u, facts = _solve(scene, case["method"], case["setting"])
-    except SolverError as exc:
-        msg = str(exc)
+def point_work(case: dict) -> dict:
+    """One timed point: wall and CPU time from the scene to the answer, probes, the field at
+    the level-1 vertices."""
+    scene = case_level(case)
+    _warm_up(case["model"], case["solution"], case["setting"])
+    c0 = time.process_time()
+    got = models.run(scene, case["model"], solve=solver(case["solution"], case["setting"]))
+    out = {"seconds": got.seconds, "cpu_seconds": time.process_time() - c0,
+           "tets": scene.mesh.n_tets}  # fmt: skip
+    if not got.ok:
+        msg = got.message
         status = "blew up" if "blew up" in msg or "inverted" in msg else "failed"
-        return {
-            "status": status,
-            "seconds": time.perf_counter() - t0,
-            "cpu_seconds": time.process_time() - c0,
-            "message": msg[:240],
-        }
+        return {**out, "status": status, "message": msg[:240]}
+    r = got.solution.result
+    facts = {k: r.info[k] for k in ("steps", "dt") if k in r.info and case["solution"] != "static"}
     return {
+        **out,
         "status": "ok",
-        "seconds": time.perf_counter() - t0,
-        "cpu_seconds": time.process_time() - c0,
-        "tip": scene.probe_displacements(u)["tip"],
-        "tets": scene.mesh.n_tets,
+        "probes": r.probes,
+        "u": np.asarray(got.u)[coarse_index(case, scene.mesh)],
+        "iterations": r.iterations,
         **facts,
-    }
-
-
-def reference_case(case: dict) -> dict:
-    """The reference tip displacement: P2 linear on the finest mesh."""
-    import reference_fem
-
-    scene = _scene(case)
-    sol = reference_fem.solve(scene, order=2, law="linear")
-    return {
-        "tip": sol.result.probes["tip"],
-        "tets": scene.mesh.n_tets,
-        "timoshenko": timoshenko_tip(scene),
     }
 
 
@@ -262,64 +275,25 @@ def step_count(n_tets: int) -> int:
     return int(np.clip(200_000 // max(n_tets, 1), STEP_COUNT, 500))
 
 
-def step_cost_case(case: dict) -> dict:
-    """Cost of one explicit step, spring model and explicit P1 FEM, measured alternately."""
-    from reference_fem.explicit import ExplicitFem
-    from springmodel.model import SpringModel
+def step_cost_case(s: StudyScene, factor: int, n_tets: int) -> dict:
+    """The cache case of the step costs on one level."""
+    return s.case("speed_accuracy", VERSION, kind="step_cost", factor=factor,
+                  repeats=STEP_REPEATS, steps=step_count(n_tets))  # fmt: skip
 
+
+def step_cost_work(case: dict) -> dict:
+    """Cost of one explicit step, the spring model and the explicit P1 FEM, interleaved."""
     from ..bench import step_costs
     from ..timing import median, median_ratio
 
-    scene = _scene(case)
-    systems = {"spring": SpringModel(scene, parallel=None), "fem": ExplicitFem(scene)}
+    scene = case_level(case)
+    systems = {SPRING: models.get(SPRING), EXPLICIT_FEM: models.get(EXPLICIT_FEM)}
+    systems = {k: m.system(scene) for k, m in systems.items()}
     samples = step_costs(systems, case["steps"], case["repeats"])  # interleaved, shuffled
-    out = {"tets": scene.mesh.n_tets}
+    out: dict[str, Any] = {"tets": scene.mesh.n_tets}
     for name in systems:
         out[f"{name}_wall"] = median(samples, name) / case["steps"]
         out[f"{name}_cpu"] = median(samples, name, "cpu") / case["steps"]
-    out["ratio_wall"] = median_ratio(samples, "spring", "fem")
-    out["ratio_cpu"] = median_ratio(samples, "spring", "fem", "cpu")
-    out["parallel"] = {
-        k: bool(
-            getattr(s, "parallel", False) or getattr(getattr(s, "kernel", None), "parallel", False)
-        )
-        for k, s in systems.items()
-    }
-    return out
-
-
-def cases_for(p: Settings) -> list[dict]:
-    """All (method, mesh, setting) points of a plan."""
-    out = []
-    for nx, ny in p.meshes:
-        base = {
-            "kind": "point",
-            "mesh": [nx, ny],
-            "scene": cantilever_table(nx, ny),
-            "torsion": TORSION,
-        }
-        for method in FEM_STATIC:
-            out.append({**base, "method": method, "setting": {}})
-        out.append({**base, "method": "spring-static", "setting": {"tol": STATIC_TOL}})
-        out.append({**base, "method": "spring-exact-static", "setting": {"tol": STATIC_TOL}})
-        for factor, (mx, _) in p.implicit.items():
-            if nx <= mx:
-                out.append(
-                    {
-                        **base,
-                        "method": "spring-implicit",
-                        "setting": {"dt_factor": factor, "tol": IMPLICIT_TOL},
-                    }
-                )
-        for tol, safety in p.explicit:
-            for method in ("spring-explicit", "fem-explicit-p1-neo-hookean"):
-                out.append({**base, "method": method, "setting": {"tol": tol, "dt_safety": safety}})
-        tol, safety = p.explicit[-1]  # the exact element: the last explicit setting only
-        out.append(
-            {
-                **base,
-                "method": "spring-exact-explicit",
-                "setting": {"tol": tol, "dt_safety": safety},
-            }
-        )
+    out["ratio_wall"] = median_ratio(samples, SPRING, EXPLICIT_FEM)
+    out["ratio_cpu"] = median_ratio(samples, SPRING, EXPLICIT_FEM, "cpu")
     return out

@@ -1,4 +1,4 @@
-"""The figure of the speed-accuracy study: CPU time against tip error, Pareto front."""
+"""The figure of the speed-accuracy study: CPU time against error, with the Pareto front."""
 
 from __future__ import annotations
 
@@ -7,11 +7,29 @@ import pandas as pd
 
 from ..registry import Figure, StudyContext
 from ..tables import save_figure
-from .cases import LABELS, STYLE, Settings
+
+#: Marker per model, colour per solution method (by model for the static FEM).
+MARKERS = {"spring-energy": "o", "spring-exact": "*", "P1": "s", "P1-NH": "s", "P2": "D",
+           "P2-NH": "D"}  # fmt: skip
+COLOURS = {
+    "spring-energy static": "tab:red",
+    "spring-energy implicit": "tab:orange",
+    "spring-energy explicit": "tab:pink",
+    "spring-exact static": "tab:brown",
+    "spring-exact explicit": "tab:gray",
+    "P1-NH explicit": "tab:purple",
+    "P1 static": "tab:blue",
+    "P1-NH static": "tab:cyan",
+    "P2 static": "tab:green",
+    "P2-NH static": "tab:olive",
+}
 
 
-def pareto_figure(ctx: StudyContext, df: pd.DataFrame, p: Settings, front_text: str) -> Figure:
-    """Every solve's CPU time against its tip error (log-log) with the Pareto front.
+def pareto_figure(
+    ctx: StudyContext, df: pd.DataFrame, column: str, reference: str, front_text: str,
+    label: str, suffix: str = "",
+) -> Figure:  # fmt: skip
+    """Every solve's CPU time against its error (log-log) with the Pareto front.
 
     Parameters
     ----------
@@ -19,10 +37,16 @@ def pareto_figure(ctx: StudyContext, df: pd.DataFrame, p: Settings, front_text: 
         Where to write.
     df
         The points (:func:`~.tables.points_frame`).
-    p
-        The study's settings.
+    column
+        The error column.
+    reference
+        The reference, for the axis label.
     front_text
         The findings' sentence about the front (ends the caption).
+    label
+        The scene's label.
+    suffix
+        File-name suffix (several scenes).
 
     Returns
     -------
@@ -30,44 +54,29 @@ def pareto_figure(ctx: StudyContext, df: pd.DataFrame, p: Settings, front_text: 
     """
     import matplotlib.pyplot as plt
 
-    rx, ry = p.reference
-    good = df[df["status"] == "ok"]
+    good = df[(df["status"] == "ok") & (df[column] > 0)]
     fig, ax = plt.subplots(figsize=(8.5, 5.6))
     for method, grp in good.groupby("method", sort=False):
-        marker, colour = STYLE[method]
-        ax.scatter(
-            grp["seconds"],
-            100 * grp["tip_error"],
-            marker=marker,
-            color=colour,
-            s=46,
-            label=LABELS[method],
-            edgecolor="k",
-            linewidth=0.4,
-            zorder=3,
-        )
+        ax.scatter(grp["seconds"], 100 * grp[column], marker=MARKERS.get(method.split()[0], "o"),
+                   color=COLOURS.get(method), s=46, label=method, edgecolor="k",
+                   linewidth=0.4, zorder=3)  # fmt: skip
         for _, r in grp.iterrows():
-            ax.annotate(
-                r["mesh"].split("x")[0],
-                (r["seconds"], 100 * r["tip_error"]),
-                fontsize=6,
-                xytext=(3, 2),
-                textcoords="offset points",
-            )
+            ax.annotate(str(r["factor"]), (r["seconds"], 100 * r[column]), fontsize=6,
+                        xytext=(3, 2), textcoords="offset points")  # fmt: skip
     front = good[good["pareto"]].sort_values("seconds")
     if len(front):
         fx = np.r_[front["seconds"].to_numpy(), good["seconds"].max() * 1.5]
-        fy = np.r_[100 * front["tip_error"].to_numpy(), 100 * front["tip_error"].iloc[-1]]
+        fy = np.r_[100 * front[column].to_numpy(), 100 * front[column].iloc[-1]]
         ax.step(fx, fy, where="post", color="k", ls="--", lw=1, label="Pareto front", zorder=2)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("CPU time from scene to answer (s)")
-    ax.set_ylabel(f"tip error vs P2 {rx}x{ry}x{ry} (%)")
-    ax.set_title("Cantilever: time against error (labels: elements along the beam)")
+    ax.set_ylabel(f"{column} vs {reference} (%)")
+    ax.set_title(f"{label}: time against error (labels: refinement factor)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="best")
     caption = (
-        f"CPU time against tip error of every solve of the cantilever (log-log; labels: "
-        f"elements along the beam), with the Pareto front. {front_text}"
+        f"CPU time against error of every solve of {label} (log-log; labels: refinement "
+        f"factor of its mesh), with the Pareto front. {front_text}"
     )
-    return Figure(save_figure(fig, ctx.path("pareto.png")), caption)
+    return Figure(save_figure(fig, ctx.path(f"pareto{suffix}.png")), caption)

@@ -4,127 +4,130 @@ from __future__ import annotations
 
 import pandas as pd
 
-from .cases import EXACT_METHODS, LABELS, STEP_REPEATS, Settings
+from .cases import EXACT, EXPLICIT_FEM, SPRING, STEP_REPEATS, method_name
+from .tables import Measure
+
+#: The explicit setting the spring model and the explicit FEM are compared at, if both ran it.
+COMPARED_SETTING = "tol 1e-06, dt = 0.5 dt_crit"
 
 
 def report_findings(
-    df: pd.DataFrame, steps: list[dict], p: Settings
+    df: pd.DataFrame, steps: dict | None, how: Measure, finest: str, label: str
 ) -> tuple[list[str], dict[str, float], str]:
-    """The findings, the headline tip errors and the Pareto-front sentence.
+    """The findings, the headline errors and the Pareto-front sentence of one scene.
 
     Parameters
     ----------
     df
         The points (:func:`~.tables.points_frame`).
     steps
-        The step-cost results per mesh.
-    p
-        The study's settings.
+        The step costs on the finest level (``None``: none).
+    how
+        The measure of the points.
+    finest
+        The finest level's label (``20x2x2``).
+    label
+        The scene's label.
 
     Returns
     -------
     findings : list of str
     headline : dict
-        Tip errors on the finest mesh (no timings), point and failure counts.
+        Errors on the finest level (no timings, rounded to 4 decimals), ``<measure>_<model>
+        _<solution>_<level>``; point and failure counts.
     front_text : str
         The sentence about the Pareto front (also the figure's caption).
     """
+    err, key = how.column, how.key
     findings: list[str] = []
     headline: dict[str, float] = {}
     ok = df["status"] == "ok"
     good, failed = df[ok], df[~ok]
-    finest = p.meshes[-1]
-    fmesh = f"{finest[0]}x{finest[1]}x{finest[1]}"
-    s_last = steps[-1]
-    ratio, ratio_cpu = s_last["ratio_wall"], s_last["ratio_cpu"]
-    findings.append(
-        f"One explicit step of the spring model costs {ratio_cpu:.2f}x one step of the explicit "
-        f"P1 neo-Hookean FEM on the same {fmesh} mesh ({s_last['tets']} tets; CPU time, median "
-        f"of {STEP_REPEATS} alternating repeats in one run; wall-clock ratio {ratio:.2f}x on "
-        f"this shared machine): "
-        + (
-            "the spring model is slower per step."
-            if ratio_cpu > 1
-            else "the spring model is cheaper per step."
+    if steps is not None:
+        ratio, ratio_cpu = steps["ratio_wall"], steps["ratio_cpu"]
+        findings.append(
+            f"One explicit step of {SPRING} costs {ratio_cpu:.2f}x one step of the explicit "
+            f"P1 neo-Hookean FEM on the same {finest} mesh ({steps['tets']} tets; CPU time, "
+            f"median of {STEP_REPEATS} alternating repeats in one run; wall-clock ratio "
+            f"{ratio:.2f}x on this shared machine): the spring model is "
+            + ("slower per step." if ratio_cpu > 1 else "cheaper per step.")
         )
-    )
 
-    def best(method, mesh=fmesh):
-        g = good[(good["method"] == method) & (good["mesh"] == mesh)]
-        return g.sort_values("tip_error").iloc[0] if len(g) else None
+    def best(model: str, solution: str, mesh: str = finest):
+        g = good[(good["method"] == method_name(model, solution)) & (good["mesh"] == mesh)]
+        return g.sort_values(err).iloc[0] if len(g) else None
 
-    sp, p1, p2 = best("spring-static"), best("fem-p1-linear"), best("fem-p2-linear")
+    def put(model: str, solution: str, row) -> None:
+        headline[f"{key}_{model}_{solution}_{finest}"] = round(float(row[err]), 4)
+
+    def pct(row, digits: int = 1) -> str:
+        return f"{100 * row[err]:.{digits}f}%"
+
+    sp, p1, p2 = best(SPRING, "static"), best("P1", "static"), best("P2", "static")
     if sp is not None and p1 is not None and p2 is not None:
         findings.append(
-            f"On {fmesh} the spring model's tip is {100 * sp['tip_error']:.1f}% off the fine P2 "
-            f"reference (static Newton, {sp['seconds']:.2f} s), P1 FEM on the same mesh "
-            f"{100 * p1['tip_error']:.1f}% ({p1['seconds']:.2f} s) and P2 FEM "
-            f"{100 * p2['tip_error']:.2f}% ({p2['seconds']:.2f} s)."
+            f"On {finest} {SPRING} is {pct(sp)} off the reference (static Newton, "
+            f"{sp['seconds']:.2f} s), P1 on the same mesh {pct(p1)} ({p1['seconds']:.2f} s) "
+            f"and P2 {pct(p2, 2)} ({p2['seconds']:.2f} s)."
         )
-        headline[f"tip_error_spring_static_{fmesh}"] = round(float(sp["tip_error"]), 4)
-        headline[f"tip_error_fem_p1_linear_{fmesh}"] = round(float(p1["tip_error"]), 4)
-        headline[f"tip_error_fem_p2_linear_{fmesh}"] = round(float(p2["tip_error"]), 4)
-    se = good[(good["method"] == "spring-explicit") & (good["mesh"] == fmesh)]
-    fe = good[(good["method"] == "fem-explicit-p1-neo-hookean") & (good["mesh"] == fmesh)]
+        for m, row in ((SPRING, sp), ("P1", p1), ("P2", p2)):
+            put(m, "static", row)
+    se = good[(good["method"] == method_name(SPRING, "explicit")) & (good["mesh"] == finest)]
+    fe = good[(good["method"] == method_name(EXPLICIT_FEM, "explicit")) & (good["mesh"] == finest)]
     common = sorted(set(se["setting"]) & set(fe["setting"]))
     if common:
-        st = (
-            "tol 1e-06, dt = 0.5 dt_crit"
-            if "tol 1e-06, dt = 0.5 dt_crit" in common
-            else (common[-1])
-        )
+        st = COMPARED_SETTING if COMPARED_SETTING in common else common[-1]
         a = se[se["setting"] == st].iloc[0]
         b = fe[fe["setting"] == st].iloc[0]
         findings.append(
-            f"To rest by dynamic relaxation ({st}) on {fmesh}: spring model {a['seconds']:.2f} s "
-            f"in {int(a['steps'])} steps (tip error {100 * a['tip_error']:.1f}%), explicit P1 FEM "
-            f"{b['seconds']:.2f} s in {int(b['steps'])} steps (tip error "
-            f"{100 * b['tip_error']:.1f}%, the P1 static answer to the solver tolerance)."
+            f"To rest by dynamic relaxation ({st}) on {finest}: {SPRING} {a['seconds']:.2f} s "
+            f"in {int(a['steps'])} steps (error {pct(a)}), the explicit P1 FEM "
+            f"{b['seconds']:.2f} s in {int(b['steps'])} steps (error {pct(b)}, the P1 static "
+            "answer to the solver tolerance)."
         )
-        headline[f"tip_error_fem_explicit_{fmesh}"] = round(float(b["tip_error"]), 4)
-        if sp is not None:
+        put(EXPLICIT_FEM, "explicit", b)
+        nh = best(EXPLICIT_FEM, "static")
+        if sp is not None and nh is not None:
             findings.append(
-                f"For this static problem dynamic relaxation is the slow way to the answer: "
-                f"{a['seconds'] / sp['seconds']:.0f}x the spring model's static Newton and "
-                f"{b['seconds'] / best('fem-p1-neo-hookean')['seconds']:.0f}x FEM P1 "
-                f"neo-Hookean Newton on {fmesh}; explicit stepping pays off only when the "
-                f"dynamics themselves are wanted."
+                "For this static problem dynamic relaxation is the slow way to the answer: "
+                f"{a['seconds'] / sp['seconds']:.0f}x {SPRING} static Newton and "
+                f"{b['seconds'] / nh['seconds']:.0f}x {EXPLICIT_FEM} static Newton on "
+                f"{finest}; explicit stepping pays off only when the dynamics themselves are "
+                "wanted."
             )
     on_front = good[good["pareto"]]
     fam = ", ".join(
-        f"{LABELS[m]} ({', '.join(on_front[on_front['method'] == m]['mesh'])})"
+        f"{m} ({', '.join(on_front[on_front['method'] == m]['mesh'])})"
         for m in on_front["method"].unique()
     )
     n_spring_front = int(on_front["method"].str.startswith("spring").sum())
-    front_text = f"Pareto front ({len(on_front)} of {len(good)} points): {fam}; " + (
+    front_text = f"{label}: Pareto front ({len(on_front)} of {len(good)} points): {fam}; " + (
         f"{n_spring_front} spring-model point(s) on it."
         if n_spring_front
-        else "no spring-model point is on it: for every spring point some "
-        "FEM point is both faster and more accurate."
+        else "no spring-model point is on it: for every spring point some FEM point is both "
+        "faster and more accurate."
     )
     findings.append(front_text)
     for _, r in failed.iterrows():
         findings.append(
-            f"{LABELS[r['method']]} on {r['mesh']} ({r['setting']}) {r['status']}: "
-            f"{r['message'][:140]}"
+            f"{r['method']} on {r['mesh']} ({r['setting']}) {r['status']}: {r['message'][:140]}"
         )
-    seed = ~df["method"].isin(EXACT_METHODS)  # the counts of the seed model's points
-    headline["n_points"] = float(seed.sum())
-    headline["n_failed"] = float((~ok & seed).sum())
-    headline["n_points_exact"] = float((~seed).sum())
-    ex = best("spring-exact-static")
+    exact = df["method"].str.startswith(f"{EXACT} ")
+    headline["n_points"] = float((~exact).sum())
+    headline["n_failed"] = float((~ok & ~exact).sum())
+    headline["n_points_exact"] = float(exact.sum())
+    ex = best(EXACT, "static")
     if ex is not None:
-        headline[f"tip_error_spring_exact_static_{fmesh}"] = round(float(ex["tip_error"]), 4)
+        put(EXACT, "static", ex)
         if sp is not None and p1 is not None:
             findings.insert(
-                2,
-                f"The exact spring element (axis-volume + energy torsion + exact calibration) "
-                f"on {fmesh}: tip {100 * ex['tip_error']:.1f}% off the fine P2 reference "
-                f"(static Newton, {ex['seconds']:.2f} s), i.e. P1's error on the same mesh "
-                f"({100 * p1['tip_error']:.1f}%), where the seed model is "
-                f"{100 * sp['tip_error']:.1f}% off. The seed model's smaller tip error on this "
-                "coarse mesh is its extra softness cancelling P1's bending stiffness (accuracy "
-                "study), not accuracy; the exact element is P1 at the spring model's cost, so "
-                "it converges where the seed model does not.",
+                2 if steps is not None else 1,
+                f"{EXACT} (axis-volume + energy torsion + exact calibration) on {finest}: "
+                f"{pct(ex)} off the reference (static Newton, {ex['seconds']:.2f} s), i.e. "
+                f"P1's error on the same mesh ({pct(p1)}), where {SPRING} is {pct(sp)} off. "
+                "A smaller error of the specification's element on a coarse mesh is its extra "
+                "softness cancelling P1's bending stiffness (accuracy study), not accuracy; "
+                "the exact element is P1 at the spring model's cost, so it converges where "
+                "the specification's element does not.",
             )
     return findings, headline, front_text

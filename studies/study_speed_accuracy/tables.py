@@ -1,13 +1,27 @@
-"""Tables of the speed-accuracy study: the points (with the Pareto front) and step costs."""
+"""Tables of the speed-accuracy study: the points (with the Pareto front) and step costs.
+
+A point's error is the relative error of the scene's probe displacement (the probe of its
+closed-form reference, e.g. the cantilever's ``tip``, else its first probe) against the
+reference, or, on a scene without probes, the relative L2 error at the level-1 vertices;
+both are in the table.
+"""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
+from .. import metrics
+from ..analytic import reference
 from ..registry import StudyContext, Table
+from ..scenes import StudyScene
+from ..study_convergence.levels import level_label
 from ..tables import write_table
-from .cases import STEP_COUNT, STEP_REPEATS, Settings
+from .cases import EXPLICIT_FEM, SPRING, STEP_COUNT, STEP_REPEATS, method_name
+
+L2 = "L2 err (level-1 vertices)"
 
 
 def pareto_front(seconds: np.ndarray, error: np.ndarray) -> np.ndarray:
@@ -27,98 +41,169 @@ def pareto_front(seconds: np.ndarray, error: np.ndarray) -> np.ndarray:
     return keep
 
 
-def setting_label(method: str, setting: dict) -> str:
-    if method == "spring-implicit":
+def setting_label(solution: str, setting: dict) -> str:
+    """A point's setting in the tables (empty for a static solve).
+
+    Examples
+    --------
+    >>> setting_label("explicit", {"tol": 1e-6, "dt_safety": 0.5})
+    'tol 1e-06, dt = 0.5 dt_crit'
+    """
+    if solution == "implicit":
         return f"dt = {setting['dt_factor']:g} dt_crit"
     if "dt_safety" in setting:
         return f"tol {setting['tol']:g}, dt = {setting['dt_safety']:g} dt_crit"
     return ""
 
 
-def _relative_error(tip, ref) -> float:
-    tip, ref = np.asarray(tip, float), np.asarray(ref, float)
-    return float(np.linalg.norm(tip - ref) / np.linalg.norm(ref))
+@dataclass(frozen=True)
+class Measure:
+    """What a scene's points are measured by: a probe, or the level-1 field.
+
+    Attributes
+    ----------
+    probe
+        The probe, or ``None`` (L2 at the level-1 vertices).
+    analytic
+        The probe's closed-form ``(component, value, source)``, if the scene has one.
+    """
+
+    probe: str | None
+    analytic: tuple[int, float, str] | None = None
+
+    @property
+    def column(self) -> str:
+        return f"{self.probe}_error" if self.probe else L2
+
+    @property
+    def key(self) -> str:
+        """The headline keys' prefix (``tip_error``, ``l2_error``)."""
+        return f"{self.probe}_error" if self.probe else "l2_error"
 
 
-def points_frame(cases: list[dict], results: list[dict], ref: dict) -> pd.DataFrame:
-    """One row per point: method, mesh, setting, status, CPU and wall time, tip error
-    against the reference, tip over Timoshenko, steps, message, on the Pareto front.
+def measure(s: StudyScene, ref: dict) -> Measure:
+    """The measure of a scene's points (see the module docstring).
 
     Parameters
     ----------
-    cases, results
-        The points and their results (:func:`~.cases.point_case`).
+    s
+        The scene.
     ref
-        The reference result (:func:`~.cases.reference_case`).
+        The reference's result.
+
+    Returns
+    -------
+    Measure
+    """
+    hook = reference(s, None)
+    if hook is not None:
+        probe, component, value, source = hook
+        return Measure(probe, (component, value, source))
+    return Measure(next(iter(ref["probes"]), None))
+
+
+def _relative(a, b) -> float:
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return float(np.linalg.norm(a - b) / np.linalg.norm(b))
+
+
+def points_frame(
+    s: StudyScene, cases: list[dict], results: list[dict], ref: dict, how: Measure
+) -> pd.DataFrame:
+    """One row per point: method, level, setting, status, CPU and wall time, errors against
+    the reference (and the probe over its closed form), steps, message, on the Pareto front.
+
+    Parameters
+    ----------
+    s
+        The scene.
+    cases, results
+        The points and their results (:func:`~.cases.point_work`).
+    ref
+        The reference's result.
+    how
+        The measure.
 
     Returns
     -------
     DataFrame
     """
-    ref_tip = np.asarray(ref["tip"])
-    timo = ref["timoshenko"]
+    u_ref = np.asarray(ref["u"], float)
     rows = []
-    for c, r in zip(cases, results):
-        nx, ny = c["mesh"]
+    for c, r in zip(cases, results, strict=True):
+        ok = r["status"] == "ok"
         row = {
-            "method": c["method"],
-            "mesh": f"{nx}x{ny}x{ny}",
-            "tets": 6 * nx * ny * ny,
-            "setting": setting_label(c["method"], c["setting"]),
+            "method": method_name(c["model"], c["solution"]),
+            "factor": c["factor"],
+            "mesh": level_label(s.table, c["factor"]),
+            "tets": r["tets"],
+            "setting": setting_label(c["solution"], c["setting"]),
             "status": r["status"],
-            "seconds": r.get("cpu_seconds", r["seconds"]),
+            "seconds": r["cpu_seconds"],
             "wall_seconds": r["seconds"],
-            "tip_error": np.nan,
-            "tip_over_timoshenko": np.nan,
-            "steps": r.get("steps", np.nan),
-            "message": r.get("message", ""),
         }
-        if r["status"] == "ok":
-            row["tip_error"] = _relative_error(r["tip"], ref_tip)
-            row["tip_over_timoshenko"] = -r["tip"][2] / timo
+        probe = r["probes"][how.probe] if ok and how.probe else None
+        if how.probe is not None:
+            row[how.column] = _relative(probe, ref["probes"][how.probe]) if ok else np.nan
+        if how.analytic is not None:
+            component, value, source = how.analytic
+            row[f"{how.probe} / {source}"] = probe[component] / value if ok else np.nan
+        row[L2] = metrics.relative_l2_error(np.asarray(r["u"], float), u_ref) if ok else np.nan
+        row["steps"] = r.get("steps", np.nan)
+        row["message"] = r.get("message", "")
         rows.append(row)
     df = pd.DataFrame(rows)
     ok = df["status"] == "ok"
     df["pareto"] = False
     df.loc[ok, "pareto"] = pareto_front(
-        df.loc[ok, "seconds"].to_numpy(), df.loc[ok, "tip_error"].to_numpy()
+        df.loc[ok, "seconds"].to_numpy(), df.loc[ok, how.column].to_numpy()
     )
     return df
 
 
-def step_frame(meshes, steps: list[dict]) -> pd.DataFrame:
-    """One row per mesh: the cost of one explicit step, spring model and explicit P1 FEM.
+def step_frame(s: StudyScene, factors: list[int], steps: list[dict]) -> pd.DataFrame:
+    """One row per level: the cost of one explicit step, spring model and explicit P1 FEM.
 
     Parameters
     ----------
-    meshes
-        ``(nx, ny)`` of each mesh.
+    s
+        The scene.
+    factors
+        The levels.
     steps
-        Their results (:func:`~.cases.step_cost_case`).
+        Their results (:func:`~.cases.step_cost_work`).
 
     Returns
     -------
     DataFrame
     """
+    a, b = method_name(SPRING, "explicit"), method_name(EXPLICIT_FEM, "explicit")
     return pd.DataFrame(
         [
             {
-                "mesh": f"{nx}x{ny}x{ny}",
-                "tets": s["tets"],
-                "spring_ms_per_step": 1e3 * s["spring_wall"],
-                "fem_ms_per_step": 1e3 * s["fem_wall"],
-                "ratio_wall": s["ratio_wall"],
-                "spring_cpu_ms": 1e3 * s["spring_cpu"],
-                "fem_cpu_ms": 1e3 * s["fem_cpu"],
-                "ratio_cpu": s["ratio_cpu"],
+                "mesh": level_label(s.table, k),
+                "tets": r["tets"],
+                f"{a} ms/step": 1e3 * r[f"{SPRING}_wall"],
+                f"{b} ms/step": 1e3 * r[f"{EXPLICIT_FEM}_wall"],
+                "ratio (wall)": r["ratio_wall"],
+                f"{a} CPU ms/step": 1e3 * r[f"{SPRING}_cpu"],
+                f"{b} CPU ms/step": 1e3 * r[f"{EXPLICIT_FEM}_cpu"],
+                "ratio (CPU)": r["ratio_cpu"],
             }
-            for (nx, ny), s in zip(meshes, steps)
+            for k, r in zip(factors, steps, strict=True)
         ]
     )
 
 
 def write_tables(
-    ctx: StudyContext, df: pd.DataFrame, sdf: pd.DataFrame, ref: dict, p: Settings
+    ctx: StudyContext,
+    s: StudyScene,
+    df: pd.DataFrame,
+    sdf: pd.DataFrame | None,
+    ref: dict,
+    ref_text: str,
+    how: Measure,
+    suffix: str = "",
 ) -> list[Table]:
     """Write the points and step-cost tables (and the failures, if any).
 
@@ -126,42 +211,57 @@ def write_tables(
     ----------
     ctx
         Where to write.
+    s
+        The scene.
     df, sdf
-        :func:`points_frame` and :func:`step_frame`.
+        :func:`points_frame` and :func:`step_frame` (``None``: no step costs).
     ref
-        The reference result.
-    p
-        The study's settings.
+        The reference's result.
+    ref_text
+        The reference (method and level).
+    how
+        The measure.
+    suffix
+        File-name suffix (several scenes).
 
     Returns
     -------
     list of Table
     """
-    rx, ry = p.reference
-    ref_tip = np.asarray(ref["tip"])
-    timo = ref["timoshenko"]
-    ok = df["status"] == "ok"
     show = df.drop(columns=["message"]).copy()
-    show["tip_error_%"] = 100 * show.pop("tip_error")
-    points = Table(
-        write_table(show, ctx.path("points")),
-        f"Every (method, mesh, setting) point: CPU time (`seconds`) and wall time from the "
-        f"scene to the tip displacement (model build and time-step estimate included; the "
-        f"solves are serial, so CPU time is the wall time of an idle machine, while this "
-        f"shared machine's wall times varied up to 3x), relative tip error "
-        f"against P2 on {rx}x{ry}x{ry} ({ref['tets']} tets; its tip is "
-        f"{-ref_tip[2] / timo:.4f} x Timoshenko), status, explicit/implicit steps, and whether "
-        f"the point is on the Pareto front.",
-    )
-    costs = Table(
-        write_table(sdf, ctx.path("step_cost")),
-        f"Cost of one explicit step (forces + update through the same solver loop), spring "
-        f"model vs explicit P1 neo-Hookean FEM on the same mesh: medians of {STEP_REPEATS} "
-        f"alternating repeats of {STEP_COUNT}-500 steps; wall and CPU (process) time.",
-    )
-    failed = df[~ok]
+    if how.probe is not None:
+        show[f"{how.column} %"] = 100 * show.pop(how.column)
+    against = f"{how.probe} displacement" if how.probe else "field at the level-1 vertices"
+    context = ""
+    if how.analytic is not None:
+        component, value, source = how.analytic
+        ratio = ref["probes"][how.probe][component] / value
+        context = f"; its {how.probe} is {ratio:.4f} × {source}"
+    tables = [
+        Table(
+            write_table(show, ctx.path(f"points{suffix}")),
+            f"{s.label}: every (method, level, setting) point: CPU time (`seconds`) and wall "
+            "time from the scene to the answer (model build and time-step estimate included; "
+            "the solves are serial, so CPU time is the wall time of an idle machine, while a "
+            "shared machine's wall times vary), relative error of the "
+            f"{against} against {ref_text} ({ref['tets']} tets{context}), status, "
+            "explicit/implicit steps, and whether the point is on the Pareto front.",
+        )
+    ]
+    if sdf is not None:
+        tables.append(
+            Table(
+                write_table(sdf, ctx.path(f"step_cost{suffix}")),
+                "Cost of one explicit step (forces + update through the same solver loop), "
+                "spring model vs explicit P1 neo-Hookean FEM on the same mesh: medians of "
+                f"{STEP_REPEATS} alternating repeats of {STEP_COUNT}-500 steps; wall and CPU "
+                "(process) time.",
+            )
+        )
+    failed = df[df["status"] != "ok"]
     if len(failed):
         write_table(
-            failed[["method", "mesh", "setting", "status", "message"]], ctx.path("failures")
+            failed[["method", "mesh", "setting", "status", "message"]],
+            ctx.path(f"failures{suffix}"),
         )
-    return [points, costs]
+    return tables

@@ -7,7 +7,7 @@ import pandas as pd
 
 from ..registry import Figure, StudyContext
 from ..tables import save_figure
-from .cases import MAP_METHODS, Settings
+from .cases import Settings
 
 
 def locking_figure(ctx: StudyContext, dk: pd.DataFrame, q: Settings) -> Figure:
@@ -48,14 +48,14 @@ def locking_figure(ctx: StudyContext, dk: pd.DataFrame, q: Settings) -> Figure:
     return Figure(
         save_figure(fig, ctx.path("locking.png")),
         f"Tip deflection over Timoshenko against ν: from ν = {min(nus)} to "
-        f"{max(nus)}, P1 goes {lo['fem-p1']:.2f} → {hi['fem-p1']:.2f}, "
-        f"P2 {lo['fem-p2']:.2f} → {hi['fem-p2']:.2f}, spring "
+        f"{max(nus)}, P1 goes {lo['P1']:.2f} → {hi['P1']:.2f}, "
+        f"P2 {lo['P2']:.2f} → {hi['P2']:.2f}, spring "
         f"{lo['spring']:.2f} → {hi['spring']:.2f}.",
     )
 
 
 def failure_map_figure(
-    ctx: StudyContext, dm: pd.DataFrame, q: Settings, methods: tuple[str, ...] | None = None
+    ctx: StudyContext, dm: pd.DataFrame, q: Settings, methods: tuple[str, ...]
 ) -> Figure:
     """The failure map per method: ok, inverted or blew up on the load × dt grid.
 
@@ -68,7 +68,7 @@ def failure_map_figure(
     q
         The study's settings.
     methods
-        The methods shown (default :data:`~.cases.MAP_METHODS`).
+        The methods shown, one panel each.
 
     Returns
     -------
@@ -78,7 +78,7 @@ def failure_map_figure(
     from matplotlib.colors import ListedColormap
 
     lf, df_ = list(q.map_loads), list(q.map_dt_factors)
-    mmethods = list(methods or MAP_METHODS)
+    mmethods = [m for m in methods if m in set(dm.method)]
     codes = {"ok": 0, "inverted": 1, "blew up": 2}
     fig, axes = plt.subplots(1, len(mmethods), figsize=(4.2 * len(mmethods), 3.8), sharey=True)
     axes = np.atleast_1d(axes)

@@ -7,6 +7,26 @@ import pandas as pd
 from ..registry import StudyContext, Table
 from ..tables import write_table
 
+#: The case keys each series' frame keeps, with their column names.
+KEYS = {
+    "dt": {"scene": "scene", "method": "method"},
+    "load": {"scene": "scene", "method": "method", "factor": "load_factor"},
+    "lock": {"scene": "scene", "method": "method", "nu": "nu"},
+    "map": {
+        "scene": "scene",
+        "method": "method",
+        "factor": "load_factor",
+        "dt_factor": "dt_factor",
+    },
+}
+#: The result columns each series' table shows.
+COLUMNS = {
+    "dt": ["scene", "method", "tets", "dt_pred", "dt_measured", "ratio"],
+    "load": ["scene", "method", "load_factor", "status", "u/size", "message"],
+    "lock": ["scene", "method", "nu", "tip_ratio", "volume_change", "inverted"],
+    "map": ["scene", "method", "load_factor", "dt_factor", "status"],
+}
+
 
 def frames(cases: dict[str, list[dict]], results: dict[str, list[dict]]) -> dict[str, pd.DataFrame]:
     """The four series as frames.
@@ -19,42 +39,31 @@ def frames(cases: dict[str, list[dict]], results: dict[str, list[dict]]) -> dict
     Returns
     -------
     dict
-        ``dt`` (method, tets, predicted and measured step, ratio), ``load`` (method, load
-        factor, status, tip/L, message), ``lock`` (method, ν, tip ratio, volume change,
-        inverted) and ``map`` (method, load factor, dt factor, status).
+        ``dt`` (scene, method, tets, predicted and measured step, ratio), ``load`` (load
+        factor, status, largest |u| over the body's size, message), ``lock`` (ν, tip ratio,
+        volume change, inverted) and ``map`` (load factor, dt factor, status).
     """
-    c, r = cases["dt"], results["dt"]
-    df = pd.DataFrame([{**{k: a[k] for k in ("method", "nx", "ny")}, **b} for a, b in zip(c, r)])
-    df["tets"] = df["nx"] * df["ny"] ** 2 * 6
-    df = df[["method", "tets", "dt_pred", "dt_measured", "ratio"]]
+    out = {}
+    for k, keys in KEYS.items():
+        rows = []
+        for c, r in zip(cases[k], results[k], strict=True):
+            row = {name: c[key] for key, name in keys.items()}
+            if k == "dt":
+                row["tets"] = _tets(c)
+            rows.append({**row, **r})
+        out[k] = pd.DataFrame(rows, columns=None if rows else COLUMNS[k])
+        out[k] = out[k].reindex(columns=COLUMNS[k])
+    return out
 
-    c, r = cases["load"], results["load"]
-    dl = pd.DataFrame(
-        [{"method": a["method"], "load_factor": a["factor"], **b} for a, b in zip(c, r)]
-    )
-    dl["tip/L"] = dl["tip"] / 0.1
-    dl = dl[["method", "load_factor", "status", "tip/L", "message"]]
 
-    c, r = cases["lock"], results["lock"]
-    dk = pd.DataFrame([{"method": a["method"], "nu": a["nu"], **b} for a, b in zip(c, r)])
+def _tets(case: dict) -> int:
+    from ..scenes import case_scene
 
-    c, r = cases["map"], results["map"]
-    dm = pd.DataFrame(
-        [
-            {
-                "method": a["method"],
-                "load_factor": a["factor"],
-                "dt_factor": a["dt_factor"],
-                "status": b["status"],
-            }
-            for a, b in zip(c, r)
-        ]
-    )
-    return {"dt": df, "load": dl, "lock": dk, "map": dm}
+    return case_scene(case).mesh.n_tets
 
 
 def write_tables(ctx: StudyContext, f: dict[str, pd.DataFrame]) -> list[Table]:
-    """Write the four tables.
+    """Write the tables of the series that ran.
 
     Parameters
     ----------
@@ -66,28 +75,33 @@ def write_tables(ctx: StudyContext, f: dict[str, pd.DataFrame]) -> list[Table]:
     Returns
     -------
     list of Table
-        Critical step, largest load, locking, failure map.
+        Critical step, largest load, locking (if run), failure map.
     """
+    captions = {
+        "dt": (
+            "critical_dt",
+            "Predicted critical step 2/ω_max against the measured largest stable step "
+            "(bisection, undamped runs from a perturbed rest state, loads off); ratio = "
+            "measured / predicted.",
+        ),
+        "load": (
+            "max_load",
+            "Static solves under the scene's loads times the load factor: status and the "
+            "largest displacement over the body's size.",
+        ),
+        "lock": (
+            "locking",
+            "Cantilever tip deflection / Timoshenko and relative volume change against "
+            "Poisson's ratio.",
+        ),
+        "map": (
+            "failure_map",
+            "Explicit damped dynamics on the load × time-step grid: ok, blew up, or ended "
+            "with inverted elements.",
+        ),
+    }
     return [
-        Table(
-            write_table(f["dt"], ctx.path("critical_dt")),
-            "Predicted critical step 2/ω_max against the measured largest "
-            "stable step (bisection, undamped runs from a perturbed rest "
-            "state); ratio = measured / predicted.",
-        ),
-        Table(
-            write_table(f["load"], ctx.path("max_load")),
-            "Static solves of the cantilever under growing end load "
-            "(factor × 0.1 Pa): status, tip deflection over length.",
-        ),
-        Table(
-            write_table(f["lock"], ctx.path("locking")),
-            "Cantilever tip deflection / Timoshenko and relative volume change "
-            "against Poisson's ratio.",
-        ),
-        Table(
-            write_table(f["map"], ctx.path("failure_map")),
-            "Explicit damped dynamics on the load × time-step grid: ok, "
-            "blew up, or ended with inverted elements.",
-        ),
+        Table(write_table(f[k], ctx.path(name)), caption)
+        for k, (name, caption) in captions.items()
+        if len(f[k])
     ]

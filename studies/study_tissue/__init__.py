@@ -1,8 +1,8 @@
 """Study ``tissue``: the spring model against the Guccione FEM at finite strain.
 
 Three measurements, each spring variant (:data:`~.cases.VARIANTS`: the exact element with
-and without the tissue's stiffening, and the seed's default) against the FEM on the same mesh
-(the beam and the ventricle: the P2 reference and the same-mesh P1):
+and without the tissue's stiffening, and the specification's element) against the FEM on the
+same mesh (the beam and the ventricle: the P2 reference and the same-mesh P1):
 
 - stress-stretch along and across the fibre: a unit cube of Land's problem-1 Guccione law
   (C = 2 kPa, b_f = 8, b_t = 2, b_fs = 4, penalty kappa = 100 kPa) and of Holzapfel &
@@ -28,18 +28,19 @@ from __future__ import annotations
 import numpy as np
 
 from ..registry import StudyContext, StudyOutput, Table, study
+from ..scenes import StudyScene
 from ..tables import write_table
 from .cases import (
-    FEM_P1,
-    STRETCH_LAWS,
+    FEM_MODELS,
     VARIANTS,
+    VERSION,
     Settings,
     beam_case,
+    scenes,
     stretch_case,
     ventricle_case,
 )
 from .convergence import (
-    convergence_cases,
     convergence_figure,
     convergence_findings,
     convergence_frame,
@@ -47,21 +48,29 @@ from .convergence import (
 )
 from .report import beam_frame, findings, pv_figure, stretch_frame, tables, ventricle_frame
 
-__all__ = ["Settings", "run"]
+__all__ = ["Settings", "run", "scenes"]
 
-MODELS = [("fem", None)] + [("spring", v) for v in VARIANTS]
-#: The beam and the ventricle also run the same-mesh P1 FEM (the cube's FEM is P1 already).
-STRUCTURE_MODELS = [*MODELS, (FEM_P1, None)]
+#: The models of the stress-stretch cube (P1 is the cube's FEM already).
+MODELS = ("fem", *VARIANTS)
+#: The beam and the ventricle also run the same-mesh P1 FEM.
+STRUCTURE_MODELS = (*MODELS, "P1")
+#: Why the study does not run on a user's scene.
+NO_USER_SCENES = (
+    "it measures its own bundled tissue scenes (a stress-stretch cube, Land's beam and "
+    "ventricles) against published values; run accuracy, ablation or compare on your scene"
+)
 
 
-@study("tissue", Settings)
-def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
+@study("tissue", Settings, scenes, user_scenes=NO_USER_SCENES)
+def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
     """Run the tissue study (see the module docstring).
 
     Parameters
     ----------
     ctx
         Output folder, cache and preset.
+    scenes
+        Its scenes by role: ``stretch`` (cubes), ``beam``, ``ventricle``, ``apex``.
     settings
         Meshes and stretches.
 
@@ -71,26 +80,24 @@ def run(ctx: StudyContext, settings: Settings) -> StudyOutput:
         Findings, the three tables, the stress-stretch and pressure-volume figure, and the
         spring model's worst errors as headline numbers.
     """
-    cube = [
-        {"law": law, "direction": d, "stretch": s, "n": settings.n, "model": m, "variant": v}
-        for law in STRETCH_LAWS
-        for d in ("along", "across")
-        for s in settings.stretches
-        for m, v in MODELS
-    ]
+
+    def cases(role: str, models: tuple[str, ...]) -> list[dict]:
+        return [
+            s.case("tissue", VERSION, model=m) for s in scenes if s.roles == (role,) for m in models
+        ]
+
+    cube = cases("stretch", MODELS)
     cube_res = ctx.cache.run(cube, stretch_case, ctx.progress, "stretch")
-    beam = [{"divisions": list(settings.beam_divisions), "model": m, "variant": v}
-            for m, v in STRUCTURE_MODELS]  # fmt: skip
+    beam = cases("beam", STRUCTURE_MODELS)
     beam_res = ctx.cache.run(beam, beam_case, ctx.progress, "beam")
-    where = {"scene": settings.lv_scene, "size": settings.lv_size, "steps": settings.lv_steps}
-    lv = [{**where, "model": m, "variant": v} for m, v in STRUCTURE_MODELS
-          if v is None or v in settings.lv_variants]  # fmt: skip
+    lv_models = tuple(m for m in STRUCTURE_MODELS if m in FEM_MODELS or m in settings.lv_variants)
+    lv = cases("ventricle", lv_models)
     lv_res = ctx.cache.run(lv, ventricle_case, ctx.progress, "ventricle")
     sdf = stretch_frame(cube, cube_res)
     bdf = beam_frame(beam, beam_res)
     vdf = ventricle_frame(lv, lv_res)
     text, headline = findings(sdf, bdf, vdf)
-    conv = convergence_cases(settings)
+    conv = cases("apex", ("fem",))
     cdf = convergence_frame(conv, ctx.cache.run(conv, ventricle_case, ctx.progress, "apex"))
     rich = richardson_frame(cdf)
     text += convergence_findings(rich)

@@ -9,19 +9,13 @@ Examples
 
 from __future__ import annotations
 
-import copy
 import math
-import time
-import tomllib
-from dataclasses import dataclass
-from pathlib import Path
+from dataclasses import dataclass, replace
 
-from springfem.errors import SolverError
 from springfem.scene import Scene, scene_from_dict
 
-from ..partial import partial_solution
-
-SCENES = Path(__file__).resolve().parents[1] / "scenes"
+from .. import models
+from ..scenes import StudyScene, case_scene
 
 #: Land's problem-1/3 Guccione constants (kPa) with a volumetric penalty the spring model
 #: can carry (kappa = 50 C: nearly incompressible, Poisson's ratio near 0.5 at rest).
@@ -35,21 +29,14 @@ HOLZAPFEL_OGDEN = {"law": "holzapfel-ogden", "a": 0.059, "b": 8.023, "a_f": 18.4
 STRETCH_LAWS = {"guccione": GUCCIONE, "holzapfel-ogden": HOLZAPFEL_OGDEN}
 
 #: The spring variants compared: the exact element with the tissue's stiffening (Green-strain
-#: axial springs, shear torsion, exponential element energy: what the bundled ventricle scenes
-#: use; the FEM's penalty U(J)), the exact element with the spec's quadratic springs, and the
-#: seed's default element.
-VARIANTS = {
-    "stiffened": {"volume": "axes", "torsion": "shear", "calibration": "exact", "coupling": True,
-                  "axial": "green", "stiffening": "exponential", "volumetric": "log"},
-    "exact": {"volume": "axes", "torsion": "energy", "calibration": "exact", "coupling": True},
-    "seed": {},
-}  # fmt: skip
-#: The ``[spring]`` keys that choose the element (a variant sets them, or leaves defaults).
-ELEMENT_KEYS = ("volume", "torsion", "calibration", "coupling", "axial", "axial_coefficients",
-                "stiffening", "stiffening_modulus", "volumetric")  # fmt: skip
-#: The FEM on the spring's mesh and element order: P1 in the displacement formulation with the
-#: spring's penalty (:func:`studies.compare_models.model_scene`), beside the P2 reference.
-FEM_P1 = "fem-p1"
+#: axial springs, shear torsion, exponential element energy, the FEM's penalty U(J): what the
+#: bundled ventricle scenes use), the exact element with the specification's quadratic
+#: springs, and the specification's element.
+VARIANTS = ("spring-stiffened", "spring-exact", "spring-spec")
+#: The FEM models: the scene's own (the P2 reference) and P1 on the spring's mesh and element
+#: order (the displacement formulation with the spring's penalty, :mod:`studies.models`).
+FEM_MODELS = ("fem", "P1")
+VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -73,8 +60,8 @@ class Settings:
     lv_steps
         FEM load steps of the ventricle (points of its pressure-volume curve).
     lv_variants
-        The spring variants run on the ventricle (the seed's fails slowly: the quick preset
-        leaves it out).
+        The spring variants run on the ventricle (the specification's element fails slowly:
+        the quick preset leaves it out).
     conv_scenes, conv_sizes, conv_steps
         The apex mesh-convergence study (P2/P1 mixed FEM): the ventricle scenes, their
         element sizes (mm, coarse to fine) and load steps. Measured here: 2 mm takes
@@ -88,7 +75,7 @@ class Settings:
     lv_scene: str = "land-ventricle"
     lv_size: float = 4.0
     lv_steps: int = 10
-    lv_variants: tuple[str, ...] = tuple(VARIANTS)
+    lv_variants: tuple[str, ...] = VARIANTS
     conv_scenes: tuple[str, ...] = ("land-ventricle", "land-ventricle-fibres")
     conv_sizes: tuple[float, ...] = (4.0, 3.0, 2.5, 2.0)
     conv_steps: int = 10
@@ -103,7 +90,7 @@ class Settings:
         """A few seconds: a coarse cube, beam and ventricle."""
         return cls(n=1, stretches=(1.1, 1.3), beam_divisions=(10, 1, 1),
                    lv_scene="land-ventricle-fibres", lv_size=6.0, lv_steps=3,
-                   lv_variants=("stiffened", "exact"), conv_scenes=("land-ventricle-fibres",),
+                   lv_variants=VARIANTS[:2], conv_scenes=("land-ventricle-fibres",),
                    conv_sizes=(6.0, 5.0), conv_steps=3)  # fmt: skip
 
 
@@ -162,28 +149,15 @@ def stretch_data(direction: str, stretch: float, n: int, law: str = "guccione") 
     return data
 
 
-def _solve(data: dict, path: Path | None, model: str, variant: str | None, partial: bool = False):
-    """Build the scene of ``data`` (with the spring ``variant``) and solve it: ``(Solution,
-    None)``, or ``(None, message)`` for a solver failure; with ``partial``, a solve that
-    stopped part way along its load gives ``(its partial Solution, message)``."""
-    from ..solve import solve_scene
-
-    if model == "spring":
-        # the variant replaces the scene's element choice (the bundled ventricles ask for the
-        # exact element); the scene's other spring settings are kept
-        own = {k: v for k, v in data.get("spring", {}).items() if k not in ELEMENT_KEYS}
-        data = {**data, "spring": {**own, **VARIANTS[variant or "exact"]}}
-    scene = scene_from_dict(data, path)
-    if model == FEM_P1:
-        from ..compare_models import model_scene
-
-        scene, model = model_scene(scene, "P1"), "fem"
-    t0 = time.perf_counter()
-    try:
-        return solve_scene(scene, model), None
-    except SolverError as exc:
-        stopped = partial_solution(scene, model, exc, time.perf_counter() - t0) if partial else None
-        return stopped, str(exc).splitlines()[0][:200]
+def _solve(scene: Scene, model: str, partial: bool = False):
+    """Solve ``scene`` with a registered model: ``(Solution, "")``, or ``(None, message)``
+    for a solver failure; with ``partial``, a solve that stopped part way along its load
+    gives ``(its partial Solution, message)``."""
+    got = models.run(scene, model)
+    if got.ok:
+        return got.solution, ""
+    message = got.message.splitlines()[0][:200]
+    return (got.solution if partial and got.status == "partial" else None), message
 
 
 def stretch_case(case: dict) -> dict:
@@ -192,29 +166,18 @@ def stretch_case(case: dict) -> dict:
     Parameters
     ----------
     case
-        ``direction``, ``stretch``, ``n``, ``model``, ``variant`` (spring only) and ``law``
-        (default ``guccione``).
+        The cube's case (:func:`scenes`): ``direction``, ``stretch``, ``law``, ``model``.
 
     Returns
     -------
     dict
         ``stress`` (NaN on failure), ``wall_time`` and ``error`` (message or "").
     """
-    law = case.get("law", "guccione")
-    data = stretch_data(case["direction"], case["stretch"], case["n"], law)
-    sol, err = _solve(data, None, case["model"], case.get("variant"))
+    sol, err = _solve(case_scene(case), case["model"])
     if sol is None:
         return {"stress": math.nan, "wall_time": math.nan, "error": err}
     fx = sol.result.reactions["x_max"][0]
     return {"stress": float(fx), "wall_time": sol.result.wall_time, "error": ""}
-
-
-def _scene_file(name: str, edit) -> tuple[dict, Path]:
-    """A bundled scene's table, edited, and its path."""
-    path = SCENES / f"{name}.toml"
-    data = copy.deepcopy(tomllib.loads(path.read_text(encoding="utf-8")))
-    edit(data)
-    return data, path
 
 
 def beam_case(case: dict) -> dict:
@@ -223,19 +186,14 @@ def beam_case(case: dict) -> dict:
     Parameters
     ----------
     case
-        ``divisions``, ``model`` (``fem``, ``fem-p1`` or ``spring``), ``variant`` (spring
-        only).
+        The beam's case: ``model`` (a registered model).
 
     Returns
     -------
     dict
         ``tip_z``, ``wall_time`` and ``error``.
     """
-
-    def edit(d):
-        d["mesh"]["divisions"] = list(case["divisions"])
-
-    sol, err = _solve(*_scene_file("land-beam", edit), case["model"], case.get("variant"))
+    sol, err = _solve(case_scene(case), case["model"])
     if sol is None:
         return {"tip_z": math.nan, "wall_time": math.nan, "error": err}
     return {"tip_z": 1.0 + sol.result.probes["tip"][2], "wall_time": sol.result.wall_time,
@@ -248,8 +206,7 @@ def ventricle_case(case: dict) -> dict:
     Parameters
     ----------
     case
-        ``scene`` (a bundled ventricle scene), ``size``, ``steps``, ``model``, ``variant``
-        (spring only).
+        A ventricle's case: ``model`` (a registered model).
 
     Returns
     -------
@@ -260,17 +217,12 @@ def ventricle_case(case: dict) -> dict:
         1: the values at the load a failed solve reached, with its ``error``) and ``error``.
     """
 
-    def edit(d):
-        d["mesh"]["size"] = case["size"]
-        d["fem"]["load_steps"] = case["steps"]
-
-    data, path = _scene_file(case["scene"], edit)
-    sol, err = _solve(data, path, case["model"], case.get("variant"), partial=True)
+    sol, err = _solve(case_scene(case), case["model"], partial=True)
     if sol is None:
         nan = math.nan
         return {"endo_apex_z": nan, "epi_apex_z": nan, "cavity": {}, "wall_time": nan,
                 "dofs": nan, "tets": nan, "load_factor": nan, "error": err}  # fmt: skip
-    return {**_ventricle_values(sol), "error": err or ""}
+    return {**_ventricle_values(sol), "error": err}
 
 
 def _ventricle_values(sol) -> dict:
@@ -285,3 +237,49 @@ def _ventricle_values(sol) -> dict:
         "dofs": sol.result.counts.get("dofs", math.nan),  # a partial state carries no counts
         "tets": sol.result.counts.get("tets", math.nan),
     }
+
+
+def cube(direction: str, stretch: float, n: int, law: str) -> StudyScene:
+    """The stress-stretch cube of :func:`stretch_data` as a study scene (role ``stretch``)."""
+    label = f"{law} cube {direction} {stretch:g}"
+    params = {"law": law, "direction": direction, "stretch": stretch}
+    return StudyScene(label, stretch_data(direction, stretch, n, law), None, ("stretch",),
+                      params=params)  # fmt: skip
+
+
+def ventricle(name: str, size: float, steps: int, role: str) -> StudyScene:
+    """A bundled Land ventricle at element ``size`` (mm) with ``steps`` FEM load steps."""
+    sets = {"mesh.size": size, "fem.load_steps": steps}
+    s = StudyScene.bundled(name, sets, label=f"{name} {size:g} mm", roles=(role,))
+    return replace(s, params={"scene": name, "size": size, "steps": steps})
+
+
+def scenes(settings: Settings) -> list[StudyScene]:
+    """The study's scenes: the stress-stretch cubes (``stretch``), the Land beam (``beam``),
+    the ventricle (``ventricle``) and the apex mesh-convergence ventricles (``apex``).
+
+    Parameters
+    ----------
+    settings
+        The study's settings.
+
+    Returns
+    -------
+    list of StudyScene
+    """
+    cubes = [
+        cube(d, s, settings.n, law)
+        for law in STRETCH_LAWS
+        for d in ("along", "across")
+        for s in settings.stretches
+    ]
+    beam = StudyScene.bundled(
+        "land-beam", {"mesh.divisions": list(settings.beam_divisions)}, roles=("beam",)
+    )
+    lv = ventricle(settings.lv_scene, settings.lv_size, settings.lv_steps, "ventricle")
+    apex = [
+        ventricle(s, h, settings.conv_steps, "apex")
+        for s in settings.conv_scenes
+        for h in settings.conv_sizes
+    ]
+    return [*cubes, beam, lv, *apex]

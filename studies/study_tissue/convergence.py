@@ -80,14 +80,6 @@ def observed_order(h: np.ndarray, f: np.ndarray) -> tuple[float, float, str]:
     return float(p), float(f3 - c * h3**p), ""
 
 
-def convergence_cases(settings) -> list[dict]:
-    """One FEM case per (scene, size); the same keys as the study's ventricle cases (the
-    cache shares a case both ask for)."""
-    steps = settings.conv_steps
-    return [{"scene": s, "size": h, "steps": steps, "model": "fem", "variant": None}
-            for s in settings.conv_scenes for h in settings.conv_sizes]  # fmt: skip
-
-
 def convergence_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
     """One row per (scene, size): apex z of endo and epi, h, tets, DOFs and wall time."""
     v = 6.0 * math.sqrt(2.0) * wall_volume()

@@ -14,12 +14,10 @@ from ..tables import save_figure, write_table
 BEAM_RANGE = (4.14, 4.20)
 
 
-#: Row labels of the FEM models (``fem``: the P2 reference; ``fem-p1``: the same-mesh P1).
-FEM_LABELS = {"fem": "fem", "fem-p1": "fem P1"}
-
-
 def _label(case: dict) -> str:
-    return FEM_LABELS.get(case["model"]) or f"spring ({case['variant']})"
+    """The row's model: a name of :mod:`studies.models` (``fem``: the P2 reference; ``P1``:
+    the same-mesh P1)."""
+    return case["model"]
 
 
 def _rel(value: float, ref: float) -> float:
@@ -58,7 +56,7 @@ def beam_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
 
 def _reference(df: pd.DataFrame, column: str) -> float:
     """The same-mesh P1 FEM's ``column`` (NaN when the P1 row is missing or failed)."""
-    rows = df.loc[(df.model == "fem P1") & (df.error.fillna("") == ""), column]
+    rows = df.loc[(df.model == "P1") & (df.error.fillna("") == ""), column]
     return float(rows.iloc[0]) if len(rows) else math.nan
 
 
@@ -138,7 +136,7 @@ def pv_figure(ctx: StudyContext, sdf, lv_cases, lv_results, settings) -> Figure:
             b.plot(pv[:, 2] / 1000.0, pv[:, 1], "o-", ms=3, label=_label(c))
     for c, r in zip(lv_cases, lv_results, strict=True):
         cav = r.get("cavity") or {}
-        if c["model"] == "spring" and cav.get("final") and math.isfinite(p_end):
+        if c["model"].startswith("spring") and cav.get("final") and math.isfinite(p_end):
             lf = r.get("load_factor", 1.0)
             b.plot(cav["final"] / 1000.0, p_end * lf, "s", ms=6,
                    label=_label(c) + ("" if lf >= 1 else f" (stopped at {lf:.2f})"))  # fmt: skip
@@ -172,7 +170,7 @@ def findings(sdf, bdf, vdf) -> tuple[list[str], dict[str, float]]:
                 f"{BEAM_RANGE[1]} mm on this mesh).")  # fmt: skip
     for _, row in bdf[bdf.model != "fem"].iterrows():
         what = f"failed: {row.error}" if row.error else f"{100 * row.rel_error:+.1f}% deflection"
-        if not row.error and row.model != "fem P1" and math.isfinite(row.rel_error_p1):
+        if not row.error and row.model != "P1" and math.isfinite(row.rel_error_p1):
             what += f", {100 * row.rel_error_p1:+.1f}% against the same-mesh P1 FEM"
         text.append(f"Land beam, {row.model}: tip z = {row.tip_z:.4g} mm ({what}).")
         head[f"beam_error_{row.model}"] = float(row.rel_error)
@@ -182,7 +180,7 @@ def findings(sdf, bdf, vdf) -> tuple[list[str], dict[str, float]]:
         if row.error and row.load_factor == row.load_factor:  # partial (not NaN)
             what = (f"partial, stopped at load factor {row.load_factor:.3g}: endo apex z = "
                     f"{row.endo_apex_z:.4g} mm, epi {row.epi_apex_z:.4g} mm")  # fmt: skip
-        spring = row.model not in ("fem", "fem P1")
+        spring = row.model not in ("fem", "P1")
         if not row.error and spring and math.isfinite(row.cavity_rel_p1):
             what += (f"; against the same-mesh P1 FEM: apex motion {100 * row.rel_error_p1:+.1f}%,"
                      f" final cavity {100 * row.cavity_rel_p1:+.1f}%")  # fmt: skip

@@ -6,12 +6,24 @@ import numpy as np
 
 from ..registry import Figure, StudyContext
 from ..tables import save_figure
-from .cases import COLORS, CUBE_STRESS, VARIANTS, Settings, analytic_drift
-from .tables import Runs, compare_words, summary
+from .cases import COLORS, DYNAMIC
+from .tables import MEASURE_WORDS, Runs, compare_words
 
 
-def time_figure(ctx: StudyContext, runs: Runs, s: Settings) -> Figure:
-    """Drift against time after a suddenly applied load (cube compressed, pulled, sag).
+def _reference_lines(ax, runs: Runs, scene: str) -> None:
+    """Dashed lines of the material's drift: the closed form, else the static FEM."""
+    ref, m = runs.volume.get(scene), runs.material(scene)
+    if ref:
+        for i in (0, 1):
+            ax[i].axhline(abs(ref[0]), color="k", ls="--", lw=1, label=f"{ref[1]} (static)")
+    elif m:
+        label = f"{m} (static)"
+        ax[0].axhline(abs(runs.stat(scene, m)), color="k", ls="--", lw=1, label=label)
+        ax[1].axhline(runs.stat(scene, m, "element_drift"), color="k", ls="--", lw=1, label=label)
+
+
+def time_figure(ctx: StudyContext, runs: Runs) -> Figure:
+    """Drift against time after a suddenly applied load, one column per scene.
 
     Parameters
     ----------
@@ -19,8 +31,6 @@ def time_figure(ctx: StudyContext, runs: Runs, s: Settings) -> Figure:
         Where to write.
     runs
         The study's runs.
-    s
-        Its settings.
 
     Returns
     -------
@@ -31,74 +41,70 @@ def time_figure(ctx: StudyContext, runs: Runs, s: Settings) -> Figure:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    dyn, sag_ref, nu = runs.dyn, runs.sag_ref, runs.nu
-    panels = [("compressed", "step"), ("pulled", "step")] + ([("sag", "step")] if s.sag else [])
+    panels = [s.label for s in runs.scenes if "step" in runs.kinds(s.label)]
     fig, axes = plt.subplots(3, len(panels), figsize=(4.6 * len(panels), 9.5), squeeze=False)
-    for j, (label, kind) in enumerate(panels):
-        for c, lab, knd, r in dyn:
-            if lab != label or knd != kind:
+    for j, scene in enumerate(panels):
+        ax = axes[:, j]
+        for m in DYNAMIC:
+            r = runs.run(scene, "step", m)
+            if r is None:
                 continue
-            v = c["variant"]
             t = np.asarray(r["t"]) * 1e3
             tag = f" ({r['status']})" if r["status"] != "ok" else ""
-            kw = {"color": COLORS[v], "label": v + tag}
-            axes[0, j].semilogy(t, np.abs(r["dV"]) + 1e-12, **kw)
-            axes[1, j].semilogy(t, np.asarray(r["element_drift"]) + 1e-12, **kw)
-            if "LMS" in v:
-                axes[2, j].plot(t, r["k_median"], **kw)
-                axes[2, j].fill_between(t, r["k_min"], r["k_max"], color=COLORS[v], alpha=0.15)
-        if label != "sag":
-            a = abs(analytic_drift(nu, CUBE_STRESS))
-            for i in (0, 1):
-                axes[i, j].axhline(a, color="k", ls="--", lw=1, label="analytic (static)")
-            title = f"cube {label} (sudden ±{CUBE_STRESS:g} Pa)"
-        else:
-            if sag_ref is not None and sag_ref["status"] == "ok":
-                axes[0, j].axhline(
-                    abs(sag_ref["dV"]),
-                    color="k",
-                    ls="--",
-                    lw=1,
-                    label="FEM P1 neo-Hookean (static)",
-                )
-                axes[1, j].axhline(
-                    sag_ref["element_drift"],
-                    color="k",
-                    ls="--",
-                    lw=1,
-                    label="FEM P1 neo-Hookean (static)",
-                )
-            title = "sag under gravity (sudden)"
-        axes[0, j].set_title(title)
-        axes[0, j].set_ylabel("|ΔV| / V0 (total)")
-        axes[1, j].set_ylabel("Σ|ΔV_k| / V0 (elements)")
-        axes[2, j].set_ylabel("LMS k_s/k_s0 (median, band min–max)")
-        axes[2, j].set_yscale("log")
-        axes[2, j].set_xlabel("time (ms)")
+            kw = {"color": COLORS[m], "label": m + tag}
+            ax[0].semilogy(t, np.abs(r["dV"]) + 1e-12, **kw)
+            ax[1].semilogy(t, np.asarray(r["element_drift"]) + 1e-12, **kw)
+            if "lms" in m:
+                ax[2].plot(t, r["k_median"], **kw)
+                ax[2].fill_between(t, r["k_min"], r["k_max"], color=COLORS[m], alpha=0.15)
+        _reference_lines(ax, runs, scene)
+        ax[0].set_title(f"{scene} (sudden load)")
+        ax[0].set_ylabel("|ΔV| / V0 (total)")
+        ax[1].set_ylabel("Σ|ΔV_k| / V0 (elements)")
+        ax[2].set_ylabel("LMS k_s/k_s0 (median, band min–max)")
+        ax[2].set_yscale("log")
+        ax[2].set_xlabel("time (ms)")
         for i in range(3):
-            axes[i, j].grid(alpha=0.3, which="both")
+            ax[i].grid(alpha=0.3, which="both")
         for i in (0, 1):
-            axes[i, j].set_ylim(1e-4, 1.0)
-        axes[0, j].legend(fontsize=7)
-        axes[2, j].legend(fontsize=7)
-    n = summary(runs)
-    comp, k_spec, k_abs, a_cube = n.comp, n.k_spec, n.k_abs, n.a_cube
+            ax[i].set_ylim(1e-4, 1.0)
+        ax[0].legend(fontsize=7)
+        ax[2].legend(fontsize=7)
     return Figure(
         save_figure(fig, ctx.path("drift_vs_time.png")),
         "Volume drift against time after a suddenly applied load (top: whole-body "
         "|ΔV|/V0; middle: element drift; bottom: LMS stiffness ratio, median and min–max "
-        "band). The compressed cube ends at |ΔV|/V0 = "
-        + ", ".join(f"{comp[v]:.3g} ({v})" for v in VARIANTS)
-        + f" against {a_cube:.2g} for the material (dashed). In compression the spec "
-        f"rule ends with median k_s/k_s0 = {k_spec:.3g} and the abs rule with {k_abs:.3g}: "
-        f"relative to fixed volume springs, spec ends at "
-        f"{compare_words(comp['LMS spec'], comp['volume on'])} and abs at "
-        f"{compare_words(comp['LMS abs'], comp['volume on'])}." + _sag_caption(dyn),
+        "band); dashed: the material's static drift (closed form, else FEM)."
+        + "".join(_time_caption(runs, s) for s in panels),
     )
 
 
+def _time_caption(runs: Runs, scene: str) -> str:
+    """One scene's sentence of the time figure's caption."""
+    key = runs.measure(scene)
+    ends = {m: abs(runs.final(scene, "step", m, key)) for m in DYNAMIC}
+    text = f" {scene}: {MEASURE_WORDS[key]} ends at " + ", ".join(
+        f"{v:.3g} ({m})" for m, v in ends.items()
+    )
+    k_spec = runs.final(scene, "step", "spring-lms-spec", "k_median")
+    k_abs = runs.final(scene, "step", "spring-lms-abs", "k_median")
+    text += (
+        f"; median k_s/k_s0 {k_spec:.3g} (spec) and {k_abs:.3g} (abs), which end at "
+        f"{compare_words(ends['spring-lms-spec'], ends['spring-volume-on'])} and "
+        f"{compare_words(ends['spring-lms-abs'], ends['spring-volume-on'])} of fixed volume "
+        "springs"
+    )
+    bad = [m for m in DYNAMIC if (runs.run(scene, "step", m) or {}).get("status") != "ok"]
+    if bad:
+        text += "; not ok: " + ", ".join(
+            f"{m} ({runs.run(scene, 'step', m)['status']})" for m in bad
+        )
+    return text + "."
+
+
 def load_figure(ctx: StudyContext, runs: Runs) -> Figure:
-    """Whole-body drift of the cube against signed load factor (ramps, statics, analytic).
+    """Whole-body drift against signed load factor along the slow ramps, with the static
+    equilibria and the closed form.
 
     Parameters
     ----------
@@ -116,85 +122,70 @@ def load_figure(ctx: StudyContext, runs: Runs) -> Figure:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    dyn, stat, nu = runs.dyn, runs.stat, runs.nu
+    scenes = [s.label for s in runs.scenes if "ramp" in runs.kinds(s.label)]
     fig, ax = plt.subplots(figsize=(7.5, 6.5))
-    for v in VARIANTS:
-        for label, sign in (("compressed", -1.0), ("pulled", 1.0)):
-            for c, lab, knd, r in dyn:
-                if lab == label and knd == "ramp" and c["variant"] == v and r["t"]:
-                    load = sign * np.asarray(r["load"])
-                    ax.semilogy(
-                        load,
-                        np.abs(r["dV"]) + 1e-12,
-                        color=COLORS[v],
-                        label=f"spring {v} (slow ramp)" if sign < 0 else None,
-                    )
-    for v, mk in (("volume off", "s"), ("volume on", "s"), ("volume on (nnls)", "s")):
-        g = stat[(stat.model == v) & (stat.status == "ok")]
-        ax.semilogy(
-            g.load,
-            np.abs(g.dV),
-            mk,
-            color=COLORS[v],
-            mfc="none",
-            ms=9,
-            label=f"spring {v} (static Newton)",
-        )
-    for law, mk in (("linear", "o-"), ("neo-hookean", "^-")):
-        g = stat[(stat.model == f"FEM P1 {law}") & (stat.status == "ok")].sort_values("load")
-        for sign in (-1.0, 1.0):
-            h = g[np.sign(g.load) == sign]
+    st = runs.static
+    for i, scene in enumerate(scenes):
+        sign, first = runs.sign(scene), i == 0
+        for m in DYNAMIC:
+            r = runs.run(scene, "ramp", m)
+            if r is not None and r["t"]:
+                ax.semilogy(
+                    sign * np.asarray(r["load"]),
+                    np.abs(r["dV"]) + 1e-12,
+                    color=COLORS[m],
+                    label=f"{m} (slow ramp)" if first else None,
+                )
+        for m in ("spring-volume-off", "spring-volume-on", "spring-volume-nnls"):
+            g = st[(st.scene == scene) & (st.model == m) & (st.status == "ok")]
             ax.semilogy(
-                h.load,
-                np.abs(h.dV),
-                mk,
-                color="k",
-                ms=5,
-                lw=1,
-                label=f"FEM P1 {law} (static)" if sign < 0 else None,
+                sign * g.load,
+                np.abs(g.dV),
+                "s",
+                color=COLORS[m],
+                mfc="none",
+                ms=9,
+                label=f"{m} (static Newton)" if first else None,
             )
-    lf = np.linspace(-1, 1, 201)
-    ax.semilogy(
-        lf,
-        np.abs(analytic_drift(nu, lf * CUBE_STRESS)) + 1e-12,
-        "k--",
-        lw=0.8,
-        label="analytic (1−2ν)σ/E",
-    )
-    ax.set_xlabel(f"signed load factor (σ / {CUBE_STRESS:g} Pa; negative = compression)")
+        for m, mk in (("P1", "o-"), ("P1-NH", "^-")):
+            g = st[(st.scene == scene) & (st.model == m) & (st.status == "ok")].sort_values("load")
+            if len(g):
+                ax.semilogy(
+                    sign * g.load,
+                    np.abs(g.dV),
+                    mk,
+                    color="k",
+                    ms=5,
+                    lw=1,
+                    label=f"{m} (static)" if first else None,
+                )
+        ref = runs.volume.get(scene)
+        if ref:
+            lf = np.linspace(0.0, 1.0, 101)
+            ax.semilogy(
+                sign * lf, abs(ref[0]) * lf + 1e-12, "k--", lw=0.8, label=ref[1] if first else None
+            )
+    ax.set_xlabel("signed load factor (negative: the material loses volume)")
     ax.set_ylabel("|ΔV| / V0")
     ax.set_ylim(1e-4, 1.0)
-    ax.set_title(f"Cube, ν = {nu}: volume change against load")
+    ax.set_title(f"Volume change against load ({', '.join(scenes)})")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7, ncol=2, loc="upper center", bbox_to_anchor=(0.5, -0.12))
-    n = summary(runs)
-    fem_c = n.fem_c
+    scene = scenes[0]
+    m = runs.material(scene)
+    fem = abs(runs.stat(scene, m)) if m else np.nan
 
-    def ramp_end(label: str, v: str) -> float:
-        return abs(runs.final(label, "ramp", v))
+    def end(model: str) -> float:
+        return abs(runs.final(scene, "ramp", model))
 
     return Figure(
         save_figure(fig, ctx.path("drift_vs_load.png")),
-        "Whole-body |ΔV|/V0 of the cube against signed load factor: spring variants "
-        "along slow quasi-static load ramps (lines; squares: Newton equilibria without "
-        "LMS), FEM P1 linear and neo-Hookean (static), and the small-strain analytic "
-        f"value. At full compression FEM neo-Hookean changes the volume by {fem_c:.2g}; "
-        f"the spring model with volume springs by {ramp_end('compressed', 'volume on'):.2g}"
-        f" ({ramp_end('compressed', 'volume on') / fem_c:.0f}× the material), with LMS "
-        f"spec {ramp_end('compressed', 'LMS spec'):.2g}, LMS abs "
-        f"{ramp_end('compressed', 'LMS abs'):.2g}, nnls calibration "
-        f"{ramp_end('compressed', 'volume on (nnls)'):.2g}.",
+        "Whole-body |ΔV|/V0 against signed load factor: spring variants along slow "
+        "quasi-static load ramps (lines; squares: Newton equilibria without LMS), same-mesh "
+        f"P1 FEM (static) and the closed form. At full load on {scene} the material "
+        f"({m}) changes the volume by {fem:.2g}; the spring model with volume springs by "
+        f"{end('spring-volume-on'):.2g} ({end('spring-volume-on') / fem:.2g}× the "
+        f"material), with LMS spec {end('spring-lms-spec'):.2g}, LMS abs "
+        f"{end('spring-lms-abs'):.2g}, nnls calibration {end('spring-volume-nnls'):.2g}, "
+        f"the exact element {end('spring-exact'):.2g}.",
     )
-
-
-def _sag_caption(dyn: list) -> str:
-    """The sag panel's sentence of the time-figure caption (empty without a sag run)."""
-    sag = {c["variant"]: r for c, label, kind, r in dyn if label == "sag"}
-    if not sag:
-        return ""
-    inverted = [v for v, r in sag.items() if r["status"] in ("inverted", "diverged")]
-    diverged = [v for v, r in sag.items() if r["status"] == "diverged"]
-    text = f" In the sagging block {len(inverted)} of {len(sag)} spring variants invert elements"
-    if diverged:
-        text += f" and {', '.join(diverged)} diverges (stopped when the element drift exceeds 1)"
-    return text + "; the dashed line is the static neo-Hookean FEM drift."

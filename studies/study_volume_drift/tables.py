@@ -1,8 +1,8 @@
-"""Tables of the volume-drift study, and the numbers read off the runs.
+"""Tables of the volume-drift study, and the runs' outcomes they are read from.
 
-:class:`Runs` holds every run's outcome; :func:`summary` reads the numbers the figures'
-captions and the findings quote; :func:`final_table` and :func:`static_table` write the
-two tables.
+:class:`Runs` holds every case's outcome and answers the questions the tables, figures and
+findings ask (a run's final drift, a static drift, the scene's measure and its FEM
+reference); :func:`final_table` and :func:`static_table` write the two tables.
 """
 
 from __future__ import annotations
@@ -14,125 +14,96 @@ import numpy as np
 import pandas as pd
 
 from ..registry import StudyContext, Table
+from ..scenes import StudyScene
 from ..tables import write_table
-from .cases import CUBE_E, CUBE_STRESS, K_MAX, K_MIN, VARIANTS, Settings, analytic_drift
+from .cases import K_MAX, K_MIN
+
+#: The drift measures in words.
+MEASURE_WORDS = {"dV": "|ΔV|/V0", "element_drift": "Σ|ΔV_k|/V0"}
+#: Small-strain laws: their solution measured on the deformed mesh is no volume reference.
+SMALL_STRAIN = ("linear", "transverse-linear")
 
 
 @dataclass
 class Runs:
-    """Outcomes of the study's runs.
+    """Outcomes of the study's cases.
 
     Parameters
     ----------
-    dyn
-        ``(case, label, kind, result)`` of each explicit run; ``label`` is ``compressed``,
-        ``pulled`` or ``sag``, ``kind`` is ``step`` or ``ramp``.
-    stat
-        One row per static equilibrium (``model``, signed ``load``, drifts, ``status``).
-    sag_ref
-        The static neo-Hookean FEM drift of the sag scene (``None``: no sag runs).
-    nu
-        Poisson's ratio of the cube.
+    scenes
+        The scenes.
+    static
+        One row per static case (:func:`static_frame`).
+    dynamic
+        ``(case, result)`` of every explicit run.
+    volume
+        Scene label -> its closed-form volume change ``(value, source)`` or ``None``.
     """
 
-    dyn: list[tuple[dict[str, Any], str, str, dict[str, Any]]]
-    stat: pd.DataFrame
-    sag_ref: dict[str, Any] | None
-    nu: float
+    scenes: list[StudyScene]
+    static: pd.DataFrame
+    dynamic: list[tuple[dict[str, Any], dict[str, Any]]]
+    volume: dict[str, tuple[float, str] | None]
 
-    def final(self, label: str, kind: str, variant: str, key: str = "dV") -> float:
-        """A final value of one explicit run (``nan`` if it has none).
+    def run(self, scene: str, kind: str, model: str) -> dict[str, Any] | None:
+        """The result of one explicit run (``None`` if it did not run)."""
+        for c, r in self.dynamic:
+            if c["scene"] == scene and c["kind"] == kind and c["model"] == model:
+                return r
+        return None
 
-        Parameters
-        ----------
-        label, kind, variant
-            Which run.
-        key
-            A key of its ``final`` measures.
+    def final(self, scene: str, kind: str, model: str, key: str = "dV") -> float:
+        """A final measure of one explicit run (``nan`` if it has none)."""
+        r = self.run(scene, kind, model)
+        return float((r or {}).get("final", {}).get(key, np.nan))
 
-        Returns
-        -------
-        float
-        """
-        for c, lab, knd, r in self.dyn:
-            if lab == label and knd == kind and c["variant"] == variant:
-                return float(r.get("final", {}).get(key, np.nan))
-        return float("nan")
+    def kinds(self, scene: str) -> list[str]:
+        """The explicit series that ran on ``scene`` (``step``, ``ramp``)."""
+        return [
+            k
+            for k in ("step", "ramp")
+            if any(c["scene"] == scene and c["kind"] == k for c, _ in self.dynamic)
+        ]
 
-    def fem(self, law: str, load: float, key: str = "dV") -> float:
-        """A drift measure of the static P1 FEM cube (``nan`` if not run).
-
-        Parameters
-        ----------
-        law
-            ``linear`` or ``neo-hookean``.
-        load
-            Signed load factor.
-        key
-            ``dV``, ``element_drift`` or ``dL``.
-
-        Returns
-        -------
-        float
-        """
-        g = self.stat[(self.stat.model == f"FEM P1 {law}") & (self.stat.load == load)]
+    def stat(self, scene: str, model: str, key: str = "dV", load: float = 1.0) -> float:
+        """A measure of one static equilibrium (``nan`` if it did not solve)."""
+        s = self.static
+        g = s[(s.scene == scene) & (s.model == model) & (s.load == load) & (s.status == "ok")]
         return float(g[key].iloc[0]) if len(g) else float("nan")
 
-    def sag(self) -> dict[str, dict[str, Any]]:
-        """Variant -> result of the sag runs (empty without them)."""
-        return {c["variant"]: r for c, lab, knd, r in self.dyn if lab == "sag"}
+    def measure(self, scene: str) -> str:
+        """The scene's drift measure: the total ``dV`` where a closed form gives the
+        material's (a uniform state), else the element drift (in a non-uniform state
+        compressed and stretched elements cancel in the total)."""
+        return "dV" if self.volume.get(scene) else "element_drift"
 
+    def material(self, scene: str) -> str | None:
+        """The static FEM that says what the material itself does: P1 neo-Hookean, else
+        the scene's own FEM (a finite-strain one first); ``None`` if neither solved."""
+        s = self.static
+        ok = s[(s.scene == scene) & (s.load == 1.0) & (s.status == "ok")].set_index("model")
+        if "P1-NH" in ok.index:
+            return "P1-NH"
+        if "fem" in ok.index:
+            return "fem"
+        return None
 
-@dataclass
-class Summary:
-    """The numbers quoted by captions and findings (absolute drifts |dV|/V0)."""
+    def small_strain(self, scene: str, model: str) -> bool:
+        """Whether a static FEM row solved a small-strain law."""
+        s = self.static
+        g = s[(s.scene == scene) & (s.model == model) & (s.load == 1.0)]
+        return bool(len(g)) and str(g.law.iloc[0]).split("/")[0] in SMALL_STRAIN
 
-    comp: dict[str, float]
-    pull: dict[str, float]
-    ramp_c: dict[str, float]
-    ramp_p: dict[str, float]
-    a_cube: float
-    k_spec: float
-    k_abs: float
-    fem_c: float
-    fem_p: float
-    dl_on: float
-    dl_fem: float
-
-
-def summary(runs: Runs) -> Summary:
-    """Read the quoted numbers off the runs.
-
-    Parameters
-    ----------
-    runs
-        The study's runs.
-
-    Returns
-    -------
-    Summary
-        Final drifts after the sudden load (``comp``, ``pull``) and at the end of the slow
-        ramps (``ramp_c``, ``ramp_p``) per variant, the analytic and FEM drifts at full
-        load, the LMS median stiffness ratios and the radial-sum changes.
-    """
-    fin = runs.final
-    return Summary(
-        comp={v: abs(fin("compressed", "step", v)) for v in VARIANTS},
-        pull={v: abs(fin("pulled", "step", v)) for v in VARIANTS},
-        ramp_c={v: abs(fin("compressed", "ramp", v)) for v in VARIANTS},
-        ramp_p={v: abs(fin("pulled", "ramp", v)) for v in VARIANTS},
-        a_cube=abs(analytic_drift(runs.nu, CUBE_STRESS)),
-        k_spec=fin("compressed", "step", "LMS spec", "k_median"),
-        k_abs=fin("compressed", "step", "LMS abs", "k_median"),
-        fem_c=abs(runs.fem("neo-hookean", -1.0)),
-        fem_p=abs(runs.fem("neo-hookean", 1.0)),
-        dl_on=fin("compressed", "ramp", "volume on", "dL"),
-        dl_fem=runs.fem("neo-hookean", -1.0, "dL"),
-    )
+    def sign(self, scene: str) -> float:
+        """``-1`` where the material loses volume under the scene's load, else ``1``."""
+        ref = self.volume.get(scene)
+        m = self.material(scene)
+        dv = ref[0] if ref else (self.stat(scene, m) if m else np.nan)
+        return -1.0 if dv < 0 else 1.0
 
 
 def static_frame(cases: list[dict[str, Any]], results: list[dict[str, Any]]) -> pd.DataFrame:
-    """One row per static case: model, signed load factor, drifts, status.
+    """One row per static case: scene, model, load factor, drifts, status, law.
 
     Parameters
     ----------
@@ -143,21 +114,25 @@ def static_frame(cases: list[dict[str, Any]], results: list[dict[str, Any]]) -> 
     -------
     DataFrame
     """
-    return pd.DataFrame(
-        [
-            {
-                "model": (f"FEM P1 {c['law']}" if c["model"] == "fem" else c["variant"]),
-                "load": np.sign(c["stress"]) * c["load"],
-                **{k: r.get(k, np.nan) for k in ("dV", "element_drift", "dL")},
-                "status": r["status"],
-            }
-            for c, r in zip(cases, results)
-        ]
-    )
+    keys = ("dV", "element_drift", "dL", "inverted", "dV (P2 volume)")
+    rows = [
+        {
+            "scene": c["scene"],
+            "model": c["model"],
+            "load": c["load"],
+            **{k: r.get(k, np.nan) for k in keys},
+            "status": r["status"],
+            "law": r.get("law", ""),
+            "message": r.get("message", ""),
+        }
+        for c, r in zip(cases, results, strict=True)
+    ]
+    cols = ["scene", "model", "load", *keys, "status", "law", "message"]
+    return pd.DataFrame(rows, columns=cols)
 
 
-def final_table(ctx: StudyContext, runs: Runs, s: Settings) -> Table:
-    """The table of drifts at the end of each explicit run, with the references.
+def final_table(ctx: StudyContext, runs: Runs) -> Table:
+    """The drifts at the end of each explicit run, with each scene's references.
 
     Parameters
     ----------
@@ -165,85 +140,70 @@ def final_table(ctx: StudyContext, runs: Runs, s: Settings) -> Table:
         Where to write.
     runs
         The study's runs.
-    s
-        Its settings (for the caption).
 
     Returns
     -------
     Table
     """
-    dyn, stat, sag_ref, nu = runs.dyn, runs.stat, runs.sag_ref, runs.nu
     rows = []
-    for c, label, kind, r in dyn:
+    for c, r in runs.dynamic:
         f = r.get("final", {})
+        lms = "lms" in c["model"]
         rows.append(
             {
-                "case": f"cube {label}, {kind}" if c["scene"] == "cube" else f"sag, {kind}",
-                "variant": c["variant"],
+                "scene": c["scene"],
+                "run": c["kind"],
+                "model": c["model"],
                 "status": r["status"],
                 "dV/V0": f.get("dV", np.nan),
                 "element drift": f.get("element_drift", np.nan),
                 "peak |dV|/V0": f.get("peak_dV", np.nan),
                 "|dL|/L0": f.get("dL", np.nan),
-                "k/k0 median": f.get("k_median", np.nan) if "LMS" in c["variant"] else np.nan,
-                "k/k0 min": f.get("k_min", np.nan) if "LMS" in c["variant"] else np.nan,
-                "k/k0 max": f.get("k_max", np.nan) if "LMS" in c["variant"] else np.nan,
+                **{
+                    f"k/k0 {q}": f.get(f"k_{q}", np.nan) if lms else np.nan
+                    for q in ("median", "min", "max")
+                },
                 "first inverted (s)": r.get("first_inverted") or np.nan,
             }
         )
-    final = pd.DataFrame(rows)
-    ref_rows = []
-    for sign, label in ((-1.0, "compressed"), (1.0, "pulled")):
-        a = analytic_drift(nu, sign * CUBE_STRESS)
-        ref_rows.append(
-            {
-                "case": f"cube {label}",
-                "variant": "analytic (linear)",
-                "status": "ok",
-                "dV/V0": a,
-                "element drift": abs(a),
-            }
-        )
-        for law in ("linear", "neo-hookean"):
-            g = stat[(stat.model == f"FEM P1 {law}") & (stat.load == sign)]
-            if len(g):
-                ref_rows.append(
-                    {
-                        "case": f"cube {label}",
-                        "variant": f"FEM P1 {law} (static)",
-                        "status": g.status.iloc[0],
-                        "dV/V0": g.dV.iloc[0],
-                        "element drift": g.element_drift.iloc[0],
-                        "|dL|/L0": g.dL.iloc[0],
-                    }
-                )
-    if sag_ref is not None:
-        ref_rows.append(
-            {
-                "case": "sag",
-                "variant": "FEM P1 neo-hookean (static)",
-                "status": sag_ref["status"],
-                "dV/V0": sag_ref.get("dV", np.nan),
-                "element drift": sag_ref.get("element_drift", np.nan),
-                "|dL|/L0": sag_ref.get("dL", np.nan),
-            }
-        )
-    final = pd.concat([final, pd.DataFrame(ref_rows)], ignore_index=True)
-    mesh_note = f"cube {s.n}³×6 tets, ν = {nu}" + (
-        f"; sag {s.sag[0]}×{s.sag[1]}×{s.sag[2]}×6 tets, ν = 0.45" if s.sag else ""
-    )
+    for sc in runs.scenes:
+        ref = runs.volume.get(sc.label)
+        if ref:
+            rows.append(
+                {
+                    "scene": sc.label,
+                    "run": "closed form",
+                    "model": ref[1],
+                    "status": "ok",
+                    "dV/V0": ref[0],
+                    "element drift": abs(ref[0]),
+                }
+            )
+        g = runs.static[(runs.static.scene == sc.label) & (runs.static.load == 1.0)]
+        for _, s in g[g.model.str.match("P1|fem")].iterrows():
+            rows.append(
+                {
+                    "scene": sc.label,
+                    "run": "static",
+                    "model": s.model,
+                    "status": s.status,
+                    "dV/V0": s.dV,
+                    "element drift": s.element_drift,
+                    "|dL|/L0": s.dL,
+                }
+            )
     return Table(
-        write_table(final, ctx.path("final_drift")),
-        f"Volume drift at the end of each explicit run ({mesh_note}; peak cube stress "
-        f"±{CUBE_STRESS / CUBE_E:.0%} of E) with the references: dV/V0 signed total change, "
-        "element drift Σ|ΔV_k|/V0, |dL|/L0 mean change of the radial sums Σ|ξ_j| that the "
-        "volume springs restore, and the LMS stiffness ratio k_s/k_s0 (clamp "
-        f"[{K_MIN:g}, {K_MAX:g}]).",
+        write_table(pd.DataFrame(rows), ctx.path("final_drift")),
+        "Volume drift at the end of each explicit run (step: a suddenly applied load; ramp: "
+        "a slow load ramp) with each scene's references (its closed form, the static FEM): "
+        "dV/V0 signed total change, element drift Σ|ΔV_k|/V0, |dL|/L0 mean change of the "
+        "radial sums Σ|ξ_j| that the volume springs restore, and the LMS stiffness ratio "
+        f"k_s/k_s0 (clamp [{K_MIN:g}, {K_MAX:g}]).",
     )
 
 
 def static_table(ctx: StudyContext, runs: Runs) -> Table:
-    """The table of the cube's static equilibria against signed load factor.
+    """The static equilibria of every scene.
 
     Parameters
     ----------
@@ -257,10 +217,13 @@ def static_table(ctx: StudyContext, runs: Runs) -> Table:
     Table
     """
     return Table(
-        write_table(runs.stat, ctx.path("static_drift")),
-        "Static equilibria of the cube against signed load factor (−1 = full compression): "
-        "FEM P1 linear and neo-Hookean, and the spring variants without LMS (Newton) at "
-        "full load, which check that the slow ramps of the dynamic runs are quasi-static.",
+        write_table(runs.static, ctx.path("static_drift")),
+        "Static equilibria under each scene's loads (× load factor): the spring variants "
+        "without LMS (Newton, full load; they check that the slow ramps are quasi-static), "
+        "same-mesh P1 FEM (the scene's small-strain law, and neo-Hookean for an isotropic "
+        "material) and the scene's own FEM ('fem', its P2 volume for a mixed formulation): "
+        "relative volume change dV of the P1 mesh at the vertex positions, element drift "
+        "Σ|V_k − V0_k|/V0, mean change of the radial sums dL.",
     )
 
 
@@ -275,6 +238,11 @@ def compare_words(x: float, ref: float) -> str:
     Returns
     -------
     str
+
+    Examples
+    --------
+    >>> compare_words(0.06, 0.05)
+    '1.20× the drift (more)'
     """
     r = x / ref if ref else float("nan")
     if not np.isfinite(r):

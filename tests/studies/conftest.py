@@ -2,33 +2,16 @@
 
 from __future__ import annotations
 
-import json
 import tomllib
 
 import numpy as np
 import pytest
-
-
-def _value(v) -> str:
-    """A TOML value: numbers, strings and booleans (JSON spells them the TOML way), arrays
-    and inline tables."""
-    if isinstance(v, dict):
-        return "{ " + ", ".join(f"{k} = {_value(x)}" for k, x in v.items()) + " }"
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_value(x) for x in v) + "]"
-    return json.dumps(v)
+from support.toml import to_toml
 
 
 def scene_toml(data: dict) -> str:
-    """The TOML text of a scene table (top-level keys, tables, arrays of tables)."""
-    lines = [f"{k} = {_value(v)}" for k, v in data.items() if not isinstance(v, (dict, list))]
-    for key, v in data.items():
-        if isinstance(v, dict):
-            lines += [f"[{key}]"] + [f"{k} = {_value(x)}" for k, x in v.items()]
-        elif isinstance(v, list):
-            for item in v:
-                lines += [f"[[{key}]]"] + [f"{k} = {_value(x)}" for k, x in item.items()]
-    text = "\n".join(lines) + "\n"
+    """The TOML text of a scene table, checked to round-trip."""
+    text = to_toml(data)
     if tomllib.loads(text) != data:  # the writer must round-trip what it was given
         raise AssertionError("scene table does not round-trip through TOML")
     return text
@@ -52,7 +35,8 @@ def scene_file(tmp_path):
 def dk_p1_displacement(scene, options=None):
     """Small-strain displacement ``(n, 3)`` of the spring model, computed independently of
     its force kernel: P1 FEM assembled with each element's effective spring matrix ``D_k``
-    in place of the material matrix (DESIGN §4: the linearised spring model *is* this FEM).
+    in place of the material matrix (docs/theory.rst#the-effective-small-strain-matrix-d-k: the
+    linearised spring model *is* this FEM).
 
     Valid for the energy forms (axial, torsion ``energy``, volume ``gradient``). Loads and
     prescribed displacements are the scene's at load factor 1, taken at the rest state.

@@ -1,6 +1,7 @@
 """``springfem bench``: output structure, interleaving, ratio arithmetic (no timing asserts).
 
-DESIGN §8: timings are never asserted. What is checked: every case runs once in every
+docs/verification.rst#how-speed-is-measured: timings are never asserted. What is checked: every case
+runs once in every
 round and the rounds are shuffled; medians and per-round ratios are computed from injected
 fake timings as written by hand here; the benchmarks run on a tiny mesh, print their rows
 and machine load, and their JSON holds every figure; the timed kernel equals the oracle.
@@ -14,7 +15,7 @@ import json
 import numpy as np
 import pytest
 
-from studies import bench
+from studies import bench, bench_print
 from studies.cli import main
 from studies.timing import interleaved, median, median_difference, median_ratio
 
@@ -121,7 +122,7 @@ def test_bench_forces_structure(forces_result, capsys):
     assert res["kernel_vs_oracle_max_rel_diff"] < 1e-12
     assert any("Warp" in n for n in res["notes"])
     assert len(res["machine"]["load_average_before"]) == 3
-    bench.print_forces(res)
+    bench_print.print_forces(res)
     out = capsys.readouterr().out
     for text in ("interleaved rounds", "load average", "read bandwidth", "limit M/s", "Warp"):
         assert text in out, text
@@ -150,3 +151,30 @@ def test_variants_cover_every_law():
     assert {o.volume_form for o in opts if o.volume} == {"gradient", "spec"}
     assert any(not o.volume for o in opts) and any(o.volume_damping for o in opts)
     assert np.unique([bench.short_label(o) for o in opts]).size == len(opts)
+
+
+def test_threads_rule_verdict_and_sizes():
+    from studies.bench_threads import rule_agrees, sizes_up_to
+
+    assert sizes_up_to(100_000) == [1000, 3000, 10000, 30000, 100000]
+    assert sizes_up_to(10) == [1000]
+    speed = {1000: 0.7, 3000: 0.95, 10000: 1.2, 30000: 1.6}  # threads win from 10k up
+    assert rule_agrees(speed, 5000) and rule_agrees(speed, 10000)
+    assert not rule_agrees(speed, 20000)  # serial at 10k, where threads were faster
+    assert not rule_agrees(speed, 2000)  # parallel at 3k, where they were slower
+
+
+def test_print_threads_names_the_rule_and_its_verdict(capsys):
+    from studies.bench_print import print_threads
+
+    mach = {"cpus": 2, "numba_threads": 2, "threading_layer": "omp", "omp_wait_policy": "p"}
+    mach.update(load_average_before=[0.1, 0.1, 0.1], load_average_after=[0.2, 0.1, 0.1])
+    row = {"tets": 1000, "kernel": "spring seed", "mtets_per_s_serial": 20.0,
+           "mtets_per_s_parallel": 30.0, "speedup": 1.5, "cpu_ratio": 0.9}  # fmt: skip
+    res = {"rounds": 3, "rows": [row], "machine": mach,
+           "rule": {"parallel_by_default": True, "min_elements": 500, "agrees": True}}  # fmt: skip
+    print_threads(res)
+    out = capsys.readouterr().out
+    for text in ("load average [0.1, 0.1, 0.1]", "spring seed", "1.50", "parallel from 500",
+                 "agrees"):  # fmt: skip
+        assert text in out, text

@@ -1,4 +1,4 @@
-"""The command line: exit codes and one-line errors (DESIGN §6)."""
+"""The command line: exit codes and one-line errors (docs/contract.rst#exit-codes)."""
 
 import json
 import subprocess

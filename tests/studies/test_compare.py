@@ -12,15 +12,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from springfem.errors import InputError, SolverError
 from springfem.scene import scene_from_dict
-from studies import compare, compare_output, plots
+from studies import compare, plots
+from studies.cli import compare as cli_compare
 from studies.cli import main
-from studies.compare import (
-    bundled_scene,
-    compare_scene,
-    max_principal_strain,
-    model_settings,
-)
+from studies.compare import compare_scene, max_principal_strain
+from studies.models import Model
+from studies.scenes import bundled_table
 
 COARSE = (3, 3, 3)  # 162 tets: all three models solve in well under a second
 SIGMA = {"stretch-fiber": 300.0, "stretch-cross": 100.0}  # traction on x_max (Pa)
@@ -28,7 +27,8 @@ E_LOAD = {"stretch-fiber": 3.0e4, "stretch-cross": 1.0e4}  # E_fiber, E_cross (P
 L = 0.01  # cube edge (m)
 
 # The spring model's small-strain answer has an independent reference: P1 FEM assembled
-# with each element's effective spring matrix D_k (DESIGN §4; ``dk_reference`` in
+# with each element's effective spring matrix D_k
+# (docs/theory.rst#the-effective-small-strain-matrix-d-k; ``dk_reference`` in
 # conftest.py). At 1e-4 of the scenes' load (strain 1e-6) the spring model's nonlinear
 # kinematics differ from that linearisation by O(strain) = 1e-6 relative (measured
 # 1.1e-6 / 1.0e-6 over the field on 3x3x3): tolerance 5e-6, five times the strain.
@@ -39,7 +39,7 @@ LINEARISATION_TOL = 5e-6
 @pytest.fixture(scope="module", params=["stretch-fiber", "stretch-cross"])
 def stretch(request):
     name = request.param
-    scene = scene_from_dict(bundled_scene(name, COARSE))
+    scene = scene_from_dict(bundled_table(name, {"mesh.divisions": list(COARSE)}))
     return name, compare_scene(scene)
 
 
@@ -70,7 +70,9 @@ def small_stretch(request, dk_reference):
     """``compare_scene`` of a stretch at 1e-4 of its load, and the D_k FEM displacement."""
     dk_p1_displacement, scaled_loads = dk_reference
     name = request.param
-    scene = scene_from_dict(scaled_loads(bundled_scene(name, COARSE), SMALL_LOAD))
+    scene = scene_from_dict(
+        scaled_loads(bundled_table(name, {"mesh.divisions": list(COARSE)}), SMALL_LOAD)
+    )
     return name, compare_scene(scene), dk_p1_displacement(scene)
 
 
@@ -121,7 +123,7 @@ def test_table_columns(stretch):
 
 
 def test_large_strain_detector_analytic():
-    scene = scene_from_dict(bundled_scene("stretch-fiber", (1, 1, 1)))
+    scene = scene_from_dict(bundled_table("stretch-fiber", {"mesh.divisions": list((1, 1, 1))}))
     x = scene.mesh.points
     eps = 0.1
     u = np.zeros_like(x)
@@ -133,15 +135,17 @@ def test_large_strain_detector_analytic():
 
 
 def test_model_names_are_validated():
-    scene = scene_from_dict(bundled_scene("stretch-fiber", (1, 1, 1)))
-    with pytest.raises(ValueError, match="unknown model"):
-        model_settings(scene, "P3")
-    with pytest.raises(ValueError, match="anisotropic hyperelastic"):
-        model_settings(scene, "P2-NH")
+    """An unknown model is named with the closest valid one; a model that cannot solve the
+    scene's law is refused before anything is solved."""
+    scene = scene_from_dict(bundled_table("stretch-fiber", {"mesh.divisions": [1, 1, 1]}))
+    with pytest.raises(InputError, match=r"unknown model 'P3'; valid models: spring, "):
+        compare_scene(scene, models=["spring", "P3"])
+    with pytest.raises(InputError, match="anisotropic hyperelastic"):
+        compare_scene(scene, models=["spring", "P2-NH"])
 
 
-def test_bundled_scene_changes_divisions():
-    scene = scene_from_dict(bundled_scene("cantilever", (10, 1, 1)))
+def test_bundled_table_changes_divisions():
+    scene = scene_from_dict(bundled_table("cantilever", {"mesh.divisions": [10, 1, 1]}))
     assert scene.mesh.n_tets == 60
 
 
@@ -151,7 +155,7 @@ def test_doctests():
 
 
 def test_cli_compare_writes_table_and_figure(tmp_path, capsys, scene_file):
-    scene = scene_file(bundled_scene("stretch-cross", (2, 2, 2)))
+    scene = scene_file(bundled_table("stretch-cross", {"mesh.divisions": list((2, 2, 2))}))
     out = tmp_path / "cmp"
     assert main(["compare", str(scene), "--out", str(out)]) == 0
     text = capsys.readouterr().out
@@ -167,8 +171,8 @@ def test_cli_compare_json(tmp_path, capsys, monkeypatch, scene_file):
     def no_render(cmp, path):  # rendering is covered above; keep this test fast
         raise RuntimeError("no OpenGL here")
 
-    monkeypatch.setattr(compare_output, "render_comparison", no_render)
-    scene = scene_file(bundled_scene("stretch-fiber", (2, 2, 2)))
+    monkeypatch.setattr(cli_compare, "render_comparison", no_render)
+    scene = scene_file(bundled_table("stretch-fiber", {"mesh.divisions": list((2, 2, 2))}))
     assert main(["compare", str(scene), "--out", str(tmp_path / "o"), "--json"]) == 0
     captured = capsys.readouterr()
     payload = json.loads(captured.out)  # stdout is pure JSON (progress went to stderr)
@@ -187,20 +191,57 @@ def test_cli_compare_model_failure_exits_3_and_keeps_table(
     tmp_path, capsys, monkeypatch, scene_file
 ):
     """A failed model becomes a row with converged = False, the others are still compared,
-    the table is written and the exit code is 3 (DESIGN §6)."""
-    real = compare.solve_model
+    the table is written and the exit code is 3 (docs/contract.rst#exit-codes)."""
+    real = Model.solve
 
-    def failing(scene, name):
-        if name == "spring":
-            raise compare.SolverError("spring model blew up at step 7")
-        return real(scene, name)
+    def failing(self, scene, verbose=False):
+        if self.name == "spring":
+            raise SolverError("spring model blew up at step 7")
+        return real(self, scene, verbose)
 
-    monkeypatch.setattr(compare, "solve_model", failing)
-    monkeypatch.setattr(compare_output, "render_comparison", lambda cmp, path: path)
-    scene = scene_file(bundled_scene("stretch-fiber", (2, 2, 2)))
+    monkeypatch.setattr(Model, "solve", failing)
+    monkeypatch.setattr(cli_compare, "render_comparison", lambda cmp, path: path)
+    scene = scene_file(bundled_table("stretch-fiber", {"mesh.divisions": list((2, 2, 2))}))
     out = tmp_path / "o"
     assert main(["compare", str(scene), "--out", str(out)]) == 3
     assert "spring model blew up at step 7" in capsys.readouterr().err
     df = pd.read_csv(out / "compare.csv").set_index("model")
     assert not df.at["spring", "converged"] and df.at["P2", "converged"]
     assert np.isnan(df.at["spring", "rel L2 err"])
+
+
+def test_cli_compare_models_and_the_stated_reference(tmp_path, capsys, monkeypatch, scene_file):
+    """``--models spring,p1``: only those run (any spelling of a registered name), the
+    reference is the finest FEM among them, and a note says so."""
+    monkeypatch.setattr(cli_compare, "render_comparison", lambda cmp, path: path)
+    scene = scene_file(bundled_table("stretch-fiber", {"mesh.divisions": [2, 2, 2]}))
+    argv = ["compare", str(scene), "--out", str(tmp_path / "o"), "--json", "--models", "spring,p1"]
+    assert main(argv) == 0
+    payload = json.loads(capsys.readouterr().out)
+    assert [r["model"] for r in payload["rows"]] == ["spring", "P1"]
+    assert payload["reference"] == "P1"
+    assert any("reference: P1, the finest FEM of the models asked for" in n
+               for n in payload["notes"])  # fmt: skip
+
+
+def test_cli_compare_refuses_an_unknown_model_in_one_line(tmp_path, capsys, scene_file):
+    scene = scene_file(bundled_table("stretch-fiber", {"mesh.divisions": [1, 1, 1]}))
+    assert main(["compare", str(scene), "--out", str(tmp_path), "--models", "spring,p1-nx"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown model 'p1-nx' (did you mean P1-NH?)" in err and err.count("\n") == 1
+
+
+def test_cli_compare_max_time_is_a_failed_row_not_a_crash(tmp_path, capsys, monkeypatch,
+                                                          scene_file):  # fmt: skip
+    """A model stopped by ``--max-time`` is a FAILED row with the stop's message; the others
+    are compared and the exit code is 3. (A cap far below one Newton iteration stops the
+    spring model's Newton at its first check after the first force evaluation.)"""
+    monkeypatch.setattr(cli_compare, "render_comparison", lambda cmp, path: path)
+    scene = scene_file(bundled_table("cantilever", {"mesh.divisions": [10, 1, 1]}))
+    out = tmp_path / "o"
+    argv = ["compare", str(scene), "--out", str(out), "--models", "spring,P1", "--max-time", "1e-9"]
+    code = main(argv)
+    err = capsys.readouterr().err
+    df = pd.read_csv(out / "compare.csv").set_index("model")
+    assert code == 3 and "stopped after" in err
+    assert df.at["spring", "status"] == "FAILED" and df.at["P1", "status"] == "ok"

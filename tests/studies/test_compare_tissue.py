@@ -4,7 +4,8 @@ Independent references: a direct ``reference_fem.solve`` of the same scene (P2, 
 Taylor–Hood) and of a scene written out by hand with the stated P1 penalty
 ``kappa = 1000 mu`` (``mu`` the mean shear modulus of the law's small-strain tangent,
 computed here from its closed form), and, at a small load, the spring exact element
-against same-mesh P1 (DESIGN §4b: the exact element is P1 with the law's small-strain
+against same-mesh P1 (docs/theory.rst#the-exact-element-is-the-p1-element: the exact element is P1
+with the law's small-strain
 tangent, so at small strain the two differ by O(strain)).
 """
 
@@ -18,9 +19,11 @@ import reference_fem
 from springfem.errors import InputError, SolverError
 from springfem.materials.tissue import tissue_tangent
 from springfem.scene import scene_from_dict
-from studies import compare, compare_output
+from studies import compare_output
 from studies.cli import main
-from studies.compare import bundled_scene, compare_scene, model_settings
+from studies.compare import compare_scene
+from studies.models import Model
+from studies.scenes import bundled_table
 
 DIVISIONS = (6, 1, 1)  # 36 tets: every model solves in about a second
 #: The Land beam's 0.004 kPa at 1e-3: P1 tip deflection ~1.5e-4 mm on a 10 mm beam.
@@ -33,7 +36,7 @@ SOLVER_TOL = 1e-7
 
 
 def beam(load: float = 1.0, spring: dict | None = None) -> dict:
-    data = bundled_scene("land-beam", DIVISIONS)
+    data = bundled_table("land-beam", {"mesh.divisions": list(DIVISIONS)})
     data["load"][0]["value"] *= load
     if spring is not None:
         data["spring"] = dict(spring)
@@ -57,7 +60,7 @@ def test_models_are_the_scenes_law(small_beam):
     assert t.at["P2", "element"] == "P2" and t.at["P1", "element"] == "P1"
     assert "guccione" in cmp.notes[-1] and "1000 μ" in cmp.notes[-1]
     with pytest.raises(InputError, match="neo-Hookean is not the scene's guccione"):
-        model_settings(scene, "P2-NH")
+        compare_scene(scene, models=["P2-NH"])
 
 
 def test_p2_reference_is_a_direct_solve_of_the_scene(small_beam):
@@ -86,7 +89,8 @@ def test_p1_is_displacement_formulation_with_the_stated_penalty(small_beam):
 
 
 def test_spring_exact_element_is_p1_of_the_law_at_small_strain(small_beam):
-    """DESIGN §4b: the exact element is P1 with the law's small-strain tangent (the same
+    """docs/theory.rst#the-exact-element-is-the-p1-element: the exact element is P1 with the law's
+    small-strain tangent (the same
     penalty). Both models' finite-strain terms are O(strain) relative to their common
     linearisation: tolerance ten times the largest P1 Green–Lagrange strain (about 1e-5
     at this load; at the full load the same comparison gives 0.4%)."""
@@ -128,15 +132,15 @@ def test_holzapfel_ogden_with_kappa_keeps_the_scenes_penalty():
 def test_a_spring_stop_is_a_partial_row_not_ranked(monkeypatch):
     """A spring model stopping at load factor 0.4 is reported partial at that load, with
     no error against the reference; the FEM models are still compared."""
-    real = compare.solve_model
+    real = Model.solve
 
-    def stopping(scene, name):
-        if name == "spring":
+    def stopping(self, scene, verbose=False):
+        if self.name == "spring":
             u = np.zeros((scene.mesh.n_points, 3))
             raise SolverError("stopped at load factor 0.4 of 1", state=u, load_factor=0.4)
-        return real(scene, name)
+        return real(self, scene, verbose)
 
-    monkeypatch.setattr(compare, "solve_model", stopping)
+    monkeypatch.setattr(Model, "solve", stopping)
     cmp = compare_scene(scene_from_dict(beam(SMALL)))
     t = cmp.table.set_index("model")
     assert t.at["spring", "status"] == "partial" and t.at["spring", "load factor"] == 0.4

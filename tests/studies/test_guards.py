@@ -1,5 +1,5 @@
 """Guard rails: implausible input warns, caps stop a solve (exit 3), -v shows progress,
-compare never ranks against a weaker reference, and the polish items of issue 12.
+compare never ranks against a weaker reference, and small points of the command line.
 
 Independent references: the cantilever's tip deflection is linear in 1/E (small-strain
 law), so E = 0.01 Pa turns the bundled ~1e-3 m tip into ~1e3 m, ten thousand times the
@@ -106,12 +106,14 @@ def test_solve_line_names_the_spring_model_once(tmp_path, capsys):
 
 @pytest.fixture
 def fake_models(monkeypatch):
-    """``solve_model`` with chosen failures: every model solves to a known field."""
+    """``Model.solve`` with chosen failures: every model solves to a known field."""
     from springfem.result import Result
+    from studies.models import Model
 
     failing: set[str] = set()
 
-    def solve(scene, name):
+    def solve(self, scene, verbose=False):
+        name = self.name
         if name in failing:
             raise SolverError(f"{name} diverged at load factor 0.64")
         u = np.full((scene.mesh.n_points, 3), {"spring": 1.1}.get(name, 1.0))
@@ -119,7 +121,7 @@ def fake_models(monkeypatch):
                    0.0, True, 1)  # fmt: skip
         return Solution(r, u)
 
-    monkeypatch.setattr(compare, "solve_model", solve)
+    monkeypatch.setattr(Model, "solve", solve)
     return failing
 
 
@@ -160,10 +162,8 @@ def test_study_help_lists_the_registered_studies(capsys):
     listed = text.split("studies (* also runs on --scene FILE):", 1)[1]
     assert REGISTRY and all(f"  {n.replace('_', '-')} " in listed for n in REGISTRY)
     rows = {line.split()[0]: line.split()[1] == "*" for line in listed.strip().splitlines()}
-    # the mark is the registry's: a study runs on --scene iff its Settings has for_scene
-    assert rows == {
-        n.replace("_", "-"): hasattr(s.settings, "for_scene") for n, s in REGISTRY.items()
-    }
+    # the mark is the registry's: a study runs on --scene unless it says why not
+    assert rows == {n.replace("_", "-"): s.user_scenes is None for n, s in REGISTRY.items()}
     assert not rows["scaling"] and rows["stability"]
 
 
@@ -184,13 +184,14 @@ def test_verbose_shows_the_fem_newton_residuals(tmp_path, capsys):
 
 
 def test_max_time_stops_the_fem_newton_with_exit_3(tmp_path, capsys):
-    # the FEM's Newton runs no SolveContext: its own deadline, checked once per iteration;
-    # a 1 ns cap stops it after the first iteration with the last converged state (rest)
+    # the FEM's Newton checks its deadline at every checkpoint (assembly, factorisation,
+    # each iteration): a 1 ns cap stops it at the first one, with the last converged state
+    # (rest, load factor 0)
     argv = ["solve", "cantilever", "--model", "fem", "--out", str(tmp_path),
             "--set", "material.law=neo-hookean", "--max-time", "1e-9"]  # fmt: skip
     assert main(argv) == 3
     err = capsys.readouterr().err.strip().splitlines()[-1]
-    assert re.search(r"stopped after [0-9.e+-]+ s / step 1 \(load 1\), iteration 1 at rel", err)
-    assert "the --max-time cap of 1e-09 s" in err and "last state written to" in err
+    assert re.search(r"stopped after [0-9.e+-]+ s / start \(the --max-time cap of 1e-09 s\)", err)
+    assert "last converged load factor 0;" in err and "last state written to" in err
     state = json.loads((tmp_path / "last_good_state.json").read_text())
     assert state["status"].startswith("stopped after")

@@ -7,13 +7,14 @@ import pytest
 
 from springfem.errors import InputError, SceneError
 from springmodel.options import SpringOptions
-from studies.cli import main, scene_path
+from studies.cli import main
 from studies.overrides import (
     apply_overrides,
     load_scene_with,
     parse_assignment,
     parse_value,
 )
+from studies.scenes import scene_path
 
 CANTILEVER = scene_path("cantilever")
 

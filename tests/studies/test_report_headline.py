@@ -33,8 +33,8 @@ WRITTEN = Path(os.environ.get("SPRINGFEM_QUICK_REPORT", ROOT / "reports" / "quic
 #: Timing-derived headlines (fitted cost slopes): noisy on a shared machine, finite only.
 TIMING_KEYS = {
     "scaling": {
-        "slope_static_fem-linear",
-        "slope_static_fem-neo-hookean",
+        "slope_static_P1",
+        "slope_static_P1-NH",
         "slope_static_spring",
         "slope_step_fem",
         "slope_step_spring",
@@ -61,65 +61,94 @@ REFERENCES = {
         1e-12,
         "E_fiber / E_cross of the stretch-fiber material",
     ),
-    ("anisotropy", "ratio_fem_p1"): (
+    ("anisotropy", "ratio_P1"): (
         lambda h: 3.0,
         ROUNDING,
         "P1 is exact for a homogeneous field (patch test)",
     ),
-    ("anisotropy", "max_rel_error_fem_p1"): (
+    ("anisotropy", "max_rel_error_P1"): (
         lambda h: 0.0,
         ROUNDING,
         "P1 reproduces the off-axis formula exactly",
     ),
-    ("anisotropy", "ratio_spring_exact_coupling"): (
+    ("anisotropy", "ratio_spring-exact"): (
         lambda h: 30e3 / 10e3,
         3.0 * (0.01 + 0.03),
         "exact element + coupling = P1 at small strain; each modulus is off by at most its "
         "applied strain (1 % along, 3 % across the fibers) from the finite-strain kinematics",
     ),
-    ("anisotropy", "max_rel_error_spring_exact_coupling"): (
+    ("anisotropy", "max_rel_error_spring-exact"): (
         lambda h: 0.0,
         0.03,
         "at most the largest applied strain (3 %, across the fibers): finite-strain kinematics",
     ),
-    ("volume_drift", "cube_analytic_dV"): (
+    ("volume_drift", "cube_compressed_analytic_dV"): (
         lambda h: (1 - 2 * 0.49) * 0.1,
         1e-12,
         "(1 - 2 nu) sigma / E, nu = 0.49, sigma = 0.1 E",
     ),
-    ("volume_drift", "fem_neohookean_compressed_dV"): (
+    ("volume_drift", "cube_compressed_static_dV_P1-NH"): (
         lambda h: (1 - 2 * 0.49) * 0.1,
         0.1 * 0.002,
         "small-strain value; finite-strain terms are of relative order eps = 0.1",
     ),
-    ("volume_drift", "cube_ramp_compressed_dV_axis_volume_exact"): (
+    ("volume_drift", "cube_compressed_ramp_dV_spring-exact"): (
         lambda h: (1 - 2 * 0.49) * 0.1,
         0.1 * 0.002,
         "the axis-volume spring's J is the true volume ratio and its small-strain element is "
         "P1's: the material's small-strain value; finite-strain terms of relative order 0.1",
     ),
-    ("speed_accuracy", "tip_error_spring_exact_static_20x2x2"): (
-        _same("speed_accuracy", "tip_error_fem_p1_linear_20x2x2"),
+    ("anisotropy", "ratio_P2"): (
+        lambda h: 3.0,
+        ROUNDING,
+        "P2 is exact for a homogeneous field (patch test)",
+    ),
+    ("anisotropy", "max_rel_error_P2"): (
+        lambda h: 0.0,
+        ROUNDING,
+        "P2 reproduces the off-axis formula exactly",
+    ),
+    ("volume_drift", "cube_pulled_analytic_dV"): (
+        lambda h: (1 - 2 * 0.49) * 0.1,
+        1e-12,
+        "(1 - 2 nu) sigma / E, nu = 0.49, sigma = 0.1 E (in tension)",
+    ),
+    ("volume_drift", "cube_pulled_static_dV_P1-NH"): (
+        lambda h: (1 - 2 * 0.49) * 0.1,
+        0.1 * 0.002,
+        "small-strain value; finite-strain terms are of relative order eps = 0.1",
+    ),
+    ("volume_drift", "cube_pulled_ramp_dV_spring-exact"): (
+        lambda h: (1 - 2 * 0.49) * 0.1,
+        0.1 * 0.002,
+        "the axis-volume spring's J is the true volume ratio and its small-strain element is "
+        "P1's: the material's small-strain value; finite-strain terms of relative order 0.1",
+    ),
+    ("speed_accuracy", "tip_error_spring-exact_static_20x2x2"): (
+        _same("speed_accuracy", "tip_error_P1_static_20x2x2"),
         2 * ROUNDING + 4e-3,
-        "the exact element's small-strain stiffness is P1's (DESIGN §4b); its finite-strain "
+        "the exact element's small-strain stiffness is P1's "
+        "(docs/theory.rst#the-exact-element-is-the-p1-element); its finite-strain "
         "kinematics move the tip by O(tip rotation w/L = 4e-3, Timoshenko)",
     ),
-    ("convergence", "tip_err_finest_spring_exact"): (
-        _same("convergence", "tip_err_finest_p1"),
+    ("convergence", "tip_err_finest_spring-exact"): (
+        _same("convergence", "tip_err_finest_P1"),
         4e-3,
-        "the exact element's small-strain stiffness is P1's (DESIGN §4b); its finite-strain "
+        "the exact element's small-strain stiffness is P1's "
+        "(docs/theory.rst#the-exact-element-is-the-p1-element); its finite-strain "
         "kinematics move the tip by O(tip rotation w/L = 4e-3, Timoshenko)",
     ),
-    ("convergence", "rate_l2_spring_exact"): (
-        _same("convergence", "rate_l2_p1"),
+    ("convergence", "rate_l2_spring-exact"): (
+        _same("convergence", "rate_l2_P1"),
         0.01,
         "same errors as P1 up to O(4e-3) relative on each level: the fitted slope moves by "
         "well under 0.01",
     ),
     ("stability", "locking_tip_ratio_spring-exact"): (
-        _same("stability", "locking_tip_ratio_fem-p1"),
+        _same("stability", "locking_tip_ratio_P1"),
         2e-3,
-        "the exact element is P1's element at small strain (DESIGN §4b), so it locks like P1; "
+        "the exact element is P1's element at small strain "
+        "(docs/theory.rst#the-exact-element-is-the-p1-element), so it locks like P1; "
         "3-decimal rounding and O(w/L) finite-strain kinematics",
     ),
     ("convergence", "ref_over_timoshenko"): (
@@ -127,8 +156,8 @@ REFERENCES = {
         0.02,
         "P2 vs Timoshenko beam theory, which ignores the 3D clamping (~1 %)",
     ),
-    ("speed_accuracy", "tip_error_fem_explicit_20x2x2"): (
-        _same("speed_accuracy", "tip_error_fem_p1_linear_20x2x2"),
+    ("speed_accuracy", "tip_error_P1-NH_explicit_20x2x2"): (
+        _same("speed_accuracy", "tip_error_P1_static_20x2x2"),
         2 * ROUNDING + 1e-4,
         "explicit neo-Hookean P1 relaxes to the static P1 answer (small load, tol 1e-6)",
     ),
@@ -141,7 +170,8 @@ for _scene in ("stretch_fiber", "stretch_cross"):
         "P1 = P2 = exact on a uniform stretch",
     )
 for _scene in ("cantilever", "cantilever_unstructured", "cantilever_elongated"):
-    # the exact element's small-strain stiffness is the P1 element's on any tet (DESIGN §4b);
+    # the exact element's small-strain stiffness is the P1 element's on any tet
+    # (docs/theory.rst#the-exact-element-is-the-p1-element);
     # solved at finite strain like P1 neo-Hookean, they differ at third order in the strain
     # (max Green-Lagrange strain 6e-4 .. 3e-3 at this load): relative L2 below 1e-4
     REFERENCES[("accuracy", f"exact_model_nh_l2_{_scene}")] = (
@@ -155,7 +185,7 @@ for _scene in ("stretch_fiber", "stretch_cross"):
         1e-8,
         "P1 = P2 = exact on a uniform stretch",
     )
-for _method in ("spring-energy", "spring-cosine", "fem-linear", "fem-neo-hookean", "spring-exact"):
+for _method in ("spring-energy", "spring-cosine", "P1", "P1-NH", "spring-exact"):
     REFERENCES[("stability", f"dt_ratio_{_method}")] = (
         lambda h: 1.0,
         0.1,

@@ -4,7 +4,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from studies.scenes import comparison_scenes
 from studies.study_ablation import (
+    ALL_VARIANTS,
     TOLERANCE,
     Settings,
     cheapest_adequate,
@@ -14,13 +16,20 @@ from studies.study_ablation import (
 )
 
 
+def _scene(name: str, divisions=None):
+    div = divisions or Settings.quick().divisions.get(name) or Settings.quick().extra[name]
+    if name.startswith("cantilever-"):
+        return comparison_scenes({}, {name: div})[0]
+    return comparison_scenes({name: div}, {})[0]
+
+
 def _run(scene: str, variants: tuple[str, ...], divisions=None) -> tuple[dict, dict]:
-    div = list(divisions or Settings.quick().divisions[scene])
-    fem = fem_case({"scene": scene, "divisions": div})
+    s = _scene(scene, divisions)
+    fem = fem_case(s.case("ablation-test", 0))
     assert fem["status"] == "ok"
     out = {}
     for v in variants:
-        case = {"scene": scene, "divisions": div, "variant": v, "dr_steps": 500}
+        case = s.case("ablation-test", 0, variant=v, dr_steps=500)
         r = spring_case(case)
         r["error"], r["probe_error"] = model_error(case, r, fem["u"])
         out[v] = r
@@ -31,11 +40,13 @@ def test_full_model_beats_axial_only_in_stretch():
     # stretch-cross (3³×6 tets): axial springs alone solve (the stretch is along the
     # axes) but carry no Poisson coupling; the full model must be at least as accurate
     # (measured 0.337 against 0.520). Torsion changes nothing without volume springs here.
-    _, r = _run("stretch-cross", ("axial", "axial+energy", "axial+energy+volume"))
+    _, r = _run(
+        "stretch-cross", ("spring-axial", "spring-axial+energy", "spring-axial+energy+volume")
+    )
     assert all(x["status"] == "ok" for x in r.values())
-    assert r["axial+energy+volume"]["error"] <= r["axial"]["error"]
-    assert r["axial+energy"]["error"] == pytest.approx(r["axial"]["error"], rel=1e-3)
-    assert r["axial+energy+volume"]["kernel_rate"] > 0
+    assert r["spring-axial+energy+volume"]["error"] <= r["spring-axial"]["error"]
+    assert r["spring-axial+energy"]["error"] == pytest.approx(r["spring-axial"]["error"], rel=1e-3)
+    assert r["spring-axial+energy+volume"]["kernel_rate"] > 0
 
 
 def test_axial_only_fails_honestly_in_bending(dk_reference):
@@ -45,34 +56,36 @@ def test_axial_only_fails_honestly_in_bending(dk_reference):
     # linearisation, the D_k FEM (conftest.py), independent of the force kernel: the
     # nonlinear kinematics add O(tip deflection / L) (Timoshenko: 4e-3), the tolerance.
     from studies.metrics import timoshenko_tip_deflection
-    from studies.study_ablation import ablation_scene, variant_options
 
-    fem, r = _run("cantilever", ("axial", "axial+energy+volume", "+volume (nnls cal.)"))
-    assert r["axial"]["status"] == "fails"
-    assert "singular" in r["axial"]["message"]
-    assert np.isnan(r["axial"]["error"])
+    fem, r = _run(
+        "cantilever",
+        ("spring-axial", "spring-axial+energy+volume", "spring-axial+energy+volume+nnls"),
+    )
+    assert r["spring-axial"]["status"] == "fails"
+    assert "singular" in r["spring-axial"]["message"]
+    assert np.isnan(r["spring-axial"]["error"])
     dk_p1_displacement, _ = dk_reference
-    scene = ablation_scene("cantilever", Settings.quick().divisions["cantilever"])
+    scene = _scene("cantilever").build()
     u_p1 = np.asarray(fem["u"])
     rotation = timoshenko_tip_deflection(0.1 * 1e-4, 0.1, 0.01, 0.01, 1.0e4, 0.3) / 0.1
-    for v in ("axial+energy+volume", "+volume (nnls cal.)"):
+    for v in ("spring-axial+energy+volume", "spring-axial+energy+volume+nnls"):
         assert r[v]["status"] == "ok"
-        u_dk = dk_p1_displacement(scene, variant_options(scene, v))
+        u_dk = dk_p1_displacement(scene, ALL_VARIANTS[v].spring_options(scene))
         expected = np.linalg.norm(u_dk - u_p1) / np.linalg.norm(u_p1)
         assert r[v]["error"] == pytest.approx(expected, abs=rotation), v
     # and the nnls calibration is the better one in bending (0.013 against 0.17)
-    assert r["+volume (nnls cal.)"]["error"] < r["axial+energy+volume"]["error"]
+    assert r["spring-axial+energy+volume+nnls"]["error"] < r["spring-axial+energy+volume"]["error"]
 
 
 def test_cheapest_adequate_rule():
     df = pd.DataFrame(
         {
             "variant": [
-                "axial",
-                "axial+cosine",
-                "axial+energy",
-                "axial+energy+volume",
-                "+volume (nnls cal.)",
+                "spring-axial",
+                "spring-axial+cosine",
+                "spring-axial+energy",
+                "spring-axial+energy+volume",
+                "spring-axial+energy+volume+nnls",
             ],
             "status": ["fails", "ok", "ok", "ok", "ok"],
             "error": [np.nan, 0.50, 0.105, 0.10, 0.20],
@@ -81,12 +94,12 @@ def test_cheapest_adequate_rule():
     )
     # adequate: error <= 1.1 x 0.10 -> axial+energy (0.105) and axial+energy+volume;
     # the faster of the two is axial+energy+volume (0.40 s against 0.60 s, not a tie)
-    assert cheapest_adequate(df).variant == "axial+energy+volume"
+    assert cheapest_adequate(df).variant == "spring-axial+energy+volume"
     # within the 25 % time tie, the variant with fewer parts wins
-    df.loc[df.variant == "axial+energy", "solve_time"] = 0.45
-    assert cheapest_adequate(df).variant == "axial+energy"
+    df.loc[df.variant == "spring-axial+energy", "solve_time"] = 0.45
+    assert cheapest_adequate(df).variant == "spring-axial+energy"
     # a failed variant never wins, however fast; with a wide tolerance the cheap one does
-    assert cheapest_adequate(df, tolerance=5.0).variant == "axial+cosine"
+    assert cheapest_adequate(df, tolerance=5.0).variant == "spring-axial+cosine"
     assert cheapest_adequate(df, max_error=0.01) is None
     assert TOLERANCE == pytest.approx(0.10)
 
@@ -97,11 +110,13 @@ def test_cheapest_adequate_rule():
 )
 def test_exact_element_on_other_meshes(scene, divisions):
     """On a jittered Delaunay mesh and on 2:1:1 cells the exact element's small-strain
-    stiffness is still P1's (DESIGN §4b): against linear P1 only the finite-strain spring
+    stiffness is still P1's (docs/theory.rst#the-exact-element-is-the-p1-element): against linear P1
+    only the finite-strain spring
     kinematics remain, a relative change O(theta) with the tip rotation theta = w / L =
-    4e-3 (Timoshenko): bound 1.5e-2 (about 4 theta, the constant unknown); the seed model's
+    4e-3 (Timoshenko): bound 1.5e-2 (about 4 theta, the constant unknown); the specification's
+    element's
     full variant misses by more than 5x that (its volume spring depends on the shape)."""
-    _, r = _run(scene, ("exact", "axial+energy+volume"), divisions)
-    assert r["exact"]["status"] == "ok"
-    assert r["exact"]["error"] < 1.5e-2
-    assert r["axial+energy+volume"]["error"] > 5 * r["exact"]["error"]
+    _, r = _run(scene, ("spring-exact-no-coupling", "spring-axial+energy+volume"), divisions)
+    assert r["spring-exact-no-coupling"]["status"] == "ok"
+    assert r["spring-exact-no-coupling"]["error"] < 1.5e-2
+    assert r["spring-axial+energy+volume"]["error"] > 5 * r["spring-exact-no-coupling"]["error"]

@@ -12,11 +12,12 @@ import pandas as pd
 import pytest
 
 from springfem.scene import scene_from_dict
+from studies import analytic
 from studies import study_accuracy as sa
 from studies.cache import CaseCache
-from studies.compare import bundled_scene
 from studies.metrics import timoshenko_tip_deflection
 from studies.registry import StudyContext
+from studies.scenes import StudyScene, bundled_table
 
 TINY = {
     "cantilever": (10, 1, 1),
@@ -26,6 +27,7 @@ TINY = {
 }
 
 EXTRA = {"cantilever-unstructured": (10, 2, 2), "cantilever-elongated": (5, 1, 1)}
+EXTRA_NAMES = tuple(EXTRA)
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +35,7 @@ def output(tmp_path_factory):
     root = tmp_path_factory.mktemp("acc")
     ctx = StudyContext("accuracy", root / "accuracy", True, CaseCache(root, "a"), False)
     settings = sa.Settings(divisions=TINY, figure_scenes=("cantilever",), extra=EXTRA)
-    out = sa.run(ctx, settings)
+    out = sa.run(ctx, sa.bundled_scenes(settings), settings)
     errors = pd.read_csv(ctx.out / "accuracy_errors.csv").set_index("scene")
     probes = pd.read_csv(ctx.out / "accuracy_probes.csv").set_index("scene")
     return out, errors, probes
@@ -46,7 +48,7 @@ def test_outputs(output):
     for f in out.figures:
         assert f.path.read_bytes()[:4] == b"\x89PNG"
     n = len(sa.SCENES) + len(EXTRA)
-    # model + total per scene, discretisation on two, exact model/total and the seed's vs
+    # model + total per scene, discretisation on two, exact model/total and the specification's vs
     # P1-NH on every scene, the exact vs P1-NH on the isotropic ones (4 of 6)
     assert len(out.headline) == 2 * n + len(sa.DISCRETISATION_HEADLINE) + 2 * n + 2 * (n - 2)
     assert all(np.isfinite(v) for v in out.headline.values())
@@ -79,7 +81,7 @@ def test_spring_stretch_errors(output, dk_reference, name):
 
     _, errors, probes = output
     dk_p1_displacement, _ = dk_reference
-    scene = scene_from_dict(bundled_scene(name, TINY[name]))
+    scene = scene_from_dict(bundled_table(name, {"mesh.divisions": list(TINY[name])}))
     u_dk = dk_p1_displacement(scene)
     u_p1 = reference_fem.solve(scene, order=1).u_vertices
     analytic = probes.at[name, "analytic (m)"]
@@ -91,14 +93,15 @@ def test_spring_stretch_errors(output, dk_reference, name):
     assert errors.at[name, "model err L2"] == pytest.approx(
         errors.at[name, "total err L2"], rel=1e-8
     )
-    # the calibration contracts too much laterally (DESIGN §4): the sign, not a size
+    # the calibration contracts too much laterally
+    # (docs/theory.rst#the-radial-tensor-and-box-meshes): the sign, not a size
     assert probes.at[name, "lateral spring / ref − 1"] > 0
 
 
 def test_cantilever_analytic_is_timoshenko(output):
     _, _, probes = output
-    scene = scene_from_dict(bundled_scene("cantilever", TINY["cantilever"]))
-    probe, comp, value, source = sa.analytic_probe("cantilever", scene)
+    bar = StudyScene.bundled("cantilever", {"mesh.divisions": [10, 1, 1]}, analytic="timoshenko")
+    probe, comp, value, source = analytic.reference(bar, bar.build())
     expected = -timoshenko_tip_deflection(0.1 * 0.01 * 0.01, 0.1, 0.01, 0.01, 1.0e4, 0.3)
     assert (probe, comp, source) == ("tip", 2, "Timoshenko")
     assert value == pytest.approx(expected, rel=1e-12)
@@ -132,12 +135,14 @@ def _max_strain(errors, name):
 
 @pytest.mark.parametrize("name", ["cantilever", *EXTRA])
 def test_exact_element_matches_p1_on_any_mesh(output, name):
-    """The exact element's small-strain stiffness is the P1 element's on any tet (DESIGN
-    §4b), so on the regular, unstructured and elongated cantilever meshes its error against
+    """The exact element's small-strain stiffness is the P1 element's on any tet
+    (docs/theory.rst#the-exact-element-is-the-p1-element), so on the regular, unstructured and
+    elongated cantilever meshes its error against
     P1 neo-Hookean (both at finite strain) is of higher order in the strain: below the
     reference's max Green-Lagrange strain. Against linear P1 the geometric nonlinearity of
     the finite-strain spring model remains: O(rotation), below sqrt(2 max strain) (a rotation
-    theta has Green-Lagrange strain theta^2 / 2). The seed model misses by more than 5 %."""
+    theta has Green-Lagrange strain theta^2 / 2). The specification's element misses by more than 5
+    %."""
     _, errors, _ = output
     strain = _max_strain(errors, name)
     assert errors.at[name, "exact model nh err L2"] < strain
@@ -149,7 +154,7 @@ def test_exact_element_matches_p1_on_any_mesh(output, name):
 def test_exact_coupling_fixes_the_stretches(output, name):
     """Exact element + Poisson coupling on the transversely isotropic stretches: P1 is exact
     (uniform strain), and the spring model solved at finite strain differs from it at
-    O(strain) = 1 %; the seed model's lateral contraction error is gone."""
+    O(strain) = 1 %; the specification's element's lateral contraction error is gone."""
     _, errors, probes = output
     assert errors.at[name, "exact model err L2"] < STRAIN
     assert errors.at[name, "model err L2"] > 5 * STRAIN
@@ -158,9 +163,9 @@ def test_exact_coupling_fixes_the_stretches(output, name):
 
 def test_unstructured_mesh_is_delaunay_of_the_box(output):
     """The jittered Delaunay mesh fills the cantilever's box exactly (its faces stay planar)."""
-    from studies.study_accuracy.variants import jittered_box
-
-    m = jittered_box((0.1, 0.01, 0.01), (10, 2, 2), seed=0)
+    scene = next(s for s in sa.bundled_scenes(sa.Settings()) if s.label == EXTRA_NAMES[0])
+    assert scene.table["mesh"]["split"] == "delaunay"
+    m = scene.with_sets({"mesh.divisions": [10, 2, 2]}).build().mesh
     assert m.volumes().sum() == pytest.approx(1e-5, rel=1e-12)
     assert (m.volumes() > 0).all()
     lo, hi = m.bounding_box()

@@ -1,4 +1,4 @@
-"""``springfem study NAME --scene FILE``: studies on a user's own scene (issue 12 item 1).
+"""``springfem study NAME --scene FILE``: studies on a user's own scene.
 
 The scenes are tiny gmsh boxes written to ``tmp_path`` with the gmsh Python API, so each
 study runs in seconds.
@@ -73,8 +73,10 @@ def accuracy_out(scene_file, tmp_path_factory):
 
 def test_accuracy_on_a_gmsh_scene(accuracy_out):
     """On an unstructured gmsh mesh the exact element matches P1 neo-Hookean to higher order
-    in the strain (below the max Green-Lagrange strain; DESIGN §4b: its small-strain element
-    is P1's) while the seed model, whose volume spring depends on the element shapes, misses
+    in the strain (below the max Green-Lagrange strain;
+    docs/theory.rst#the-exact-element-is-the-p1-element: its small-strain element
+    is P1's) while the specification's element, whose volume spring depends on the element shapes,
+    misses
     by more than 5 %."""
     code, out = accuracy_out
     assert code == 0
@@ -100,12 +102,18 @@ def test_set_changes_the_scene(scene_file, accuracy_out, tmp_path):
 def test_convergence_by_refinement_of_a_file_mesh(scene_file, tmp_path):
     """Uniform refinement of the gmsh mesh (each tet into 8): the level-2 mesh has 8x the
     tets, P1's error against the finest P2 falls, P2 beats P1 on the same mesh, and the exact
-    element's error equals P1's to O(rotation) (DESIGN §4b)."""
-    out = tmp_path / "out"
-    args = ["study", "convergence", "--quick", "--scene", str(scene_file), "--out", str(out)]
-    assert main(args) == 0
-    df = pd.read_csv(out / "convergence" / "convergence_scene_levels.csv")
-    d = df.set_index(["model", "level"])
+    element's error equals P1's to O(rotation) (its small-strain element is P1's)."""
+    from studies import study_convergence
+    from studies.cache import CaseCache
+    from studies.registry import StudyContext
+    from studies.scenes import StudyScene
+
+    out = tmp_path / "out" / "convergence"
+    ctx = StudyContext("convergence", out, True, CaseCache(tmp_path, "c"), False)
+    scenes = [StudyScene.from_file(scene_file)]
+    study_convergence.run(ctx, scenes, study_convergence.Settings.quick())
+    df = pd.read_csv(out / "convergence_levels.csv")
+    d = df.set_index(["model", "factor"])
     assert d.at[("P1", 2), "tets"] == 8 * d.at[("P1", 1), "tets"]
     err = "L2 err (level-1 vertices)"
     assert d.at[("P1", 2), err] < d.at[("P1", 1), err]
@@ -117,7 +125,9 @@ def test_convergence_by_refinement_of_a_file_mesh(scene_file, tmp_path):
     assert np.isfinite(d[err]).all()
 
 
-@pytest.mark.parametrize("name, why", [("scaling", "generated box meshes")])
+@pytest.mark.parametrize(
+    "name, why", [("scaling", "generated box meshes"), ("tissue", "its own bundled tissue scenes")]
+)
 def test_a_study_that_cannot_run_on_a_scene_says_why(scene_file, tmp_path, capsys, name, why):
     code = main(["study", name, "--scene", str(scene_file), "--out", str(tmp_path)])
     assert code == 2
@@ -129,14 +139,18 @@ def test_a_study_that_cannot_run_on_a_scene_says_why(scene_file, tmp_path, capsy
 
 def test_ablation_on_a_gmsh_scene(scene_file, tmp_path):
     """Every variant on the user's mesh against its own P1: the exact element is within
-    O(tip rotation ~ 0.03) of P1 (its small-strain element is P1's, DESIGN §4b) and becomes
-    the most accurate variant; the seed-only winner columns are kept beside it."""
+    O(tip rotation ~ 0.03) of P1 (its small-strain element is P1's,
+    docs/theory.rst#the-exact-element-is-the-p1-element) and becomes
+    the most accurate variant; the specification-only winner columns are kept beside it."""
     out = tmp_path / "out"
     args = ["study", "ablation", "--quick", "--scene", str(scene_file), "--out", str(out)]
     assert main(args) == 0
     w = pd.read_csv(out / "ablation" / "winners.csv").set_index("scene")
     assert list(w.index) == ["gbox"]
-    assert w.at["gbox", "best (with exact)"] in ("exact", "exact+coupling")
+    assert w.at["gbox", "best (with exact)"] in (
+        "spring-exact-no-coupling",
+        "spring-exact+coupling",
+    )
     assert w.at["gbox", "best error (with exact)"] < 0.03
     assert w.at["gbox", "best error"] > w.at["gbox", "best error (with exact)"]
 

@@ -11,7 +11,7 @@ import studies.study_tissue as st
 from springfem.materials.tissue import guccione_tangent, holzapfel_ogden_tangent
 from studies.cache import CaseCache
 from studies.registry import StudyContext
-from studies.study_tissue.cases import GUCCIONE, HOLZAPFEL_OGDEN, stretch_case
+from studies.study_tissue.cases import GUCCIONE, HOLZAPFEL_OGDEN, VERSION, cube, stretch_case
 
 
 def small_strain_tangent(law):
@@ -25,17 +25,15 @@ def small_strain_tangent(law):
 
 @pytest.mark.parametrize("law", ["guccione", "holzapfel-ogden"])
 @pytest.mark.parametrize("direction", ["along", "across"])
-@pytest.mark.parametrize(("model", "variant"), [("fem", None), ("spring", "exact")])
-def test_small_stretch_gives_the_uniaxial_modulus_of_the_tangent(law, direction, model, variant):
+@pytest.mark.parametrize("model", ["fem", "spring-exact"])
+def test_small_stretch_gives_the_uniaxial_modulus_of_the_tangent(law, direction, model):
     # uniaxial stress with free lateral faces: P = E eps with E = 1 / S_xx of the law's
     # small-strain tangent (the fibre, or across it the sheet, in tension); at eps = 0.002
     # the finite-strain terms are O(b eps), < 1 %
     S = np.linalg.inv(small_strain_tangent(law))
     E = 1.0 / S[0, 0] if direction == "along" else 1.0 / S[1, 1]  # x is the sheet axis across
     eps = 0.002
-    case = {"direction": direction, "stretch": 1 + eps, "n": 1, "model": model,
-            "variant": variant, "law": law}  # fmt: skip
-    r = stretch_case(case)
+    r = stretch_case(cube(direction, 1 + eps, 1, law).case("tissue-test", VERSION, model=model))
     assert r["error"] == ""
     assert r["stress"] == pytest.approx(E * eps, rel=0.01)
 
@@ -44,7 +42,8 @@ def test_small_stretch_gives_the_uniaxial_modulus_of_the_tangent(law, direction,
 def output(tmp_path_factory):
     root = tmp_path_factory.mktemp("tissue")
     ctx = StudyContext("tissue", root / "tissue", True, CaseCache(root, "t"), False)
-    return ctx, st.run(ctx, st.Settings.quick())
+    settings = st.Settings.quick()
+    return ctx, st.run(ctx, st.scenes(settings), settings)
 
 
 def test_quick_outputs(output):
@@ -76,22 +75,22 @@ def test_quick_outputs(output):
     # the stiffened exact element is the Guccione law under a stretch along a frame axis
     # (springmodel.stiffening; the same penalty U(J)): equal to the P1 FEM's homogeneous
     # solution to the solvers' tolerance, where the quadratic springs are 40-75 % off at 30 %
-    spring = s[s.model == "spring (stiffened)"].set_index(["direction", "stretch"]).stress
+    spring = s[s.model == "spring-stiffened"].set_index(["direction", "stretch"]).stress
     assert np.allclose(spring, fem[spring.index], rtol=1e-6)
-    exact = s[s.model == "spring (exact)"].set_index(["direction", "stretch"]).stress
+    exact = s[s.model == "spring-exact"].set_index(["direction", "stretch"]).stress
     assert (abs(exact / fem[exact.index] - 1).loc[:, hi] > 0.4).all()
     # Holzapfel-Ogden: one exponent per element, the fibre term's (C = a_f / b_f): along the
     # fibre the stiffened element is that term (the isotropic one aside), far closer than the
     # quadratic element; across, the sheet's b_s is missed and it stays too soft
     ho = every[(every.law == "holzapfel-ogden") & (every.stretch == hi)]
     err = ho.set_index(["direction", "model"]).rel_error
-    assert abs(err[("along", "spring (stiffened)")]) < 0.1 * abs(err[("along", "spring (exact)")])
-    assert err[("across", "spring (stiffened)")] < 0
+    assert abs(err[("along", "spring-stiffened")]) < 0.1 * abs(err[("along", "spring-exact")])
+    assert err[("across", "spring-stiffened")] < 0
     # the ventricle: the stiffened element reaches the full load (the quadratic one stops)
-    assert lv.loc["spring (stiffened)", "load_factor"] == 1.0
-    assert lv.loc["spring (exact)", "load_factor"] < 0.5
+    assert lv.loc["spring-stiffened", "load_factor"] == 1.0
+    assert lv.loc["spring-exact", "load_factor"] < 0.5
     assert any("Land beam" in f for f in out.findings)
-    assert "stress_error_along_spring (exact)" in out.headline
+    assert "stress_error_along_spring-exact" in out.headline
 
 
 def test_quick_apex_convergence(output):

@@ -27,7 +27,7 @@ from studies.sweep_file import load_sweep, parse_sweep
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def tiny(models=("fem-p1", "fem-p2"), **grid):
+def tiny(models=("P1", "P2"), **grid):
     grid = grid or {"mesh.divisions": [[4, 1, 1], [8, 1, 1]], "material.nu": [0.3, 0.45]}
     return {"scene": "cantilever", "models": list(models), "grid": grid}
 
@@ -48,21 +48,21 @@ def test_grid_is_every_combination_and_cases_a_list(tmp_path):
     }
     f = tmp_path / "list.toml"
     f.write_text(
-        'scene = "cantilever"\nmodels = ["spring", "fem-p1"]\n'
+        'scene = "cantilever"\nmodels = ["spring", "P1"]\n'
         '[[cases]]\nmaterial.nu = 0.3\n[[cases]]\n"mesh.divisions" = [4, 1, 1]\n'
     )
     spec = load_sweep(f)
     assert spec.cases == [{"material.nu": 0.3}, {"mesh.divisions": [4, 1, 1]}]
     assert spec.keys == ("material.nu", "mesh.divisions")
-    assert spec.reference == "fem-p1" and spec.name == "list"
+    assert spec.reference == "P1" and spec.name == "list"
 
 
 @pytest.mark.parametrize(
     "models, reference, expected",
     [
-        (["spring", "fem-p1", "fem-p2"], None, "fem-p2"),
-        (["fem-p1", "fem-p2", "fem-p2-nh"], None, "fem-p2-nh"),
-        (["spring"], "fem-p1", "fem-p1"),  # a reference not listed is added
+        (["spring", "P1", "P2"], None, "P2"),
+        (["P1", "P2", "P2-NH"], None, "P2-NH"),
+        (["spring"], "P1", "P1"),  # a reference not listed is added
     ],
 )
 def test_reference_is_the_finest_fem(models, reference, expected):
@@ -78,14 +78,14 @@ def test_scene_path_is_relative_to_the_sweep_file(tmp_path):
     text = (ROOT / "studies" / "scenes" / "cantilever.toml").read_text()
     (tmp_path / "sub" / "beam.toml").write_text(text.replace('"cantilever"', '"beam"'))
     f = tmp_path / "s.toml"
-    f.write_text('scene = "sub/beam.toml"\nmodels = ["fem-p1"]\n')
+    f.write_text('scene = "sub/beam.toml"\nmodels = ["P1"]\n')
     assert load_sweep(f).scene_path == tmp_path / "sub" / "beam.toml"
 
 
 @pytest.mark.parametrize(
     "data, needle",
     [
-        ({"models": ["fem-p1"]}, "scene: missing"),
+        ({"models": ["P1"]}, "scene: missing"),
         ({"scene": "nope"}, "no bundled scene"),
         ({"scene": "cantilever", "models": ["fem-p3"]}, "unknown model 'fem-p3'"),
         ({"scene": "cantilever", "models": ["spring"]}, "no FEM model listed"),
@@ -107,7 +107,7 @@ def test_bad_sweep_files_are_one_line_input_errors(data, needle):
 
 def test_table_rows_columns_and_resume(tmp_path):
     out = tmp_path / "out"
-    spec = parse_sweep(tiny(models=("spring", "fem-p1", "fem-p2")))
+    spec = parse_sweep(tiny(models=("spring", "P1", "P2")))
     run = run_sweep(spec, out, progress=False)
     t = pd.read_parquet(out / "results.parquet")
     csv = pd.read_csv(out / "results.csv", dtype={"message": str}).fillna(
@@ -120,15 +120,15 @@ def test_table_rows_columns_and_resume(tmp_path):
                 "wall_time"):  # fmt: skip
         assert col in t.columns
     assert set(t["status"]) == {"ok"}
-    ref = t[t["model"] == "fem-p2"]
+    ref = t[t["model"] == "P2"]
     assert (ref["rel_l2"] == 0).all() and (ref["probe_error:tip"] == 0).all()  # vs itself
     # the grid columns are the case's values: the 8x1x1 mesh has 6 * 8 tets
     assert set(t.loc[t["mesh.divisions"] == "[8, 1, 1]", "tets"]) == {48}
     # relative probe error recomputed from the table's own probe columns (independent path)
     for _, d in t.groupby("case"):
-        r = d[d["model"] == "fem-p2"][["probe:tip:ux", "probe:tip:uy", "probe:tip:uz"]].to_numpy()
-        u = d[d["model"] == "fem-p1"][["probe:tip:ux", "probe:tip:uy", "probe:tip:uz"]].to_numpy()
-        e = d.loc[d["model"] == "fem-p1", "probe_error:tip"].item()
+        r = d[d["model"] == "P2"][["probe:tip:ux", "probe:tip:uy", "probe:tip:uz"]].to_numpy()
+        u = d[d["model"] == "P1"][["probe:tip:ux", "probe:tip:uy", "probe:tip:uz"]].to_numpy()
+        e = d.loc[d["model"] == "P1", "probe_error:tip"].item()
         assert e == pytest.approx(np.linalg.norm(u - r) / np.linalg.norm(r), rel=1e-12)
     pngs = sorted(p.name for p in out.glob("*.png"))
     assert pngs == ["error_vs_material.nu.png", "error_vs_mesh.divisions.png",
@@ -141,22 +141,22 @@ def test_table_rows_columns_and_resume(tmp_path):
 
 
 def test_failures_are_rows_not_crashes(tmp_path, monkeypatch):
-    import studies.compare
+    from studies.models import Model
 
-    real = studies.compare.solve_model
+    real = Model.solve
 
-    def flaky(scene, name):
-        if name == "P2" and scene.material.nu > 0.4:
+    def flaky(self, scene, verbose=False):
+        if self.name == "P2" and scene.material.nu > 0.4:
             raise SolverError("P2 diverged (test)")
-        return real(scene, name)
+        return real(self, scene, verbose)
 
-    monkeypatch.setattr(studies.compare, "solve_model", flaky)
+    monkeypatch.setattr(Model, "solve", flaky)
     run = run_sweep(parse_sweep(tiny()), tmp_path, progress=False, figures=False)
     t = run.table
     bad = t[t["material.nu"] == 0.45]
-    assert set(bad.loc[bad["model"] == "fem-p2", "status"]) == {"failed"}
-    assert set(bad.loc[bad["model"] == "fem-p2", "message"]) == {"P2 diverged (test)"}
-    p1 = bad[bad["model"] == "fem-p1"]
+    assert set(bad.loc[bad["model"] == "P2", "status"]) == {"failed"}
+    assert set(bad.loc[bad["model"] == "P2", "message"]) == {"P2 diverged (test)"}
+    p1 = bad[bad["model"] == "P1"]
     assert set(p1["status"]) == {"reference failed"} and p1["rel_l2"].isna().all()
     assert p1["probe:tip:uz"].notna().all()  # its own solution is kept
     assert set(t.loc[t["material.nu"] == 0.3, "status"]) == {"ok"}
@@ -164,14 +164,12 @@ def test_failures_are_rows_not_crashes(tmp_path, monkeypatch):
 
 def test_cli_sweep_exit_codes(tmp_path, capsys):
     f = tmp_path / "s.toml"
-    f.write_text(
-        'scene = "cantilever"\nmodels = ["fem-p1"]\n[grid]\n"mesh.divisions" = [[4, 1, 1]]\n'
-    )
+    f.write_text('scene = "cantilever"\nmodels = ["P1"]\n[grid]\n"mesh.divisions" = [[4, 1, 1]]\n')
     assert main(["sweep", str(f), "--out", str(tmp_path / "o"), "--set", "material.E=2e4"]) == 0
     assert "1 cases x 1 models (1 computed, 0 cached)" in capsys.readouterr().out
     row = json.loads((next((tmp_path / "o" / "cases").glob("*.json"))).read_text())
     assert row["case"]["scene"]["material"]["E"] == 2e4  # --set under every case
-    f.write_text('scene = "cantilever"\nmodels = ["fem-p1"]\n[grid]\n"mesh.nope" = [1]\n')
+    f.write_text('scene = "cantilever"\nmodels = ["P1"]\n[grid]\n"mesh.nope" = [1]\n')
     assert main(["sweep", str(f)]) == 2
     err = capsys.readouterr().err.strip()
     assert "mesh.nope: unknown key" in err and "\n" not in err
@@ -212,7 +210,7 @@ def test_local_cluster_survives_a_killed_worker_and_resumes(tmp_path):
     # the cheapest cases that still show it: one model, the other worker finishing two cases
     # while the victim waits to be killed
     divs = [[4, 1, 1], [5, 1, 1], [6, 1, 1]]
-    spec = parse_sweep(tiny(models=("fem-p1",), **{"mesh.divisions": divs}))
+    spec = parse_sweep(tiny(models=("P1",), **{"mesh.divisions": divs}))
     work = partial(_marked_case, str(marker), [5, 1, 1])
     stop = threading.Event()
     killer = threading.Thread(target=_kill_victim, args=(marker, stop), daemon=True)
@@ -253,7 +251,7 @@ def test_joins_an_existing_scheduler(tmp_path):
 def test_killed_client_loses_no_finished_case(tmp_path):
     f = tmp_path / "s.toml"
     f.write_text(
-        'scene = "cantilever"\nmodels = ["fem-p1", "fem-p2"]\n[grid]\n'
+        'scene = "cantilever"\nmodels = ["P1", "P2"]\n[grid]\n'
         '"mesh.divisions" = [[20, 2, 2], [24, 2, 2], [28, 3, 3], [32, 3, 3], [36, 4, 4], '
         "[40, 4, 4]]\n"
     )

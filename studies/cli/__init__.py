@@ -1,67 +1,31 @@
-"""The ``springfem`` command line: inspect, solve, compare, study, report, bench.
+"""The ``springfem`` command line: inspect, solve, compare, verdict, study, report, sweep,
+bench.
 
-Exit codes (DESIGN §6): 0 ok, 2 bad input (one clear line on stderr, no traceback),
-3 solver failure (what, where, when), 1 internal error.
+This package holds the parser and one module per command (:mod:`.inspect`, :mod:`.solve`,
+:mod:`.compare`, :mod:`.verdict`, :mod:`.study`, :mod:`.sweep`, :mod:`.bench`); nothing
+else imports it.
+Exit codes: 0 ok, 2 bad input (one clear line on stderr, no traceback), 3 solver failure
+(what, where, when), 1 internal error.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 
 # One BLAS thread: multithreaded OpenBLAS on a busy 2-core machine is many times slower
 # for the small dense factorisations of the solvers (set before numpy is imported).
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 # Passive OpenMP waiting: spinning threads of the parallel kernels otherwise steal the
-# other core on a busy machine (measured 10-20x slower than serial).
+# other core on a busy machine (far slower than serial).
 os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 import sys
 import traceback
 from collections.abc import Callable, Sequence
-from pathlib import Path
 
-from springfem.errors import InputError, SpringFemError
+from springfem.errors import SpringFemError
 
-from .overrides import add_set_option  # sweeps
-
-SCENES = Path(__file__).resolve().parent / "scenes"
-DEFAULT_SCENE = SCENES / "cantilever.toml"
-
-
-def scene_path(name: str | None) -> Path:
-    """A scene file path, or the name of a bundled scene (``cantilever``, ``sag`` …)."""
-    if name is None:
-        return DEFAULT_SCENE
-    p = Path(name)
-    if p.is_file():
-        return p
-    bundled = SCENES / f"{name}.toml"
-    if bundled.is_file() and p.suffix == "":
-        return bundled
-    names = ", ".join(sorted(s.stem for s in SCENES.glob("*.toml")))
-    raise InputError(f"scene file {name} does not exist (bundled scenes: {names})")
-
-
-def _print_json(obj) -> None:
-    print(json.dumps(obj, indent=2, sort_keys=True))
-
-
-def cmd_inspect(args: argparse.Namespace) -> int:
-    from springfem.scene import load_scene
-    from springmodel.inspect import inspect_scene
-
-    scene = load_scene(scene_path(args.scene))
-    report = inspect_scene(scene)
-    for note in scene.mesh.notes:
-        print(f"note: {note}", file=sys.stderr)
-    if args.json:
-        _print_json(report)
-    else:
-        width = max(len(k) for k in report)
-        for key, value in report.items():
-            print(f"{key:<{width}}  {value}")
-    return 0
+from ..overrides import add_set_option
 
 
 def _subcommand(module: str, func: str) -> Callable[[argparse.Namespace], int]:
@@ -97,6 +61,14 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _model_list(text: str) -> list[str]:
+    """An argparse type: comma-separated model names (checked against the registry later)."""
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError("no model named")
+    return names
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with usage errors as one line (exit 2), like every other bad input."""
 
@@ -114,12 +86,12 @@ class _StudyParser(_Parser):
     def format_help(self) -> str:
         import inspect
 
-        from .runner import REGISTRY
+        from ..runner import REGISTRY
 
         rows = []
         for name, spec in REGISTRY.items():
             doc = _first_line(inspect.getmodule(spec.run).__doc__)
-            mark = "*" if hasattr(spec.settings, "for_scene") else " "
+            mark = "*" if spec.user_scenes is None else " "
             rows.append(f"  {name.replace('_', '-'):<16}{mark} {doc}")
         names = "\n".join(rows)
         return super().format_help() + f"\nstudies (* also runs on --scene FILE):\n{names}\n"
@@ -144,7 +116,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("inspect", help="mesh, axes and intersection statistics of a scene")
     p.add_argument("scene", help="scene TOML file or bundled scene name")
     p.add_argument("--json", action="store_true", help="print JSON")
-    p.set_defaults(func=cmd_inspect)
+    p.set_defaults(func=_subcommand("studies.cli.inspect", "cmd_inspect"))
 
     p = sub.add_parser("solve", help="solve a scene with one model")
     p.add_argument("scene", help="scene TOML file or bundled scene name")
@@ -160,14 +132,35 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-steps", type=_positive_int, default=None, metavar="N",
                    help="stop a time-stepping solve after N steps (exit 3)")  # fmt: skip
     add_set_option(p)  # sweeps: --set key=value
-    p.set_defaults(func=_subcommand("studies.solve", "cmd_solve"))
+    p.set_defaults(func=_subcommand("studies.cli.solve", "cmd_solve"))
 
     p = sub.add_parser("compare", help="spring model vs FEM (P1, P2) on the same scene")
     p.add_argument("scene", nargs="?", default=None, help="scene (default: cantilever)")
     p.add_argument("--out", default=None, help="output folder (default: out/compare-<scene>)")
     p.add_argument("--json", action="store_true", help="print the table as JSON")
+    p.add_argument("--models", type=_model_list, default=None, metavar="M1,M2,...",
+                   help="models to run, e.g. spring,p1 (default: spring, P1, P2 and, at "
+                   "large strain, P1-NH, P2-NH); the reference is the finest FEM among "
+                   "them")  # fmt: skip
+    p.add_argument("--verbose", "-v", action="store_true",
+                   help="print each model's solver progress")  # fmt: skip
+    p.add_argument("--max-time", type=_positive_float, default=None, metavar="SECONDS",
+                   help="stop each model's solve after this wall time (a FAILED row)")  # fmt: skip
     add_set_option(p)  # sweeps: --set key=value
-    p.set_defaults(func=_subcommand("studies.compare_output", "cmd_compare"))
+    p.set_defaults(func=_subcommand("studies.cli.compare", "cmd_compare"))
+
+    p = sub.add_parser("verdict", help="which model is good enough for a scene, and how fast")
+    p.add_argument("scene", help="scene TOML file or bundled scene name")
+    p.add_argument("--tolerance", type=_positive_float, default=0.05,
+                   help="largest relative L2 error vs the reference (default 0.05)")  # fmt: skip
+    p.add_argument("--budget", type=_positive_float, default=None, metavar="SECONDS",
+                   help="time for the whole verdict; each solve gets the time left")  # fmt: skip
+    p.add_argument("--models", type=_model_list, default=None, metavar="M1,M2,...",
+                   help="the models to weigh (default: every one that applies)")  # fmt: skip
+    p.add_argument("--out", default=None, help="output folder (default: out/verdict-<scene>)")
+    p.add_argument("--json", action="store_true", help="print the verdict as JSON")
+    add_set_option(p)
+    p.set_defaults(func=_subcommand("studies.cli.verdict", "cmd_verdict"))
 
     p = sub.add_parser("study", help="run one study into reports/")
     p.__class__ = _StudyParser  # lists the studies in its --help
@@ -191,7 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="run the cases on a local Dask cluster of N processes")  # fmt: skip
     where.add_argument("--scheduler", default=None, metavar="ADDRESS",
                        help="run the cases on a Dask cluster, e.g. tcp://host:8786")  # fmt: skip
-    p.set_defaults(func=_subcommand("studies.runner", "cmd_study"))
+    p.set_defaults(func=_subcommand("studies.cli.study", "cmd_study"))
 
     p = sub.add_parser("sweep", help="a scene over a grid of values (SWEEP.toml), on Dask")
     p.add_argument("file", help="sweep TOML file (see studies/sweeps/cantilever.toml)")
@@ -202,22 +195,22 @@ def build_parser() -> argparse.ArgumentParser:
     where.add_argument("--scheduler", default=None, metavar="ADDRESS",
                        help="join a Dask cluster, e.g. tcp://host:8786")  # fmt: skip
     add_set_option(p)
-    p.set_defaults(func=_subcommand("studies.sweep", "cmd_sweep"))
+    p.set_defaults(func=_subcommand("studies.cli.sweep", "cmd_sweep"))
 
     p = sub.add_parser("report", help="run all studies and write reports/REPORT.md")
     p.add_argument("--quick", action="store_true", help="coarser meshes, fewer points")
     p.add_argument(
         "--out", default=None, help="report folder (default reports/, quick: reports/quick/)"
     )
-    p.set_defaults(func=_subcommand("studies.runner", "cmd_report"))
+    p.set_defaults(func=_subcommand("studies.cli.study", "cmd_report"))
 
-    p = sub.add_parser("bench", help="benchmarks: spring force kernel or FEM assembly/solve")
-    p.add_argument("what", choices=("forces", "fem", "step"))
+    p = sub.add_parser("bench", help="benchmarks: spring force kernel, threads rule, FEM, steps")
+    p.add_argument("what", choices=("forces", "fem", "step", "threads"))
     p.add_argument("--tets", type=int, default=None, help="approximate number of tets")
     p.add_argument("--repeats", type=int, default=7, help="repeats (median reported)")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.add_argument("--variants", action="store_true", help="forces: every spring variant too")
-    p.set_defaults(func=_subcommand("studies.bench", "cmd_bench"))
+    p.set_defaults(func=_subcommand("studies.cli.bench", "cmd_bench"))
     return parser
 
 

@@ -1,0 +1,56 @@
+"""``springfem bench forces|fem|step|threads``: interleaved benchmarks (medians, ratios)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+from ..bench import DEFAULT_TETS, bench_forces, bench_step, machine
+from ..bench_print import print_forces, print_step, print_threads
+from ..bench_threads import bench_threads
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    """Entry point of ``springfem bench``."""
+    from springfem.errors import InputError
+
+    what = args.what
+    n = args.tets if args.tets is not None else DEFAULT_TETS[what]
+    repeats = int(getattr(args, "repeats", 7) or 7)
+    if n < 6:
+        raise InputError(f"--tets must be at least 6, got {n}")
+    if repeats < 1:
+        raise InputError(f"--repeats must be at least 1, got {repeats}")
+    as_json = bool(getattr(args, "json", False))
+    if what == "forces":
+        res = bench_forces(n, repeats, variants=bool(getattr(args, "variants", False)))
+        if not as_json:
+            print_forces(res)
+    elif what == "step":
+        res = bench_step(n, repeats)
+        if not as_json:
+            print_step(res)
+    elif what == "threads":
+        res = bench_threads(n, repeats)
+        if not as_json:
+            print_threads(res)
+    elif what == "fem":
+        from reference_fem import bench
+        from reference_fem.bench import _print as print_fem
+
+        t0 = time.perf_counter()
+        res = bench(n, verbose=False)
+        res["machine"] = machine()
+        res["seconds"] = time.perf_counter() - t0
+        if not as_json:
+            print_fem(res, file=sys.stdout)  # its default stream is bound at import time
+            print(f"  machine load average {res['machine']['load_average']}")
+    else:  # argparse restricts the choices
+        raise InputError(f"unknown benchmark {what!r}; valid: forces, fem, step, threads")
+    if as_json:
+        from springfem.files import jsonable as _jsonable
+
+        print(json.dumps(_jsonable(res), indent=2, sort_keys=True))
+    return 0

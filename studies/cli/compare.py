@@ -1,0 +1,98 @@
+"""``springfem compare [SCENE]``: the spring model against FEM P1 and P2 on the same mesh."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from springfem.files import jsonable
+from springfem.mechanics.limits import solve_limits
+from springfem.result import write_result
+
+from ..compare import compare_scene
+from ..compare_output import printable, render_comparison, summary_lines
+from ..overrides import load_scene_with
+from ..scenes import scene_path
+from ..tables import write_table
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    """``springfem compare [SCENE] [--out DIR] [--json] [--models M,..] [-v] [--max-time S]``.
+
+    Parameters
+    ----------
+    args
+        Parsed arguments: ``scene``, ``out``, ``json``, ``models``, ``verbose``,
+        ``max_time`` (per model).
+
+    Returns
+    -------
+    int
+        Exit code: 0, or 3 when a model failed.
+    """
+    scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))  # sweeps: --set
+    quiet = bool(getattr(args, "json", False))
+    out = Path(args.out) if args.out else Path("out") / f"compare-{scene.name}"
+
+    def log(msg: str) -> None:
+        print(msg, file=sys.stderr if quiet else sys.stdout, flush=True)
+
+    for note in scene.mesh.notes:
+        print(f"note: {note}", file=sys.stderr)
+    log(
+        f"{scene.name}: {scene.mesh.n_points} nodes, {scene.mesh.n_tets} tets, "
+        f"law {scene.material.law}"
+    )
+    models = getattr(args, "models", None)
+    verbose = bool(getattr(args, "verbose", False))
+    with solve_limits(max_time=getattr(args, "max_time", None)):
+        cmp = compare_scene(scene, models, log=log, allow_no_reference=True, verbose=verbose)
+    md = write_table(cmp.table, out / "compare")
+    for name, sol in cmp.solutions.items():
+        write_result(
+            out / name,
+            sol.result,
+            scene.mesh,
+            sol.u,
+            cell_data=sol.cell_data,
+            point_data={"error": cmp.error_field(name)} if cmp.reference else None,
+        )
+    for name, sol in cmp.partial.items():  # the state a failed model stopped at
+        write_result(out / name, sol.result, scene.mesh, sol.u, stem="partial")
+    png = None
+    try:
+        if cmp.reference:
+            png = render_comparison(cmp, out / "compare.png")
+    except Exception as exc:  # noqa: BLE001 - a missing OpenGL must not lose the table
+        print(f"springfem: warning: figure not rendered: {type(exc).__name__}: {exc}",
+              file=sys.stderr)  # fmt: skip
+    files = {"csv": str(md.with_suffix(".csv")), "markdown": str(md)}
+    if png is not None:
+        files["png"] = str(png)
+    if quiet:
+        payload = {
+            "scene": scene.name,
+            "reference": cmp.reference,
+            "max_principal_strain_p1": cmp.strain,
+            "notes": cmp.notes,
+            "failures": cmp.failures,
+            "summary": summary_lines(cmp),
+            "rows": cmp.table.to_dict(orient="records"),
+            "files": files,
+        }
+        print(json.dumps(jsonable(payload), indent=2))
+    else:
+        print()
+        print(printable(cmp.table))
+        print()
+        for note in cmp.notes:
+            print(f"note: {note}")
+        print(f"reference: {cmp.reference or 'none (FAILED)'}")
+        for line in summary_lines(cmp):
+            print(line)
+        print("wrote " + ", ".join(files.values()) + f" and {out}/<model>/result.json + .vtu")
+    for name, msg in cmp.failures.items():
+        print(f"springfem: solver failure: {name}: {msg}", file=sys.stderr)
+    return 3 if cmp.failures else 0

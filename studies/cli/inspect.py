@@ -1,0 +1,38 @@
+"""``springfem inspect SCENE [--json]``: mesh, quality, axes, ray casting, calibration."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..scenes import scene_path
+from .common import print_json
+
+
+def cmd_inspect(args: argparse.Namespace) -> int:
+    """Print the spring model's statistics of a scene (:func:`springmodel.inspect`).
+
+    Parameters
+    ----------
+    args
+        Parsed options ``scene``, ``json``.
+
+    Returns
+    -------
+    int
+        The exit code (0).
+    """
+    from springfem.scene import load_scene
+    from springmodel.inspect import inspect_scene
+
+    scene = load_scene(scene_path(args.scene))
+    report = inspect_scene(scene)
+    for note in scene.mesh.notes:
+        print(f"note: {note}", file=sys.stderr)
+    if args.json:
+        print_json(report)
+    else:
+        width = max(len(k) for k in report)
+        for key, value in report.items():
+            print(f"{key:<{width}}  {value}")
+    return 0

@@ -1,0 +1,98 @@
+"""``springfem study NAME`` and ``springfem report``: run registered studies."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from springfem.errors import InputError
+from springfem.files import safe_filename
+
+from ..html import write_index
+from ..runner import default_out, run_report, run_study
+
+
+def cmd_study(args: argparse.Namespace) -> int:
+    """``springfem study NAME [--quick] [--out DIR] [--scene FILE] [--set K=V] [--workers N]``.
+
+    Runs one study (on the bundled scenes, or on ``--scene`` with ``--set`` overrides where
+    the study supports it) and prints what it found.
+
+    Parameters
+    ----------
+    args
+        Parsed options ``name``, ``quick``, ``out``, ``scene``, ``set``, ``workers``,
+        ``scheduler``.
+
+    Returns
+    -------
+    int
+        The exit code (0).
+
+    Raises
+    ------
+    InputError
+        If the study cannot run on the given scene (the message says why), or ``--set``
+        is given without ``--scene``.
+    """
+    from ..registry import get_study
+    from ..scenes import StudyScene
+
+    spec = get_study(args.name)
+    sets = list(getattr(args, "set", None) or [])
+    scene = getattr(args, "scene", None)
+    scenes = None
+    out = default_out(args.out, args.quick)
+    if scene is not None:
+        if spec.user_scenes is not None:
+            name = spec.name.replace("_", "-")
+            raise InputError(f"study {name} cannot run on --scene: {spec.user_scenes}")
+        from ..overrides import parse_assignment
+
+        user = StudyScene.from_file(scene, [parse_assignment(a) for a in sets])
+        scenes = [user]
+        if args.out is None:
+            out = Path("out") / f"study-{safe_filename(user.label)}"
+    elif sets:
+        raise InputError("--set needs --scene (the bundled studies run their own scenes)")
+    command = None
+    if scene is not None:
+        sets_text = "".join(f" --set {a}" for a in sets)
+        command = f"springfem study {args.name}{' --quick' * args.quick} --scene {scene}{sets_text}"
+    res = run_study(spec.name, out, args.quick, scenes=scenes,
+                    workers=getattr(args, "workers", None),
+                    scheduler=getattr(args, "scheduler", None), command=command)  # fmt: skip
+    if scene is not None:
+        write_index(out, f"springfem studies of {scenes[0].label}",
+                    f"Every study run on the scene {scene} into this folder.")  # fmt: skip
+    print(f"{res.title} ({res.seconds:.1f} s)")
+    for line in res.findings:
+        print(f"  - {line}")
+    for t in res.tables:
+        print(f"  table:  {t.path}")
+    for f in res.figures:
+        print(f"  figure: {f.path}")
+    if scene is not None:
+        print(f"  page:   {out / 'index.html'}")
+    return 0
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    """``springfem report [--quick] [--out DIR]``: run every study and write the report.
+
+    Parameters
+    ----------
+    args
+        Parsed options ``quick``, ``out``.
+
+    Returns
+    -------
+    int
+        The exit code (0).
+    """
+    out = default_out(args.out, args.quick)
+    outputs = run_report(out, args.quick)
+    total = sum(o.seconds for o in outputs)
+    pages = f"{out / 'REPORT.md'} and {out / 'index.html'}"
+    print(f"wrote {pages} ({len(outputs)} studies, {total:.0f} s)")
+    return 0

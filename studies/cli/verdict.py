@@ -1,0 +1,64 @@
+"""``springfem verdict SCENE``: is the spring model good enough here, and how fast is it?"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from springfem.files import jsonable, safe_filename
+
+from ..compare_output import printable
+from ..overrides import load_scene_with
+from ..scenes import scene_path
+from ..tables import write_table
+from ..verdict import verdict
+
+
+def cmd_verdict(args: argparse.Namespace) -> int:
+    """Weigh every applicable model against the scene's reference; print the verdict.
+
+    Parameters
+    ----------
+    args
+        Parsed options ``scene``, ``set``, ``tolerance``, ``budget``, ``models``, ``out``,
+        ``json``.
+
+    Returns
+    -------
+    int
+        The exit code (0; 3 when no reference could be solved).
+    """
+    scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))
+    quiet = bool(args.json)
+
+    def log(line: str) -> None:
+        print(line, file=sys.stderr if quiet else sys.stdout, flush=True)
+
+    log(f"{scene.name}: {scene.mesh.n_tets} tets, law {scene.material.law}")
+    v = verdict(scene, args.tolerance, args.budget, args.models, log=log)
+    out = Path(args.out) if args.out else Path("out") / f"verdict-{safe_filename(scene.name)}"
+    md = write_table(v.table, out / "verdict")
+    if quiet:
+        payload = {
+            "scene": v.scene,
+            "tolerance": v.tolerance,
+            "reference": v.reference,
+            "static": v.static_pick,
+            "dynamic": v.dynamic_pick,
+            "sentence": v.sentence,
+            "notes": v.notes,
+            "rows": v.table.to_dict(orient="records"),
+            "files": {"csv": str(md.with_suffix(".csv")), "markdown": str(md)},
+        }
+        print(json.dumps(jsonable(payload), indent=2))
+    else:
+        print()
+        print(printable(v.table.drop(columns=["message"])))
+        print()
+        for note in v.notes:
+            print(f"note: {note}")
+        print(f"verdict: {v.sentence}")
+        print(f"wrote {md.with_suffix('.csv')} and {md}")
+    return 0 if v.reference else 3

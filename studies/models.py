@@ -1,0 +1,573 @@
+"""The models: one name, one label and one solve per model, in one registry.
+
+Every comparison, sweep and study names its models here, so a model has one spelling in
+the command line (``compare --models``), in tables, figures, sweep files and headline keys.
+Names are looked up case-insensitively (``p1`` is ``P1``); a misspelt name gets a "did you
+mean". Failures are caught in one place, :func:`run`.
+
+Models
+------
+``spring``
+    the spring model with the scene's ``[spring]`` options;
+``spring-<variant>``
+    the spring model with a variant's changes to the scene's ``[spring]`` options
+    (:func:`spring_variant`; ``spring-energy``, ``spring-cosine``: that torsion law), or a
+    whole element of its own: ``spring-spec`` (the specification's element: barycentric
+    volume springs, cosine torsion, the analytic calibration), ``spring-exact`` (axis-volume
+    + energy torsion + the exact calibration, with the Poisson-coupling springs for an
+    anisotropic law: P1's small-strain element on any tet), ``spring-stiffened`` (the exact
+    element for tissue at finite strain: Green axial springs, shear torsion, exponential
+    stiffening);
+``fem``
+    the FEM the scene's ``[fem]`` section and law ask for (``springfem solve --model fem``);
+``P1``, ``P2``
+    FEM on the scene's mesh with the scene's small-strain law (``linear`` or
+    ``transverse-linear``; ``linear`` with ``E, nu`` for a neo-Hookean scene), or for a
+    finite-strain tissue law the scene's own law: ``P2`` with the scene's formulation,
+    ``P1`` in the displacement formulation with the scene's ``kappa`` or, for an
+    incompressible material, the spring model's penalty (:func:`p1_penalty`);
+``P1-NH``, ``P2-NH``
+    neo-Hookean FEM (the scene's formulation); not for anisotropic laws.
+
+Examples
+--------
+>>> get("p1-nh").name, get("P1-NH").label
+('P1-NH', 'FEM P1 neo-Hookean')
+>>> get("spring-exact").changes
+{'volume': 'axes', 'torsion': 'energy', 'calibration': 'exact'}
+>>> from springfem.scene import scene_from_dict
+>>> scene = scene_from_dict({"mesh": {"generator": "box", "size": [0.1, 0.01, 0.01],
+...     "divisions": [4, 1, 1]}, "material": {"law": "linear", "E": 1e4, "nu": 0.3},
+...     "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+...     "load": [{"type": "traction", "region": "x_max", "value": [0, 0, -0.1]}]})
+>>> [run(scene, m).status for m in ("spring-exact", "P1")]
+['ok', 'ok']
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any, Literal
+
+import numpy as np
+
+from reference_fem.options import FemOptions
+from springfem.errors import InputError, SolverError
+from springfem.materials.tissue import TISSUE_LAWS
+from springfem.mechanics.limits import SolveStopped
+from springfem.scene import Scene
+from springfem.scene.reader import suggestion
+
+from .partial import partial_solution
+from .solve import Solution
+
+#: The exact spring element: small-strain P1 on any tet (with coupling when anisotropic).
+EXACT = {"volume": "axes", "torsion": "energy", "calibration": "exact"}
+#: The spring element for tissue at finite strain: the exact element with Green axial
+#: springs, the shear torsion law, the exponential stiffening of the element energy and the
+#: tissue laws' log penalty ``U(J)``.
+STIFFENED = {
+    "volume": "axes",
+    "torsion": "shear",
+    "calibration": "exact",
+    "axial": "green",
+    "stiffening": "exponential",
+    "volumetric": "log",
+}
+#: The ``[spring]`` options that choose the element (the rest choose the solver): a model
+#: that *defines* an element resets them to the defaults before its changes.
+ELEMENT_KEYS = (
+    *("axial", "axial_coefficients", "torsion", "torsion_cubic", "volume", "volume_average"),
+    *("nodal_fraction", "stiffening", "stiffening_modulus", "volumetric", "coupling"),
+    *("volume_form", "lms", "calibration", "k_axial", "k_torsion", "k_volume"),
+)
+#: Laws with an anisotropic small-strain tangent (the exact element adds coupling springs).
+ANISOTROPIC_LAWS = ("transverse-linear", *TISSUE_LAWS)
+
+
+@dataclass(frozen=True)
+class Model:
+    """A model of the registry.
+
+    Attributes
+    ----------
+    name
+        Its one spelling.
+    label
+        A longer human name for tables and figures.
+    kind
+        ``spring`` or ``fem``.
+    changes
+        Spring models: changes to the scene's ``[spring]`` options (values of
+        :class:`springmodel.options.SpringOptions`; ``lms`` may be a rule name and
+        ``axial`` ``"green"``, as in a scene file).
+    coupling
+        Spring models: add the Poisson-coupling springs when the law is anisotropic.
+    element
+        Spring models: the model defines the whole element (:data:`ELEMENT_KEYS` start from
+        their defaults, whatever the scene's ``[spring]`` says); otherwise ``changes``
+        modify the scene's options.
+    order
+        FEM models: 1 or 2 (``None``: the scene's ``[fem] order``).
+    law
+        FEM models: ``small-strain``, ``neo-hookean`` or ``scene`` (the scene's own law and
+        formulation).
+    """
+
+    name: str
+    label: str
+    kind: Literal["spring", "fem"]
+    changes: Mapping[str, Any] = field(default_factory=dict)
+    coupling: bool = False
+    element: bool = False
+    order: int | None = None
+    law: Literal["small-strain", "neo-hookean", "scene"] = "small-strain"
+
+    # -- what the model solves ---------------------------------------------------------------
+    def applies(self, scene: Scene) -> str | None:
+        """Why this model cannot solve ``scene`` (``None``: it can).
+
+        Parameters
+        ----------
+        scene
+            The scene.
+
+        Returns
+        -------
+        str or None
+        """
+        if self.kind == "fem" and self.law == "neo-hookean":
+            law = scene.material.law
+            if law == "transverse-linear":
+                return (
+                    f"model {self.name}: reference_fem has no anisotropic hyperelastic law "
+                    "for the transverse-linear material"
+                )
+            if law in TISSUE_LAWS:
+                return (
+                    f"model {self.name}: neo-Hookean is not the scene's {law} law; P1 and P2 "
+                    "solve that law"
+                )
+        return None
+
+    def spring_options(self, scene: Scene):
+        """The spring options this model solves ``scene`` with (spring models only).
+
+        Parameters
+        ----------
+        scene
+            The scene.
+
+        Returns
+        -------
+        springmodel.options.SpringOptions
+        """
+        from springmodel.options import GREEN_AXIAL_COEFFICIENTS, LMSOptions, SpringOptions
+
+        changes = dict(self.changes)
+        if isinstance(changes.get("lms"), str):
+            changes["lms"] = LMSOptions(rule=changes["lms"])
+        if changes.get("axial") == "green":  # the scene files' spelling of the cubic law
+            changes["axial"], changes["axial_coefficients"] = "cubic", GREEN_AXIAL_COEFFICIENTS
+        if self.coupling and scene.material.law in ANISOTROPIC_LAWS:
+            changes["coupling"] = True
+        options = SpringOptions.of(scene)
+        if self.element:
+            default = SpringOptions()
+            options = replace(options, **{k: getattr(default, k) for k in ELEMENT_KEYS})
+        return replace(options, **changes)
+
+    def fem_settings(self, scene: Scene) -> tuple[Scene, int | None, str | None]:
+        """``(scene, order, law)`` of :func:`reference_fem.solve` for this FEM model.
+
+        Parameters
+        ----------
+        scene
+            The scene.
+
+        Returns
+        -------
+        tuple
+        """
+        if self.law == "scene":
+            return scene, self.order, None
+        if self.law == "neo-hookean":
+            return scene, self.order, "neo-hookean"
+        if scene.material.law in TISSUE_LAWS:
+            return tissue_scene(scene, self.order), self.order, scene.material.law
+        return scene, self.order, linear_law(scene)
+
+    def solve(self, scene: Scene, verbose: bool = False) -> Solution:
+        """Solve ``scene`` with this model (raises what the model raises).
+
+        Parameters
+        ----------
+        scene
+            The scene.
+        verbose
+            Solver progress on stderr.
+
+        Returns
+        -------
+        Solution
+
+        Raises
+        ------
+        InputError
+            The model does not apply to the scene (:meth:`applies`).
+        SolverError
+            From the solver.
+        """
+        why = self.applies(scene)
+        if why is not None:
+            raise InputError(why)
+        if self.kind == "spring":
+            from springmodel.model import solve_spring
+
+            sol = solve_spring(scene, self.spring_options(scene), verbose)
+            return Solution(sol.result, sol.u, dict(sol.cell_data))
+        import reference_fem
+
+        fem_scene, order, law = self.fem_settings(scene)
+        sol = reference_fem.solve(fem_scene, order=order, law=law, verbose=verbose)
+        return Solution(sol.result, sol.u_vertices, dict(sol.cell_data))
+
+    def system(self, scene: Scene):
+        """The model as a :class:`~springfem.mechanics.MechanicalSystem` for time
+        integration: the spring model, or the explicit P1 FEM.
+
+        Parameters
+        ----------
+        scene
+            The scene.
+
+        Returns
+        -------
+        MechanicalSystem
+
+        Raises
+        ------
+        InputError
+            For a P2 model (no explicit P2 FEM) or a law the explicit FEM lacks.
+        """
+        if self.kind == "spring":
+            from springmodel.model import SpringModel
+
+            return SpringModel(scene, self.spring_options(scene))
+        if self.order == 2:
+            raise InputError(f"model {self.name}: there is no explicit P2 FEM")
+        from reference_fem.explicit import ExplicitFem
+
+        _, _, law = self.fem_settings(scene)
+        return ExplicitFem(scene, law=law or scene.material.law)
+
+
+#: Registered models, by name, in registration order.
+REGISTRY: dict[str, Model] = {}
+
+
+def register(model: Model) -> Model:
+    """Add ``model`` to :data:`REGISTRY` (a name is registered once).
+
+    Parameters
+    ----------
+    model
+        The model.
+
+    Returns
+    -------
+    Model
+        ``model``.
+
+    Raises
+    ------
+    ValueError
+        If another model has its name (case-insensitively).
+    """
+    key = model.name.lower()
+    old = next((m for m in REGISTRY.values() if m.name.lower() == key), None)
+    if old is not None and old != model:
+        raise ValueError(f"model {model.name!r} is registered twice")
+    REGISTRY[model.name] = model
+    return model
+
+
+def spring_variant(
+    name: str, label: str, coupling: bool = False, element: bool = False, **changes: Any
+) -> Model:
+    """Register a spring model: the scene's ``[spring]`` options with ``changes``.
+
+    Parameters
+    ----------
+    name
+        ``spring-<variant>``.
+    label
+        Its label.
+    coupling
+        Add the Poisson-coupling springs for an anisotropic law.
+    element
+        The model defines the whole element (see :attr:`Model.element`).
+    **changes
+        Spring options.
+
+    Returns
+    -------
+    Model
+    """
+    return register(Model(name, label, "spring", dict(changes), coupling=coupling, element=element))
+
+
+def get(name: str | Model) -> Model:
+    """The registered model ``name`` (case-insensitive).
+
+    Parameters
+    ----------
+    name
+        A model name, or a :class:`Model` (returned as is).
+
+    Returns
+    -------
+    Model
+
+    Raises
+    ------
+    InputError
+        Unknown name: the message suggests the closest and lists the valid ones.
+    """
+    if isinstance(name, Model):
+        return name
+    for m in REGISTRY.values():
+        if m.name.lower() == str(name).lower():
+            return m
+    near = suggestion(str(name), REGISTRY)
+    hint = f" (did you mean {near}?)" if near else ""
+    raise InputError(f"unknown model {name!r}{hint}; valid models: {', '.join(REGISTRY)}")
+
+
+@dataclass
+class Outcome:
+    """What :func:`run` got from one model on one scene.
+
+    Attributes
+    ----------
+    model
+        The model.
+    status
+        ``ok``, ``partial`` (a load-stepped solve stopped part way: ``solution`` is the
+        state at ``load_factor``) or ``failed``.
+    solution
+        The solution (``ok``: a :class:`~studies.solve.Solution`, or what a study's own
+        solve returned) or the partial state (``partial``); ``None`` when failed.
+    message
+        Why it failed or stopped (empty when ok).
+    seconds
+        Wall time of the attempt.
+    """
+
+    model: Model
+    status: Literal["ok", "partial", "failed"]
+    solution: Any = None
+    message: str = ""
+    seconds: float = float("nan")
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+    @property
+    def load_factor(self) -> float:
+        """The load reached: 1 when ok, the partial state's, NaN when failed."""
+        if self.status == "ok":
+            return 1.0
+        if self.solution is not None:
+            return float(self.solution.result.info.get("load_factor", np.nan))
+        return float("nan")
+
+    @property
+    def u(self) -> np.ndarray | None:
+        return None if self.solution is None else self.solution.u
+
+
+def run(
+    scene: Scene,
+    model: str | Model,
+    solve: Callable[[Model, Scene], Any] | None = None,
+    verbose: bool = False,
+) -> Outcome:
+    """Solve ``scene`` with ``model``; a solver failure is an outcome, not an exception.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    model
+        A model or its name.
+    solve
+        How to solve (default :meth:`Model.solve`): a study's own solver settings; what it
+        returns is the outcome's ``solution``.
+    verbose
+        Solver progress on stderr (the default solve).
+
+    Returns
+    -------
+    Outcome
+        ``ok``; ``partial`` with the last converged state when a load-stepped solve stopped
+        part way (a solver failure, or a cap of
+        :func:`springfem.mechanics.limits.solve_limits`); ``failed`` with the message.
+
+    Raises
+    ------
+    InputError
+        Unknown model, or one that does not apply to the scene: bad input, not a failure.
+    """
+    m = get(model)
+    t0 = time.perf_counter()
+    try:
+        sol = solve(m, scene) if solve is not None else m.solve(scene, verbose)
+    except (SolverError, SolveStopped) as exc:  # a stop by a cap is kept like a failure
+        seconds = time.perf_counter() - t0
+        state = partial_solution(scene, m.kind, exc, seconds)
+        status: Literal["partial", "failed"] = "partial" if state is not None else "failed"
+        return Outcome(m, status, state, str(exc), seconds)
+    return Outcome(m, "ok", sol, "", time.perf_counter() - t0)
+
+
+# -- the FEM models' laws ------------------------------------------------------------------
+
+
+def is_tissue(scene: Scene) -> bool:
+    """True when the scene's law is a finite-strain tissue law (Guccione, Holzapfel–Ogden).
+
+    Parameters
+    ----------
+    scene
+        The scene.
+
+    Returns
+    -------
+    bool
+    """
+    return scene.material.law in TISSUE_LAWS
+
+
+def linear_law(scene: Scene) -> str:
+    """The small-strain law of the scene's material (``linear`` or ``transverse-linear``).
+
+    Parameters
+    ----------
+    scene
+        The scene.
+
+    Returns
+    -------
+    str
+    """
+    return "transverse-linear" if scene.material.law == "transverse-linear" else "linear"
+
+
+def p1_penalty(scene: Scene) -> float:
+    """Bulk modulus of the volumetric penalty of a tissue scene's P1 model.
+
+    The scene's ``kappa`` if it has one; for an incompressible material the bulk modulus
+    of its isotropic equivalent (``Material.kappa``: 1000 × the mean shear modulus of the
+    law's small-strain tangent), which is the penalty the spring model's calibration uses.
+    Same-mesh P1 and the spring model then stand in for the incompressible law with the
+    same volumetric stiffness, so P1 stays the spring model's like-for-like reference.
+
+    Parameters
+    ----------
+    scene
+        A tissue scene.
+
+    Returns
+    -------
+    float
+    """
+    kappa = float(scene.material.parameters.get("kappa", 0.0) or 0.0)
+    return kappa if kappa > 0.0 else float(scene.material.kappa)
+
+
+def tissue_scene(scene: Scene, order: int | None) -> Scene:
+    """The scene a tissue FEM model of ``order`` solves.
+
+    P2 keeps the scene's ``[fem]`` options (its formulation); P1, which cannot be
+    Taylor–Hood, is the displacement formulation with the penalty :func:`p1_penalty`.
+
+    Parameters
+    ----------
+    scene
+        A tissue scene.
+    order
+        1 or 2.
+
+    Returns
+    -------
+    Scene
+        A shallow copy with the model's material and ``[fem]`` options.
+    """
+    fem = FemOptions.of(scene)
+    if order == 2:
+        return scene.with_options(fem=replace(fem, order=2))
+    mat = scene.material
+    params = {**mat.parameters, "kappa": p1_penalty(scene)}
+    p1 = replace(scene, material=replace(mat, parameters=params, incompressible=False))
+    return p1.with_options(fem=replace(fem, order=1, formulation="displacement"))
+
+
+def tissue_note(scene: Scene) -> str:
+    """The note of a tissue comparison: which law and formulation each FEM model solves.
+
+    Parameters
+    ----------
+    scene
+        A tissue scene.
+
+    Returns
+    -------
+    str
+    """
+    law = scene.material.law
+    p2 = FemOptions.of(tissue_scene(scene, 2)).formulation
+    p2_form = "mixed Taylor–Hood u–p" if p2 == "mixed" else "displacement formulation"
+    if scene.material.incompressible:
+        why = "1000 μ, the spring model's incompressible penalty"
+    else:
+        why = "the scene's kappa"
+    return (
+        f"finite-strain tissue law {law}: P1 and P2 solve it (P2 {p2_form}; P1 displacement "
+        f"formulation, penalty kappa = {p1_penalty(scene):.4g} = {why}, so same-mesh P1 is "
+        "the spring model's like-for-like model-error reference); P2 is the reference"
+    )
+
+
+# -- the registry ----------------------------------------------------------------------------
+
+SPRING = register(Model("spring", "spring model (the scene's [spring] options)", "spring"))
+spring_variant("spring-spec", "the specification's spring element", element=True)
+spring_variant("spring-exact", "exact spring element", coupling=True, element=True, **EXACT)
+spring_variant(
+    "spring-stiffened", "stiffened exact spring element", coupling=True, element=True, **STIFFENED
+)
+spring_variant("spring-energy", "spring model, energy torsion", torsion="energy")
+spring_variant("spring-cosine", "spring model, cosine torsion", torsion="cosine")
+FEM = register(Model("fem", "FEM (the scene's [fem] options)", "fem", law="scene"))
+P1 = register(Model("P1", "FEM P1", "fem", order=1))
+P2 = register(Model("P2", "FEM P2", "fem", order=2))
+P1_NH = register(Model("P1-NH", "FEM P1 neo-Hookean", "fem", order=1, law="neo-hookean"))
+P2_NH = register(Model("P2-NH", "FEM P2 neo-Hookean", "fem", order=2, law="neo-hookean"))
+
+#: The models a verdict weighs on a user's scene: the scene's own spring model, the three
+#: spring elements and the FEM of the scene's law (the torsion variants and the studies'
+#: own variants are the studies' business).
+PRIMARY = (
+    "spring",
+    "spring-spec",
+    "spring-exact",
+    "spring-stiffened",
+    "P1",
+    "P2",
+    "P1-NH",
+    "P2-NH",
+)
