@@ -159,7 +159,8 @@ def check_solution(scene: Scene, u: np.ndarray, law: str) -> list[Finding]:
         if eig[e] > SMALL_STRAIN:
             line = (
                 f"the {law} (small-strain) solution reaches {eig[e]:.1%} strain at "
-                f"{_at(scene, e)} (> {SMALL_STRAIN:.0%}): use a finite-strain law"
+                f"{_at(scene, e)} (> {SMALL_STRAIN:.0%}): use a finite-strain law "
+                "(neo-hookean; compare does)"
             )
             out.append(Finding("strain", float(eig[e]), _at(scene, e), line))
     size = float(np.linalg.norm(mesh.points.max(axis=0) - mesh.points.min(axis=0)))

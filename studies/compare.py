@@ -62,6 +62,10 @@ class Comparison:
         Model name -> the state a failed model stopped at part way along its load
         (:func:`studies.solve.partial_solution`): reported in the table at its load
         factor, never ranked against the reference.
+    implausible
+        Model name -> why its solution is implausible
+        (:func:`springfem.plausibility.check_solution`); it stays in ``solutions`` and
+        its row's status is ``implausible``.
     """
 
     scene: Scene
@@ -72,6 +76,7 @@ class Comparison:
     failures: dict[str, str] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
     partial: dict[str, Solution] = field(default_factory=dict)
+    implausible: dict[str, str] = field(default_factory=dict)
 
     @property
     def same_mesh_p1(self) -> str | None:
@@ -160,10 +165,14 @@ def compare_scene(
     failures: dict[str, str] = {}
     notes: list[str] = []
     partial: dict[str, Solution] = {}
+    implausible: dict[str, str] = {}
 
     def run(name: str) -> None:
-        got = run_model(scene, name, verbose=verbose)
-        if not got.ok:
+        got = run_model(scene, name, verbose=verbose, check=True)
+        if got.status == "implausible":
+            implausible[name] = got.message
+            say(f"  {name:<6} IMPLAUSIBLE: {got.message}")
+        if not got.solved:
             failures[name] = got.message
             if got.status == "partial":
                 partial[name] = got.solution
@@ -231,6 +240,7 @@ def compare_scene(
         failures=failures,
         notes=notes,
         partial=partial,
+        implausible=implausible,
     )
     cmp.table = comparison_table(cmp, list(models))
     return cmp
@@ -308,7 +318,7 @@ def comparison_table(cmp: Comparison, models: Sequence[str]) -> pd.DataFrame:
             row.update({"status": "FAILED", "element": "", "law": "", "converged": False})
             rows.append(row)
             continue
-        row["status"] = "ok"
+        row["status"] = "implausible" if name in cmp.implausible else "ok"
         row["load factor"] = 1.0
         r = sol.result
         row["element"] = r.element

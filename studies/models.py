@@ -57,6 +57,7 @@ from reference_fem.options import FemOptions
 from springfem.errors import InputError, SolverError
 from springfem.materials.tissue import TISSUE_LAWS
 from springfem.mechanics.limits import SolveStopped
+from springfem.plausibility import check_solution
 from springfem.scene import Scene
 from springfem.scene.reader import suggestion
 
@@ -355,8 +356,10 @@ class Outcome:
     model
         The model.
     status
-        ``ok``, ``partial`` (a load-stepped solve stopped part way: ``solution`` is the
-        state at ``load_factor``) or ``failed``.
+        ``ok``, ``implausible`` (solved, but :func:`springfem.plausibility.check_solution`
+        found the state implausible: ``message`` says why), ``partial`` (a load-stepped
+        solve stopped part way: ``solution`` is the state at ``load_factor``) or
+        ``failed``.
     solution
         The solution (``ok``: a :class:`~studies.solve.Solution`, or what a study's own
         solve returned) or the partial state (``partial``); ``None`` when failed.
@@ -367,7 +370,7 @@ class Outcome:
     """
 
     model: Model
-    status: Literal["ok", "partial", "failed"]
+    status: Literal["ok", "implausible", "partial", "failed"]
     solution: Any = None
     message: str = ""
     seconds: float = float("nan")
@@ -377,9 +380,14 @@ class Outcome:
         return self.status == "ok"
 
     @property
+    def solved(self) -> bool:
+        """Solved to full load (``ok`` or ``implausible``)."""
+        return self.status in ("ok", "implausible")
+
+    @property
     def load_factor(self) -> float:
         """The load reached: 1 when ok, the partial state's, NaN when failed."""
-        if self.status == "ok":
+        if self.solved:
             return 1.0
         if self.solution is not None:
             return float(self.solution.result.info.get("load_factor", np.nan))
@@ -395,6 +403,7 @@ def run(
     model: str | Model,
     solve: Callable[[Model, Scene], Any] | None = None,
     verbose: bool = False,
+    check: bool = False,
 ) -> Outcome:
     """Solve ``scene`` with ``model``; a solver failure is an outcome, not an exception.
 
@@ -409,12 +418,15 @@ def run(
         returns is the outcome's ``solution``.
     verbose
         Solver progress on stderr (the default solve).
+    check
+        Check a solved state's plausibility (:func:`springfem.plausibility.check_solution`:
+        ``J``, volume change, small strain, displacement): ``implausible`` when it fails.
 
     Returns
     -------
     Outcome
-        ``ok``; ``partial`` with the last converged state when a load-stepped solve stopped
-        part way (a solver failure, or a cap of
+        ``ok``; ``implausible`` (with ``check``); ``partial`` with the last converged
+        state when a load-stepped solve stopped part way (a solver failure, or a cap of
         :func:`springfem.mechanics.limits.solve_limits`); ``failed`` with the message.
 
     Raises
@@ -431,7 +443,12 @@ def run(
         state = partial_solution(scene, m.kind, exc, seconds)
         status: Literal["partial", "failed"] = "partial" if state is not None else "failed"
         return Outcome(m, status, state, str(exc), seconds)
-    return Outcome(m, "ok", sol, "", time.perf_counter() - t0)
+    seconds = time.perf_counter() - t0
+    if check and getattr(sol, "u", None) is not None:
+        findings = check_solution(scene, sol.u, sol.result.law)
+        if findings:
+            return Outcome(m, "implausible", sol, "; ".join(f.line for f in findings), seconds)
+    return Outcome(m, "ok", sol, "", seconds)
 
 
 # -- the FEM models' laws ------------------------------------------------------------------

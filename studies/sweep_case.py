@@ -56,12 +56,15 @@ def run_case(task: dict[str, Any]) -> dict[str, Any]:
     order = [reference] + [m for m in models if m != reference]  # a failed reference is known
     solutions, failures = {}, {}
     warm = {m: m in _SOLVED_HERE for m in order}
+    implausible = {}
     for m in order:
-        got = run_model(scene, m)
-        if got.ok:
+        got = run_model(scene, m, check=True)
+        if got.solved:
             solutions[m] = got.solution
         else:
             failures[m] = got.message
+        if got.status == "implausible":
+            implausible[m] = got.message
         _SOLVED_HERE.add(m)
     ref = solutions.get(reference)
     rows = []
@@ -75,7 +78,9 @@ def run_case(task: dict[str, Any]) -> dict[str, Any]:
             row.update(volume_change=NAN, iterations=None, wall_time=NAN)
         else:
             r = sol.result
-            row.update(status="ok" if ref is not None else "reference failed", message="")
+            status = "ok" if ref is not None else "reference failed"
+            row.update(status="implausible" if m in implausible else status)
+            row.update(message=implausible.get(m, ""))
             row.update(_probe_columns(r.probes))
             row.update(
                 volume_change=r.volume.get("relative_change", NAN),

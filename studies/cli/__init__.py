@@ -24,6 +24,8 @@ import traceback
 from collections.abc import Callable, Sequence
 
 from springfem.errors import SpringFemError
+from springfem.warning_count import counted_warnings
+from springfem.warning_count import summary as warnings_summary
 
 from ..overrides import add_set_option
 
@@ -220,6 +222,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     os.environ.setdefault("MPLBACKEND", "Agg")
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.debug:  # every raw warning, where it was raised
+        return _run(args)
+    with counted_warnings() as seen:
+        try:
+            return _run(args)
+        finally:
+            if (line := warnings_summary(seen)) is not None:
+                print(f"springfem: note: {line}", file=sys.stderr)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Run the subcommand; errors become one line on stderr and an exit code."""
     try:
         return int(args.func(args) or 0)
     except SpringFemError as exc:

@@ -10,6 +10,7 @@ from pathlib import Path
 from reference_fem.options import FemOptions
 from springfem.errors import InputError, SolverError
 from springfem.mechanics.limits import SolveStopped, solve_limits
+from springfem.plausibility import check_solution
 from springfem.result import write_result
 from springfem.scene import OutputOptions
 
@@ -53,8 +54,8 @@ def cmd_solve(args: argparse.Namespace) -> int:
             ) from None
         text = f"{exc} ({written})"
         raise SolverError(text, state=exc.state, load_factor=exc.load_factor) from None
-    for line in guards.solution_warnings(scene, sol.result.law, sol.u):
-        warn(line)
+    for finding in check_solution(scene, sol.u, sol.result.law):
+        warn(finding.line)
     js, vtu = _write(out, sol.result, scene.mesh, sol.u, cell_data=sol.cell_data)
     anim = None
     series = sol.result.info.get("series")

@@ -238,7 +238,8 @@ def test_joins_an_existing_scheduler(tmp_path):
     from distributed import LocalCluster
 
     spec = parse_sweep(tiny(**{"mesh.divisions": [[4, 1, 1], [5, 1, 1]]}))
-    with LocalCluster(n_workers=1, processes=False, protocol="tcp", dashboard_address=None) as c:
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      dashboard_address=None) as c:  # fmt: skip
         assert c.scheduler_address.startswith("tcp://")
         run = run_sweep(spec, tmp_path, scheduler=c.scheduler_address, progress=False,
                         figures=False)  # fmt: skip
