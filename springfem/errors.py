@@ -118,3 +118,17 @@ class SolverError(SpringFemError, RuntimeError):
         super().__init__(message)
         self.state = state
         self.load_factor = load_factor
+
+
+class OutputError(SpringFemError, OSError):
+    """An output cannot be written: a full disk, a read-only or locked folder (exit code 4).
+
+    What was written before stays whole (every writer replaces its file atomically).
+
+    Parameters
+    ----------
+    message
+        One line naming the file or folder and why.
+    """
+
+    exit_code = 4

@@ -15,13 +15,18 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
 import re
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from .errors import InputError, OutputError
 
 
 def jsonable(obj: Any) -> Any:
@@ -75,8 +80,25 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     Returns
     -------
     None
+
+    Raises
+    ------
+    OutputError
+        The disk is full (or over quota, or read-only): one line, the old content kept.
     """
     path = Path(path)
+    try:
+        _write_atomically(path, text)
+    except OSError as exc:
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EROFS):
+            raise OutputError(
+                f"cannot write {path}: {os.strerror(exc.errno)}; what was written before is "
+                "kept whole"
+            ) from None
+        raise
+
+
+def _write_atomically(path: Path, text: str) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     # the writer's pid in the name lets remove_stale_temp_files tell a killed writer's
     # leftovers from a live writer's file
@@ -179,3 +201,64 @@ def safe_filename(name: str, limit: int = 80) -> str:
     """
     text = "".join(c if c.isprintable() and c not in "/\\:" else "_" for c in name)
     return text.lstrip(".")[:limit] or "scene"
+
+
+# Folders this process holds the lock of: path -> [open lock file descriptor, depth].
+_LOCKED: dict[Path, list[int]] = {}
+
+
+@contextlib.contextmanager
+def folder_lock(folder: str | os.PathLike, what: str = "run") -> Iterator[None]:
+    """Hold ``folder`` inside the block: a second process that asks for it is refused.
+
+    Two sweeps or studies writing their cases into one folder would race on the same
+    files; the lock (``fcntl.flock`` on ``folder/.lock``, released by the kernel when the
+    holder exits, even by SIGKILL) makes the second one stop with one line instead. The
+    same process may take it again inside the block (the blocks nest).
+
+    Parameters
+    ----------
+    folder
+        The folder (created if missing).
+    what
+        What holds it, for the message (``sweep``, ``study``).
+
+    Raises
+    ------
+    InputError
+        Another live process holds the folder.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = tempfile.mkdtemp()
+    >>> with folder_lock(folder), folder_lock(folder):  # this process again: fine
+    ...     pass
+    """
+    import fcntl
+
+    path = Path(folder).resolve()
+    held = _LOCKED.get(path)
+    if held is None:
+        path.mkdir(parents=True, exist_ok=True)
+        fd = os.open(path / ".lock", os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.read(fd, 32).decode(errors="replace").strip() or "?"
+            os.close(fd)
+            raise InputError(
+                f"{path}: another {what} (pid {holder}) is writing its cases here; wait "
+                "for it to finish or choose another --out"
+            ) from None
+        os.ftruncate(fd, 0)
+        os.write(fd, str(os.getpid()).encode())
+        held = _LOCKED[path] = [fd, 0]
+    held[1] += 1
+    try:
+        yield
+    finally:
+        held[1] -= 1
+        if held[1] == 0:
+            del _LOCKED[path]
+            os.close(held[0])  # releases the flock

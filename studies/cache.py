@@ -2,7 +2,8 @@
 
 An interrupted study resumes without redoing finished cases: every finished case is
 written atomically to ``<cache>/<study>/<hash>.json`` before the next one starts, so a
-rerun computes only what is missing or what changed.
+rerun computes only what is missing or what changed. Each file carries the checksum of its
+result; a truncated or corrupted one is set aside and recomputed.
 
 Examples
 --------
@@ -25,6 +26,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import sys
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
@@ -39,6 +41,12 @@ def case_key(case: dict[str, Any], fingerprint: str = "") -> str:
     """Stable hash of a case's settings (JSON with sorted keys) and a code fingerprint."""
     text = json.dumps(_jsonable(case), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256((CACHE_VERSION + fingerprint + text).encode()).hexdigest()[:20]
+
+
+def checksum(result: Any) -> str:
+    """SHA-256 of a result's canonical JSON (sorted keys, NaN written as JSON writes it)."""
+    text = json.dumps(_jsonable(result), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def source_fingerprint(*paths: str | os.PathLike) -> str:
@@ -78,18 +86,33 @@ class CaseCache:
         return self.dir / f"{case_key(case, self.fingerprint)}.json"
 
     def get(self, case: dict[str, Any]) -> dict[str, Any] | None:
+        """The stored result of ``case``, or ``None`` when it is missing or damaged.
+
+        A file that does not parse, or whose result does not match its checksum (a
+        truncated or corrupted file), is set aside as ``<name>.json.damaged`` with a note
+        on stderr, and the case is computed again.
+        """
         p = self.path(case)
         if not p.is_file():
             return None
         try:
-            return json.loads(p.read_text(encoding="utf-8"))["result"]
-        except (ValueError, KeyError, TypeError):  # a damaged entry is recomputed
+            entry = json.loads(p.read_text(encoding="utf-8"))
+            result = entry["result"]
+            ok = entry["sha256"] == checksum(result)
+        except (ValueError, KeyError, TypeError, UnicodeDecodeError):
+            ok = False
+        if not ok:
+            os.replace(p, p.with_name(p.name + ".damaged"))
+            print(f"note: {p} is damaged (checksum); the case is computed again",
+                  file=sys.stderr)  # fmt: skip
             return None
+        return result
 
     def put(self, case: dict[str, Any], result: dict[str, Any]) -> None:
-        atomic_write_text(
-            self.path(case), json.dumps(_jsonable({"case": case, "result": result}), indent=1)
-        )
+        """Store ``result`` of ``case`` atomically, with the checksum of the result."""
+        result = _jsonable(result)
+        entry = {"case": case, "result": result, "sha256": checksum(result)}
+        atomic_write_text(self.path(case), json.dumps(_jsonable(entry), indent=1))
 
     def run(
         self,

@@ -13,7 +13,7 @@ import json
 import time
 from pathlib import Path
 
-from springfem.files import atomic_write_text, remove_stale_temp_files
+from springfem.files import atomic_write_text, folder_lock, remove_stale_temp_files
 from springfem.files import jsonable as _jsonable
 
 from .cache import CaseCache, source_fingerprint
@@ -168,7 +168,8 @@ def run_study(
     remove_stale_temp_files(ctx.out)  # tables/figures of a run killed mid-write
     t0 = time.perf_counter()
     settings = settings if settings is not None else spec.settings_for(quick)
-    result = spec.run(ctx, scenes if scenes is not None else spec.scenes(settings), settings)
+    with folder_lock(root / ".cache" / spec.name, "study"):  # one writer per case folder
+        result = spec.run(ctx, scenes if scenes is not None else spec.scenes(settings), settings)
     result.seconds = time.perf_counter() - t0
     atomic_write_text(
         ctx.path("headline.json"), json.dumps(_jsonable(result.headline), indent=2, sort_keys=True)

@@ -31,8 +31,8 @@ from typing import Any
 
 import pandas as pd
 
+from springfem.files import folder_lock, remove_stale_temp_files, safe_filename
 from springfem.files import jsonable as _jsonable
-from springfem.files import safe_filename
 
 from .cache import CaseCache, case_key, source_fingerprint
 from .executor import run_tasks
@@ -127,9 +127,21 @@ def run_sweep(
     Returns
     -------
     SweepRun
+
+    Raises
+    ------
+    InputError
+        Another process is running a sweep into ``out`` (:func:`springfem.files.folder_lock`).
     """
-    t0 = time.perf_counter()
     out = Path(out) if out is not None else default_out(spec)
+    with folder_lock(out, "sweep"):
+        return _run_in(spec, out, workers, scheduler, progress, figures, work)
+
+
+def _run_in(spec, out, workers, scheduler, progress, figures, work) -> SweepRun:
+    """:func:`run_sweep` with ``out`` locked."""
+    t0 = time.perf_counter()
+    remove_stale_temp_files(out)  # tables of a run killed mid-write
     cache = CaseCache(out, "cases", fingerprint=code_fingerprint())
     tasks = [spec.task(i) for i in range(len(spec.cases))]
     results: list[dict[str, Any] | None] = [cache.get(t) for t in tasks]
