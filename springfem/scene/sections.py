@@ -358,8 +358,27 @@ def parse_load(r: TableReader, mesh: TetMesh) -> Load:
         region = parse_region(r, mesh)
         if kind in ("traction", "pressure") and region.facets.size == 0:
             raise r.fail("region", f"{region.name} contains no boundary facets for a {kind}")
+        spec = r.t.get("region")
+        if kind in ("traction", "pressure") and isinstance(spec, str):
+            if spec in mesh.cell_sets and spec not in mesh.facet_sets:
+                mesh.notes.append(_volume_region_note(r, mesh, region, kind))
     r.finish()
     return Load(type=kind, value=value, region=region)
+
+
+def _volume_region_note(r: TableReader, mesh: TetMesh, region: Region, kind: str) -> str:
+    """What a surface load on a volume (cell-set) region acts on, in one line."""
+    from ..regions import facet_areas_normals
+
+    area = float(facet_areas_normals(mesh.points, region.facets)[0].sum())
+    closed = len(region.facets) == len(mesh.boundary_facets())
+    line = (
+        f"{r.file}: {r._key('region')}: {region.name} is a volume region; the {kind} acts on "
+        f"the {len(region.facets)} boundary facets of its cells (area {area:.4g})"
+    )
+    if closed:
+        line += ": the whole closed surface, so its net force is zero"
+    return line
 
 
 def parse_probe(r: TableReader, mesh: TetMesh) -> Probe:

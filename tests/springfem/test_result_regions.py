@@ -44,3 +44,31 @@ def test_region_names_are_visible_to_paraview_readers(tmp_path):
     assert set(table) == {"muscle", "tendon sheath"}
     ids = np.asarray(grid.cell_data["region"])
     assert np.all(ids[left] == table["muscle"]) and set(np.unique(ids)) == set(table.values())
+
+
+def test_a_surface_load_on_a_volume_region_says_what_it_acts_on(tmp_path):
+    """The left half's boundary facets: its x = 0 face (1 x 1) and its share of the four
+    side faces (1 x 1 each), 5 in all; the whole box is closed (area 2 * (2 + 2 + 1))."""
+    from springfem.scene import scene_from_dict
+
+    mesh, left, _ = _mesh_with_regions()
+    vtu = _write(tmp_path / "halves", mesh)
+    mesh.cell_sets.clear()
+    mesh.cell_sets["body"] = np.arange(mesh.n_tets)
+    whole = _write(tmp_path / "whole", mesh)
+
+    def scene(region):
+        return scene_from_dict({
+            "mesh": {"file": str(whole if region == "body" else vtu)},
+            "material": {"law": "linear", "E": 1e3, "nu": 0.3},
+            "boundary": [{"region": "x_max", "fix": ["x", "y", "z"]}],
+            "load": [{"type": "pressure", "region": region, "value": 10.0}],
+        })  # fmt: skip
+
+    (note,) = [n for n in scene("muscle").mesh.notes if "volume region" in n]
+    assert "load[0].region: muscle is a volume region; the pressure acts on" in note
+    assert float(note.split("area ")[1].rstrip(")")) == pytest.approx(5.0, rel=1e-12)
+    (closed,) = [n for n in scene("body").mesh.notes if "volume region" in n]
+    assert float(closed.split("area ")[1].split(")")[0]) == pytest.approx(10.0, rel=1e-12)
+    assert closed.endswith("so its net force is zero")
+    assert not [n for n in scene("x_min").mesh.notes if "volume region" in n]

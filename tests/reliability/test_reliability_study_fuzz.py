@@ -1,0 +1,119 @@
+"""Every study that takes a user's scene runs on every kind of scene or says why not, in one
+line: never an internal error.
+
+The fuzz is the product of the studies that accept ``--scene`` with the bundled scenes, a
+gmsh box and variants of them (nearly incompressible, neo-Hookean, a soft modulus, no probe,
+fibres off the axes). The contract (docs/contract.rst#exit-codes): exit 0 with the study's
+outputs, 2 (bad input: the study does not apply to this scene) or 3 (a solver failure),
+with one line on stderr for 2 and 3; exit 1 (an internal error) never. The default run
+takes a fixed sample of the pairs; ``-m slow`` all of them.
+"""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import pytest
+from support.toml import to_toml
+
+from studies.cli import main
+from studies.runner import REGISTRY
+from studies.scenes import scene_path
+
+BUNDLED = ("cantilever", "sag", "stretch-fiber", "land-beam", "drift-cube")
+VARIANTS = {
+    "as-is": {},
+    "nu-0.499": {"material": {"nu": 0.499}},
+    "neo-hookean": {"material": {"law": "neo-hookean"}},
+    "soft": {"material": {"E": 5.0}},
+    "off-axis": {"axes": {"fiber": [0.6, 0.8, 0.0], "sheet": [-0.8, 0.6, 0.0]}},
+}
+#: The default run's sample: (study, scene, variant), one per study.
+SAMPLE = (
+    ("accuracy", "gmsh", "off-axis"),
+    ("stability", "sag", "soft"),
+)
+
+
+def _user_studies() -> list[str]:
+    return [n.replace("_", "-") for n, spec in REGISTRY.items() if spec.user_scenes is None]
+
+
+def _gmsh_box(path: Path) -> None:
+    gmsh = pytest.importorskip("gmsh")
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("box")
+        gmsh.model.occ.addBox(0, 0, 0, 0.1, 0.02, 0.02)
+        gmsh.model.occ.synchronize()
+        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.02)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.02)
+        gmsh.model.addPhysicalGroup(3, [1], name="body")
+        gmsh.model.mesh.generate(3)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+
+
+def _scene_table(scene: str, folder: Path) -> dict:
+    import tomllib
+
+    if scene == "gmsh":
+        _gmsh_box(folder / "box.msh")
+        return {
+            "name": "gbox",
+            "mesh": {"file": str(folder / "box.msh")},
+            "material": {"law": "linear", "E": 1.0e4, "nu": 0.3},
+            "axes": {"fiber": [1.0, 0.0, 0.0], "sheet": [0.0, 1.0, 0.0]},
+            "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+            "load": [{"type": "traction", "region": "x_max", "value": [0.0, 0.0, -0.1]}],
+            "probe": [{"name": "tip", "point": [0.1, 0.01, 0.01]}],
+        }
+    path = scene_path(scene)
+    table = tomllib.loads(Path(path).read_text())
+    mesh = table.get("mesh", {})
+    if "file" in mesh:  # relative to the bundled scene's folder
+        mesh["file"] = str((Path(path).parent / mesh["file"]).resolve())
+    return table
+
+
+def _merged(table: dict, change: dict) -> dict:
+    out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in table.items()}
+    for key, sub in change.items():
+        out[key] = {**out.get(key, {}), **sub}
+    return out
+
+
+def _run(study: str, scene: str, variant: str, tmp: Path, capsys) -> None:
+    table = _merged(_scene_table(scene, tmp), VARIANTS[variant])
+    if variant == "soft" and table["material"].get("law") in ("guccione", "holzapfel-ogden"):
+        table["material"]["C" if "C" in table["material"] else "a"] = 0.001
+    f = tmp / f"{scene}-{variant}.toml"
+    f.write_text(to_toml(table))
+    code = main(["study", study, "--scene", str(f), "--quick", "--out", str(tmp / "out")])
+    err = capsys.readouterr().err
+    assert "internal error" not in err, err
+    assert code in (0, 2, 3), (code, err)
+    if code in (2, 3):
+        lines = [ln for ln in err.splitlines() if ln.startswith("springfem: ")]
+        assert len(lines) == 1, err
+
+
+@pytest.mark.parametrize(("study", "scene", "variant"), SAMPLE)
+def test_study_on_a_user_scene_never_fails_internally(study, scene, variant, tmp_path, capsys):
+    _run(study, scene, variant, tmp_path, capsys)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("study", "scene", "variant"),
+    [
+        (s, sc, v)
+        for s, sc, v in itertools.product(_user_studies(), ("gmsh", *BUNDLED), tuple(VARIANTS))
+        if (s, sc, v) not in SAMPLE
+    ],
+)
+def test_every_study_on_every_scene_never_fails_internally(study, scene, variant, tmp_path, capsys):
+    _run(study, scene, variant, tmp_path, capsys)
