@@ -180,6 +180,9 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FILE",
         help="run the study on this scene instead of the bundled ones (where it makes sense)",
     )
+    p.add_argument("--max-time", type=_positive_float, default=None, metavar="SECONDS",
+                   help="cap each solve (default: 120 s with --scene, none otherwise); a "
+                   "capped solve is a stopped row")  # fmt: skip
     add_set_option(p)
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, nargs="?", const=0, default=None, metavar="N",

@@ -7,22 +7,29 @@ from pathlib import Path
 
 from springfem.errors import InputError
 from springfem.files import safe_filename
+from springfem.mechanics.limits import solve_limits
 
 from ..html import write_index
 from ..runner import default_out, run_report, run_study
+
+#: Default cap of each solve of a study on a user's scene (s): a scene the solvers cannot
+#: handle gives stopped (partial or failed) rows instead of a study that never ends.
+USER_SCENE_MAX_TIME = 120.0
 
 
 def cmd_study(args: argparse.Namespace) -> int:
     """``springfem study NAME [--quick] [--out DIR] [--scene FILE] [--set K=V] [--workers N]``.
 
     Runs one study (on the bundled scenes, or on ``--scene`` with ``--set`` overrides where
-    the study supports it) and prints what it found.
+    the study supports it) and prints what it found. Each solve is capped at
+    ``--max-time`` seconds (default: :data:`USER_SCENE_MAX_TIME` on ``--scene``, none on
+    the bundled scenes, whose numbers must not depend on the machine's speed).
 
     Parameters
     ----------
     args
-        Parsed options ``name``, ``quick``, ``out``, ``scene``, ``set``, ``workers``,
-        ``scheduler``.
+        Parsed options ``name``, ``quick``, ``out``, ``scene``, ``set``, ``max_time``,
+        ``workers``, ``scheduler``.
 
     Returns
     -------
@@ -59,9 +66,13 @@ def cmd_study(args: argparse.Namespace) -> int:
     if scene is not None:
         sets_text = "".join(f" --set {a}" for a in sets)
         command = f"springfem study {args.name}{' --quick' * args.quick} --scene {scene}{sets_text}"
-    res = run_study(spec.name, out, args.quick, scenes=scenes,
-                    workers=getattr(args, "workers", None),
-                    scheduler=getattr(args, "scheduler", None), command=command)  # fmt: skip
+    cap = getattr(args, "max_time", None)
+    if cap is None and scene is not None:
+        cap = USER_SCENE_MAX_TIME
+    with solve_limits(max_time=cap):
+        res = run_study(spec.name, out, args.quick, scenes=scenes,
+                        workers=getattr(args, "workers", None),
+                        scheduler=getattr(args, "scheduler", None), command=command)  # fmt: skip
     if scene is not None:
         write_index(out, f"springfem studies of {scenes[0].label}",
                     f"Every study run on the scene {scene} into this folder.")  # fmt: skip
