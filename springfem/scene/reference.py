@@ -11,13 +11,13 @@ source) checks that the corpus reaches every branch.
 Examples
 --------
 The sections are named by what their keys depend on (a material by its law, a mesh by
-its source); the parsers' source names Guccione's constants:
+its source); the parsers' source names the transversely isotropic constants:
 
 >>> _section("load[2]", {"mesh": {}, "material": {"law": "linear"}})
 'load'
 >>> _section("material", {"mesh": {}, "material": {"law": "guccione"}})
 'material (guccione)'
->>> {"C", "b_f", "b_t", "b_fs"} <= literal_keys()
+>>> {"E_fiber", "E_cross", "G_fiber"} <= literal_keys()
 True
 """
 
