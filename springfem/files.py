@@ -174,6 +174,28 @@ def remove_stale_temp_files(folder: str | os.PathLike) -> list[Path]:
     return removed
 
 
+def output_folder(command: str, name: str) -> Path:
+    """The default output folder of a command: ``out/<command>-<name>``, one rule for all.
+
+    Parameters
+    ----------
+    command
+        The command (``solve``, ``compare``, ``verdict``, ``study``, ``sweep``).
+    name
+        What it ran on: the scene's name (with the model for ``solve``), or the sweep's.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Examples
+    --------
+    >>> output_folder("compare", "../liver").as_posix()  # stays inside out/
+    'out/compare-_liver'
+    """
+    return Path("out") / f"{command}-{safe_filename(name)}"
+
+
 def safe_filename(name: str, limit: int = 80) -> str:
     """``name`` as one file or folder name that stays inside the folder it is joined to.
 

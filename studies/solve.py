@@ -19,7 +19,7 @@ import numpy as np
 from reference_fem.options import FemOptions
 from springfem.cardiac import cavity_summary, is_ventricle
 from springfem.errors import InputError, SolverError
-from springfem.files import safe_filename
+from springfem.files import output_folder
 from springfem.mechanics.limits import SolveStopped
 from springfem.result import Result, volume_summary, write_result
 from springfem.scene import OutputOptions, Scene
@@ -148,8 +148,8 @@ def model_label(r: Result) -> str:
 
 
 def default_out(scene_name: str, tag: str) -> Path:
-    """``out/<name>-<tag>``, with the scene name reduced to one safe folder name."""
-    return Path("out") / f"{safe_filename(scene_name)}-{tag}"
+    """``out/solve-<name>-<tag>`` (:func:`springfem.files.output_folder`)."""
+    return output_folder("solve", f"{scene_name}-{tag}")
 
 
 def state_result(

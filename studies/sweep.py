@@ -31,7 +31,7 @@ from typing import Any
 
 import pandas as pd
 
-from springfem.files import folder_lock, remove_stale_temp_files, safe_filename
+from springfem.files import folder_lock, output_folder, remove_stale_temp_files
 from springfem.files import jsonable as _jsonable
 
 from .cache import CaseCache, case_key, source_fingerprint
@@ -80,8 +80,8 @@ class SweepRun:
 
 
 def default_out(spec: SweepSpec) -> Path:
-    """``out/sweep-<name>``."""
-    return Path("out") / f"sweep-{safe_filename(spec.name)}"
+    """``out/sweep-<name>`` (:func:`springfem.files.output_folder`; the sweep file's name)."""
+    return output_folder("sweep", spec.name)
 
 
 def code_fingerprint() -> str:

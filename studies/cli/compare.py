@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from springfem.files import jsonable
+from springfem.files import jsonable, output_folder
 from springfem.mechanics.limits import solve_limits
 from springfem.result import write_result
 
@@ -34,7 +34,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     """
     scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))  # sweeps: --set
     quiet = bool(getattr(args, "json", False))
-    out = Path(args.out) if args.out else Path("out") / f"compare-{scene.name}"
+    out = Path(args.out) if args.out else output_folder("compare", scene.name)
 
     def log(msg: str) -> None:
         print(msg, file=sys.stderr if quiet else sys.stdout, flush=True)

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from springfem.errors import InputError
-from springfem.files import safe_filename
+from springfem.files import output_folder
 from springfem.mechanics.limits import solve_limits
 
 from ..html import write_index
@@ -59,7 +58,7 @@ def cmd_study(args: argparse.Namespace) -> int:
         user = StudyScene.from_file(scene, [parse_assignment(a) for a in sets])
         scenes = [user]
         if args.out is None:
-            out = Path("out") / f"study-{safe_filename(user.label)}"
+            out = output_folder("study", user.label)
     elif sets:
         raise InputError("--set needs --scene (the bundled studies run their own scenes)")
     command = None

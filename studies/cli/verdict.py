@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from springfem.files import jsonable, safe_filename
+from springfem.files import jsonable, output_folder
 
 from ..compare_output import printable
 from ..overrides import load_scene_with
@@ -38,7 +38,7 @@ def cmd_verdict(args: argparse.Namespace) -> int:
 
     log(f"{scene.name}: {scene.mesh.n_tets} tets, law {scene.material.law}")
     v = verdict(scene, args.tolerance, args.budget, args.models, log=log)
-    out = Path(args.out) if args.out else Path("out") / f"verdict-{safe_filename(scene.name)}"
+    out = Path(args.out) if args.out else output_folder("verdict", scene.name)
     md = write_table(v.table, out / "verdict")
     if quiet:
         payload = {

@@ -125,7 +125,7 @@ def test_scene_name_cannot_escape_the_output_folder(tmp_path, monkeypatch, capsy
     assert written and all(p.is_relative_to(work / "out") for p in written), written
     (folder,) = {p.parent for p in written}
     assert folder.parent == work / "out"  # exactly one level below out/
-    assert folder.name == f"{safe_filename(name)}-fem-p1"
+    assert folder.name == f"solve-{safe_filename(name)}-fem-p1"
     assert f"can't be part of a folder name; using {safe_filename(name)!r}" in err
 
 
