@@ -217,7 +217,8 @@ class SpringSolution:
 
 
 def variant_label(options: SpringOptions) -> str:
-    """Short description of the enabled spring parts, e.g. ``axial=linear,torsion=cosine``.
+    """Short description of the enabled spring parts in the ``[spring]`` keys' own words,
+    e.g. ``axial=linear,torsion=cosine,volume=true,calibration=analytic``.
 
     Parameters
     ----------
@@ -227,7 +228,13 @@ def variant_label(options: SpringOptions) -> str:
     Returns
     -------
     str
-        Comma-separated ``part=law`` items, ending with the calibration.
+        Comma-separated ``key=value`` items of the scene's ``[spring]`` section (a default
+        sub-option is left out), ending with the calibration.
+
+    Examples
+    --------
+    >>> variant_label(SpringOptions(volume="axes", torsion="energy", calibration="exact"))
+    'axial=linear,torsion=energy,volume=axes,volumetric=quadratic,calibration=exact'
     """
     axial = options.axial
     if axial in ("quadratic", "cubic"):
@@ -235,13 +242,19 @@ def variant_label(options: SpringOptions) -> str:
         axial = "green" if b == GREEN_AXIAL_COEFFICIENTS else f"{axial}({b[0]:g},{b[1]:g})"
     parts = [f"axial={axial}", f"torsion={options.torsion}"]
     if options.axis_volume:
-        f = options.nodal_fraction
-        nodal = ("/nodal" + (f"{f:g}" if f < 1 else "")) * options.nodal_volume
-        parts.append(f"volume=axes/{options.volumetric}{nodal}")
+        parts += ["volume=axes", f"volumetric={options.volumetric}"]
+        if options.nodal_volume:
+            parts.append("volume_average=nodal")
+            if options.nodal_fraction < 1:
+                parts.append(f"nodal_fraction={options.nodal_fraction:g}")
+    elif options.volume:
+        parts.append("volume=true")
+        if options.volume_form != SpringOptions().volume_form:
+            parts.append(f"volume_form={options.volume_form}")
     else:
-        parts.append(f"volume={options.volume_form}" if options.volume else "volume=off")
+        parts.append("volume=false")
     if options.coupling:
-        parts.append("coupling")
+        parts.append("coupling=true")
     if options.stiffening != "off":
         parts.append(f"stiffening={options.stiffening}")
     if options.lms is not None:
