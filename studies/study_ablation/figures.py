@@ -38,7 +38,11 @@ def error_cost_figure(
     names = list(df.scene.unique())
     ncol = min(len(names), 3)
     nrow = -(-len(names) // ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 4.0 * nrow), squeeze=False)
+    from matplotlib.ticker import LogLocator, NullFormatter
+
+    fig, axes = plt.subplots(
+        nrow, ncol, figsize=(4.4 * ncol, 4.0 * nrow + 1.2), squeeze=False, layout="constrained"
+    )
     markers = dict(zip(ALL_VARIANTS, "o<v^sDP*XH"))
     colors = dict(zip(ALL_VARIANTS, plt.rcParams["axes.prop_cycle"].by_key()["color"]))
     handles = {}
@@ -78,25 +82,22 @@ def error_cost_figure(
         if name in fem_times:
             handles["FEM P1 solve time"] = ax.axvline(fem_times[name], color="k", ls=":", lw=1)
         failed = ", ".join(g[(g.status != "ok") & ~np.isfinite(g.error)].variant)
-        ax.set_title(f"{name} ({int(g.tets.iloc[0])} tets)", fontsize=10)
-        if failed:
-            ax.text(0.03, 0.97, f"fails: {failed}", transform=ax.transAxes, fontsize=7, va="top")
+        title = f"{name} ({int(g.tets.iloc[0])} tets)" + (f"\nfails: {failed}" if failed else "")
+        ax.set_title(title, fontsize=10)
         ax.set_xlabel("static solve wall time (s)")
         ax.grid(alpha=0.3, which="both")
+        for axis in (ax.xaxis, ax.yaxis):  # decade labels only: no crowded minor labels
+            axis.set_minor_formatter(NullFormatter())
+        lo, hi = ax.get_ylim()
+        if hi / lo < 100:  # under 2 decades: label 1 and 3 of each decade too
+            ax.yaxis.set_major_locator(LogLocator(subs=(1.0, 3.0)))
     for ax in axes.ravel()[len(names) :]:
         ax.set_visible(False)
     for row in axes:
         row[0].set_ylabel("model error vs FEM P1 (relative L2)")
     rank = {v: i for i, v in enumerate(ALL_VARIANTS)}
     keys = sorted(handles, key=lambda k: rank.get(k.split(" (not")[0], len(rank)))
-    fig.legend(
-        [handles[k] for k in keys],
-        keys,
-        loc="upper center",
-        ncol=4,
-        fontsize=8,
-        bbox_to_anchor=(0.5, -0.02),
-    )
+    fig.legend([handles[k] for k in keys], keys, loc="outside lower center", ncol=4, fontsize=8)
     summary = "; ".join(
         f"{w['scene']}: {w['cheapest adequate']}"
         + (f" ({w['its error']:.3g})" if pd.notna(w.get("its error")) else "")
