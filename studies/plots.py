@@ -173,7 +173,7 @@ def render_error_panels(
         surf = surface_grid(mesh, pts, {"error": np.asarray(p.error, float)})
         pl = pv.Plotter(off_screen=True, window_size=window)
         pl.set_background("white")
-        pl.add_mesh(rest_edges, color="gray", line_width=1.0, opacity=0.6)
+        pl.add_mesh(rest_edges, color="#6e6e6e", line_width=2.0, opacity=0.9)  # the rest shape
         pl.add_mesh(
             surf,
             scalars="error",
