@@ -87,6 +87,26 @@ def _compared(df: pd.DataFrame, reference: str) -> pd.DataFrame:
     return ok[np.isfinite(ok["rel_l2"]) & (ok["rel_l2"] > 0)]
 
 
+#: Swept keys that change the mesh: their figure's axis is the number of tets.
+MESH_SIZE_KEYS = ("mesh.file", "mesh.divisions", "mesh.size", "mesh.scale")
+
+
+def _error_against_tets(ax, data: pd.DataFrame, models: list, key: str) -> None:
+    """Error against the mesh's tet count (log-log), one colour per model."""
+    for m in models:
+        d = data[data["model"] == m].sort_values("tets")
+        ax.scatter(d["tets"], d["rel_l2"], label=m, alpha=0.75, s=22)
+        med = d.groupby("tets")["rel_l2"].median()
+        ax.plot(med.index.to_numpy(float), med.to_numpy(), lw=1, alpha=0.6)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(f"tets (swept: {key})")
+    ax.set_title("error against mesh size (points: cases; lines: median)", fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+    if models:
+        ax.legend(fontsize=8)
+
+
 def sweep_figures(df: pd.DataFrame, keys: Sequence[str], reference: str, out: Path) -> list[Path]:
     """Error against each swept key and against wall time, one colour per model.
 
@@ -114,6 +134,11 @@ def sweep_figures(df: pd.DataFrame, keys: Sequence[str], reference: str, out: Pa
         fig, ax = plt.subplots(figsize=(5.5, 3.8))
         levels = list(dict.fromkeys(df[key].dropna()))
         numeric = all(isinstance(v, (int, float)) for v in levels)
+        if key in MESH_SIZE_KEYS and "tets" in data:  # a mesh is read by its size, not its name
+            _error_against_tets(ax, data, models, key)
+            ax.set_ylabel(f"relative L2 error vs {reference}")
+            paths.append(save_figure(fig, out / f"error_vs_{safe_filename(key)}.png"))
+            continue
         spread = np.linspace(-0.15, 0.15, max(len(models), 1))
         for j, m in enumerate(models):
             d = data[data["model"] == m]
@@ -141,9 +166,15 @@ def sweep_figures(df: pd.DataFrame, keys: Sequence[str], reference: str, out: Pa
             ax.legend(fontsize=8)
         paths.append(save_figure(fig, out / f"error_vs_{safe_filename(key)}.png"))
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    cold_seen = False
     for m in models:
         d = data[data["model"] == m]
-        ax.scatter(d["wall_time"], d["rel_l2"], label=m, alpha=0.75, s=22)
+        cold = ~d["warm"].fillna(True).astype(bool) if "warm" in d else np.zeros(len(d), bool)
+        (h,) = [ax.scatter(d["wall_time"][~cold], d["rel_l2"][~cold], label=m, alpha=0.75, s=22)]
+        if cold.any():  # a worker's first solve of the model: imports and compilation
+            ax.scatter(d["wall_time"][cold], d["rel_l2"][cold], s=22, facecolors="none",
+                       edgecolors=h.get_facecolor()[0])  # fmt: skip
+            cold_seen = True
     ref = df[(df["model"] == reference) & (df["status"] == "ok")]["wall_time"]
     if len(ref):
         ax.axvline(float(ref.median()), color="k", ls="--", lw=1, label=f"{reference} (median)")
@@ -151,7 +182,11 @@ def sweep_figures(df: pd.DataFrame, keys: Sequence[str], reference: str, out: Pa
     ax.set_yscale("log")
     ax.set_xlabel("wall time of the solve (s)")
     ax.set_ylabel(f"relative L2 error vs {reference}")
-    ax.set_title("error against cost (one point per case)", fontsize=9)
+    ax.set_title(
+        "error against cost (one point per case"
+        + ("; hollow: a worker's first solve of the model, with its set-up)" if cold_seen else ")"),
+        fontsize=9,
+    )
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     paths.append(save_figure(fig, out / "error_vs_wall_time.png"))
