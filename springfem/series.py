@@ -289,10 +289,20 @@ def history_figure(hist, path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    probe_cols = [c for c in hist.columns if c.startswith("probe:")]
-    energy_cols = [c for c in ("kinetic", "potential", "total") if c in hist.columns]
-    panels = [p for p in (probe_cols, energy_cols, ["volume_change"]) if p]
-    fig, axes = plt.subplots(len(panels), 1, figsize=(6, 2.2 * len(panels)), sharex=True)
+    def drawn(c: str) -> bool:  # a series with no finite value is left out, with a note
+        return c in hist.columns and bool(np.isfinite(np.asarray(hist[c], float)).any())
+
+    probe_cols = [c for c in hist.columns if c.startswith("probe:") and drawn(c)]
+    energy_cols = [c for c in ("kinetic", "potential", "total") if drawn(c)]
+    missing = [c for c in ("potential", "total") if c in hist.columns and not drawn(c)]
+    volume_cols = ["volume_change"] if drawn("volume_change") else []
+    panels = [p for p in (probe_cols, energy_cols, volume_cols) if p]
+    if not panels:  # nothing finite to draw: an empty energy panel that says so
+        panels, energy_cols = [[]], []
+        energy_cols = panels[0]
+    fig, axes = plt.subplots(
+        len(panels), 1, figsize=(6, 2.2 * len(panels)), sharex=True, layout="constrained"
+    )
     axes = np.atleast_1d(axes)
     labels = {0: "displacement (m)", 1: "energy (J)", 2: "relative volume change"}
     for ax, cols in zip(axes, panels, strict=True):
@@ -301,7 +311,14 @@ def history_figure(hist, path: Path) -> Path:
         kind = 0 if cols is probe_cols else 1 if cols is energy_cols else 2
         ax.set_ylabel(labels[kind], fontsize=8)
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, loc="best")
+        if cols:
+            ax.legend(fontsize=7, loc="best")
+        if cols is energy_cols and missing:
+            ax.set_title(
+                f"{' and '.join(missing)} energy not drawn: undefined under a follower "
+                "pressure (it has no potential)",
+                fontsize=8,
+            )
     axes[-1].set_xlabel("time (s)")
     tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.png")
     fig.savefig(tmp, dpi=110, bbox_inches="tight")
