@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 
 from ..registry import Figure, StudyContext
-from ..tables import save_figure
+from ..tables import pyplot
 from .cases import ALL_VARIANTS, TOLERANCE
 
 
@@ -30,10 +30,7 @@ def error_cost_figure(
     -------
     Figure
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     names = list(df.scene.unique())
     ncol = min(len(names), 3)
@@ -102,8 +99,9 @@ def error_cost_figure(
         + (f" ({w['its error']:.3g})" if pd.notna(w.get("its error")) else "")
         for _, w in winners.iterrows()
     )
-    return Figure(
-        save_figure(fig, ctx.path("error_vs_cost.png")),
+    return ctx.figure(
+        fig,
+        "error_vs_cost.png",
         "Model error against static solve time for each spring variant (hollow: the "
         "last state of a run that did not converge; variants that fail outright are "
         "named in the panel); circled: the cheapest variant within "

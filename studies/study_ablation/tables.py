@@ -8,7 +8,6 @@ import numpy as np
 import pandas as pd
 
 from ..registry import StudyContext, Table
-from ..tables import write_table
 from .cases import (
     ALL_VARIANTS,
     EXACT_VARIANTS,
@@ -102,8 +101,9 @@ def ablation_table(ctx: StudyContext, df: pd.DataFrame, fem_times: dict[str, flo
     """
     table = df.drop(columns=["k_ratio_median"]).copy()
     table["fem_p1_time"] = table.scene.map(fem_times)
-    return Table(
-        write_table(table, ctx.path("ablation")),
+    return ctx.table(
+        table,
+        "ablation",
         "Spring-model parts switched on one by one, per scene: status, model error "
         "(relative L2 of vertex displacements against FEM P1 on the same mesh), largest "
         "probe error, static solve wall time (s; the LMS variant: dynamic relaxation), "
@@ -205,8 +205,9 @@ def winners_table(ctx: StudyContext, winners: pd.DataFrame) -> Table:
     -------
     Table
     """
-    return Table(
-        write_table(winners, ctx.path("winners")),
+    return ctx.table(
+        winners,
+        "winners",
         f"Per scene: the most accurate spring variant; the cheapest variant (smallest "
         f"static solve time, ties within {TIME_TIE:.0%} broken towards fewer parts) whose "
         f"model error is within {TOLERANCE:.0%} of the best, over all variants and over "

@@ -14,7 +14,6 @@ from springfem.errors import SolverError
 from ..analytic import fibre_angle, off_axis_strain, reference
 from ..registry import StudyContext, Table
 from ..scenes import StudyScene
-from ..tables import write_table
 from .cases import MODELS, REFERENCES, split_errors, stretch_measures
 
 SPLIT_COLUMNS = {
@@ -117,8 +116,9 @@ def split_table(ctx: StudyContext, split: pd.DataFrame) -> Table:
     -------
     Table
     """
-    return Table(
-        write_table(split, ctx.path("fibre_split")),
+    return ctx.table(
+        split,
+        "fibre_split",
         "Each model's displacement error against P2 and against same-mesh P1, split into "
         "the fibre direction and across it (relative to ‖u_ref‖; the two add in quadrature "
         "to the L2 error), and the L2 errors of the fibre strain f·εf and of the mean "
@@ -148,8 +148,9 @@ def modulus_table(ctx: StudyContext, df: pd.DataFrame, sigma: float, n_tets: int
         if m.startswith("spring"):
             wide[f"{m} error"] = wide[m] / wide["analytic"] - 1.0
     wide = wide.reset_index().rename(columns={"angle": "θ (deg)"})
-    return Table(
-        write_table(wide, ctx.path("modulus")),
+    return ctx.table(
+        wide,
+        "modulus",
         f"Effective modulus E_eff = σ/ε_xx (Pa) against fibre angle θ on the {n_tets}-tet "
         f"block (σ = {sigma:g} Pa): off-axis formula, spring model (analytic and nnls "
         "calibration, exact element with coupling), FEM P1 and P2, and the spring models' "
@@ -214,8 +215,9 @@ def ratio_table(ctx: StudyContext, ratios: pd.DataFrame) -> Table:
     -------
     Table
     """
-    return Table(
-        write_table(ratios, ctx.path("anisotropy_ratio")),
+    return ctx.table(
+        ratios,
+        "anisotropy_ratio",
         "Stiffness along (0°) and across (90°) the fibres and the anisotropy ratio "
         "E(0)/E(90) of each model against the analytic E_f/E_c.",
     )

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..registry import Figure, StudyContext
-from ..tables import save_figure
+from ..tables import pyplot
 from .cases import SPRING
 from .findings import limit_sentence
 from .tables import L2, Analysis
@@ -31,10 +31,7 @@ def rate_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
     -------
     Figure
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     from ..plots import loglog_rates
 
@@ -62,8 +59,9 @@ def rate_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
     e = df[df["model"].isin([SPRING, p1])].pivot(index="factor", columns="model", values=L2)
     n_below = int((e[SPRING] < e[p1]).sum()) if {SPRING, p1} <= set(e.columns) else 0
     text = ", ".join(f"{m} {rates[m]['l2']:.2f}" for m in rates)
-    return Figure(
-        save_figure(fig, ctx.path(f"convergence{suffix}.png")),
+    return ctx.figure(
+        fig,
+        f"convergence{suffix}.png",
         f"Errors against the {p2} reference under refinement, log-log, fitted rates in the "
         f"legend (L2: {text}); {SPRING}'s error is below {p1}'s on {n_below} of {len(e)} levels.",
     )
@@ -85,10 +83,7 @@ def tip_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
     -------
     Figure
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     from ..plots import loglog_rates
 
@@ -117,8 +112,9 @@ def tip_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
                  f"|{SPRING} / {p1} − 1| of w", {name: a.gap_rate}, xticks=sorted(h))  # fmt: skip
     bx.set_title("does the spring–P1 gap close under refinement?", fontsize=10)
     fig.tight_layout()
-    return Figure(
-        save_figure(fig, ctx.path(f"tip_deflection{suffix}.png")),
+    return ctx.figure(
+        fig,
+        f"tip_deflection{suffix}.png",
         f"Left: {a.track.label} normalised by the P2 reference under refinement. Right: the "
         "spring model's w relative to P1 on the same mesh. " + limit_sentence(a),
     )

@@ -16,7 +16,6 @@ import pandas as pd
 from .. import metrics
 from ..analytic import reference
 from ..registry import StudyContext, Table
-from ..tables import write_table
 from .cases import COSINE, SPRING, Plan, richardson_limit
 from .levels import grid_box, level_label
 
@@ -236,16 +235,18 @@ def write_tables(ctx: StudyContext, a: Analysis, suffix: str = "") -> list[Table
         if grid_box(p.scene.table)
         else "uniform refinement (each tet into 8 per doubling)"
     )
-    levels = Table(
-        write_table(a.levels, ctx.path(f"convergence_levels{suffix}")),
+    levels = ctx.table(
+        a.levels,
+        f"convergence_levels{suffix}",
         f"{label} refined by {how}: w = {a.track.label} and errors against {p.fem[1]} on level "
         f"{p.ref} ({a.ref['tets']} tets, w = {a.w_ref:.6g}); h = h₁ / factor with h₁ = "
         f"{p.h1:.4g} the mean edge length of the scene's mesh (its length unit)"
         + (f"; {'; '.join(p.notes)}" if p.notes else "")
         + ".",
     )
-    rates = Table(
-        write_table(a.rates, ctx.path(f"convergence_rates{suffix}")),
+    rates = ctx.table(
+        a.rates,
+        f"convergence_rates{suffix}",
         "Fitted rates (slope of log error over log h, all levels) and w extrapolated from "
         f"each model's three finest levels (w = L + C h^p); {p.fem[0]}'s true limit is the "
         "reference's, so its extrapolated value shows the extrapolation's own bias.",

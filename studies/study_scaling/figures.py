@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 
 from ..registry import Figure, StudyContext
-from ..tables import save_figure
+from ..tables import pyplot
 from .cases import STATIC_METHODS
 
 
@@ -37,7 +37,7 @@ def scaling_figure(
     -------
     Figure
     """
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     n_step = sdf["tets"].to_numpy(float)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.4))
@@ -71,4 +71,4 @@ def scaling_figure(
     ax.set_title("Static solve (set-up included)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    return Figure(save_figure(fig, ctx.path("scaling.png")), caption)
+    return ctx.figure(fig, "scaling.png", caption)

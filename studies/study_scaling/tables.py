@@ -6,7 +6,6 @@ import pandas as pd
 
 from ..metrics import fitted_rate
 from ..registry import StudyContext, Table
-from ..tables import write_table
 from .cases import REPEATS, STATIC_METHODS
 
 
@@ -105,19 +104,22 @@ def write_tables(
     """
     fits = pd.DataFrame([{"series": k, "fitted slope": v} for k, v in slope.items()])
     return [
-        Table(
-            write_table(sdf, ctx.path("explicit_step")),
+        ctx.table(
+            sdf,
+            "explicit_step",
             f"Cost of one explicit step (serial kernels, forces + update through the solver loop; "
             f"CPU ms, median of {REPEATS} alternating repeats; wall ms beside) and of the set-up "
             f"(CPU s), spring model vs explicit P1 neo-Hookean FEM on the same mesh.",
         ),
-        Table(
-            write_table(tdf, ctx.path("static_solve")),
+        ctx.table(
+            tdf,
+            "static_solve",
             "One static solve from the scene (set-up, assembly, Newton or linear solve): CPU and "
             "wall seconds, Newton iterations and the linear solver used.",
         ),
-        Table(
-            write_table(fits, ctx.path("slopes")),
+        ctx.table(
+            fits,
+            "slopes",
             "Fitted log-log slopes of cost against tet count (1 = linear scaling).",
         ),
     ]

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 
 from ..registry import Figure, StudyContext
-from ..tables import save_figure
+from ..tables import pyplot
 
 #: Marker per model, colour per solution method (by model for the static FEM).
 MARKERS = {"spring-energy": "o", "spring-exact": "*", "P1": "s", "P1-NH": "s", "P2": "D",
@@ -52,7 +52,7 @@ def pareto_figure(
     -------
     Figure
     """
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     good = df[(df["status"] == "ok") & (df[column] > 0)]
     fig, ax = plt.subplots(figsize=(8.5, 5.6))
@@ -79,4 +79,4 @@ def pareto_figure(
         f"CPU time against error of every solve of {label} (log-log; labels: refinement "
         f"factor of its mesh), with the Pareto front. {front_text}"
     )
-    return Figure(save_figure(fig, ctx.path(f"pareto{suffix}.png")), caption)
+    return ctx.figure(fig, f"pareto{suffix}.png", caption)

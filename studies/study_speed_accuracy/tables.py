@@ -238,8 +238,9 @@ def write_tables(
         ratio = ref["probes"][how.probe][component] / value
         context = f"; its {how.probe} is {ratio:.4f} × {source}"
     tables = [
-        Table(
-            write_table(show, ctx.path(f"points{suffix}")),
+        ctx.table(
+            show,
+            f"points{suffix}",
             f"{s.label}: every (method, level, setting) point: CPU time (`seconds`) and wall "
             "time from the scene to the answer (model build and time-step estimate included; "
             "the solves are serial, so CPU time is the wall time of an idle machine, while a "
@@ -250,8 +251,9 @@ def write_tables(
     ]
     if sdf is not None:
         tables.append(
-            Table(
-                write_table(sdf, ctx.path(f"step_cost{suffix}")),
+            ctx.table(
+                sdf,
+                f"step_cost{suffix}",
                 "Cost of one explicit step (forces + update through the same solver loop), "
                 "spring model vs explicit P1 neo-Hookean FEM on the same mesh: medians of "
                 f"{STEP_REPEATS} alternating repeats of {STEP_COUNT}-500 steps; wall and CPU "

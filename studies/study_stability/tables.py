@@ -5,7 +5,6 @@ from __future__ import annotations
 import pandas as pd
 
 from ..registry import StudyContext, Table
-from ..tables import write_table
 
 #: The case keys each series' frame keeps, with their column names.
 KEYS = {
@@ -100,8 +99,4 @@ def write_tables(ctx: StudyContext, f: dict[str, pd.DataFrame]) -> list[Table]:
             "with inverted elements.",
         ),
     }
-    return [
-        Table(write_table(f[k], ctx.path(name)), caption)
-        for k, (name, caption) in captions.items()
-        if len(f[k])
-    ]
+    return [ctx.table(f[k], name, caption) for k, (name, caption) in captions.items() if len(f[k])]

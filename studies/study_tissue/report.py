@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 
 from ..registry import Figure, StudyContext, Table
-from ..tables import save_figure, write_table
+from ..tables import pyplot
 
 #: Land et al. 2015 problem 1: the published range of the beam's deformed tip z (mm).
 BEAM_RANGE = (4.14, 4.20)
@@ -104,16 +104,13 @@ def tables(ctx: StudyContext, sdf, bdf, vdf, settings) -> list[Table]:
          "rel_error_p1 vs the same-mesh P1 FEM, cavity_rel_p1 of the final cavity vs P1's "
          "(none for a partial row: its values are at the load_factor it reached)."),
     ):  # fmt: skip
-        out.append(Table(write_table(df, ctx.path(stem)), caption))
+        out.append(ctx.table(df, stem, caption))
     return out
 
 
 def pv_figure(ctx: StudyContext, sdf, lv_cases, lv_results, settings) -> Figure:
     """Stress-stretch curves (left) and the ventricle's pressure-volume curve (right)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
     for ax, law in zip(axes[:2], ("guccione", "holzapfel-ogden"), strict=True):
@@ -144,13 +141,12 @@ def pv_figure(ctx: StudyContext, sdf, lv_cases, lv_results, settings) -> Figure:
     b.set_ylabel("endocardial pressure (kPa)")
     b.legend(fontsize=7)
     b.grid(True, alpha=0.3)
-    path = save_figure(fig, ctx.path("tissue.png"))
-    plt.close(fig)
-    return Figure(path, "Left and middle: nominal stress against stretch along and across the "
-                  "fibre (log scale), Guccione and Holzapfel-Ogden, FEM solid, spring variants "
-                  "dashed. Right: the Land ventricle's pressure-volume curve over the FEM's "
-                  "load steps (P2 reference and same-mesh P1); squares: the spring variants' "
-                  "final cavity, at the load factor each reached.")  # fmt: skip
+    return ctx.figure(fig, "tissue.png", "Left and middle: nominal stress against stretch "
+                      "along and across the fibre (log scale), Guccione and Holzapfel-Ogden, "
+                      "FEM solid, spring variants dashed. Right: the Land ventricle's "
+                      "pressure-volume curve over the FEM's load steps (P2 reference and "
+                      "same-mesh P1); squares: the spring variants' final cavity, at the load "
+                      "factor each reached.")  # fmt: skip
 
 
 def findings(sdf, bdf, vdf) -> tuple[list[str], dict[str, float]]:

@@ -15,7 +15,6 @@ import pandas as pd
 
 from ..registry import StudyContext, Table
 from ..scenes import StudyScene
-from ..tables import write_table
 from .cases import K_MAX, K_MIN
 
 #: The drift measures in words.
@@ -192,8 +191,9 @@ def final_table(ctx: StudyContext, runs: Runs) -> Table:
                     "|dL|/L0": s.dL,
                 }
             )
-    return Table(
-        write_table(pd.DataFrame(rows), ctx.path("final_drift")),
+    return ctx.table(
+        pd.DataFrame(rows),
+        "final_drift",
         "Volume drift at the end of each explicit run (step: a suddenly applied load; ramp: "
         "a slow load ramp) with each scene's references (its closed form, the static FEM): "
         "dV/V0 signed total change, element drift Σ|ΔV_k|/V0, |dL|/L0 mean change of the "
@@ -216,8 +216,9 @@ def static_table(ctx: StudyContext, runs: Runs) -> Table:
     -------
     Table
     """
-    return Table(
-        write_table(runs.static, ctx.path("static_drift")),
+    return ctx.table(
+        runs.static,
+        "static_drift",
         "Static equilibria under each scene's loads (× load factor): the spring variants "
         "without LMS (Newton, full load; they check that the slow ramps are quasi-static), "
         "same-mesh P1 FEM (the scene's small-strain law, and neo-Hookean for an isotropic "
