@@ -13,22 +13,8 @@ from .cases import ALL_VARIANTS, TOLERANCE
 def error_cost_figure(
     ctx: StudyContext, df: pd.DataFrame, winners: pd.DataFrame, fem_times: dict[str, float]
 ) -> Figure:
-    """Model error against static solve time, one panel per scene, winners circled.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    df
-        The (scene, variant) rows.
-    winners
-        The winners per scene.
-    fem_times
-        Scene -> FEM P1 solve time (a vertical line).
-
-    Returns
-    -------
-    Figure
+    """Model error against static solve time, one panel per scene, winners circled, the FEM P1
+    solve time a vertical line.
     """
     plt = pyplot()
 

@@ -46,20 +46,8 @@ def cheapest_adequate(
 
 
 def result_rows(name: str, cases: list[dict], results: list[dict], u_ref: Any) -> list[dict]:
-    """One row per variant of one scene: status, model error, cost, solver facts.
-
-    Parameters
-    ----------
-    name
-        The scene.
-    cases, results
-        Its spring cases and their results (:func:`~.cases.spring_case`).
-    u_ref
-        The FEM P1 vertex displacements.
-
-    Returns
-    -------
-    list of dict
+    """One row per variant of one scene (its :func:`~.cases.spring_case` cases and results):
+    status, model error against the FEM P1 vertex displacements ``u_ref``, cost, solver facts.
     """
     rows = []
     for c, r in zip(cases, results):
@@ -84,21 +72,7 @@ def result_rows(name: str, cases: list[dict], results: list[dict], u_ref: Any) -
 
 
 def ablation_table(ctx: StudyContext, df: pd.DataFrame, fem_times: dict[str, float]) -> Table:
-    """Write the table of every (scene, variant) with the FEM P1 time for scale.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    df
-        The rows of :func:`result_rows`.
-    fem_times
-        Scene -> FEM P1 solve time.
-
-    Returns
-    -------
-    Table
-    """
+    """Write the table of every (scene, variant) with the FEM P1 time for scale."""
     table = df.drop(columns=["k_ratio_median"]).copy()
     table["fem_p1_time"] = table.scene.map(fem_times)
     return ctx.table(
@@ -113,18 +87,8 @@ def ablation_table(ctx: StudyContext, df: pd.DataFrame, fem_times: dict[str, flo
 
 
 def winners_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, float]]:
-    """Per scene: the best variant, the cheapest adequate ones, the failures.
-
-    Parameters
-    ----------
-    df
-        The rows of :func:`result_rows`.
-
-    Returns
-    -------
-    winners : DataFrame
-    headline : dict
-        Best and full-model (``axial+energy+volume``) errors per scene.
+    """Per scene: the best variant, the cheapest adequate ones, the failures; and the headline's
+    best and full-model (``axial+energy+volume``) errors per scene.
     """
     headline: dict[str, float] = {}
     wrows = []
@@ -192,19 +156,7 @@ def winners_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, float]]:
 
 
 def winners_table(ctx: StudyContext, winners: pd.DataFrame) -> Table:
-    """Write the winners table.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    winners
-        :func:`winners_frame`.
-
-    Returns
-    -------
-    Table
-    """
+    """Write the winners table."""
     return ctx.table(
         winners,
         "winners",

@@ -22,22 +22,8 @@ def modulus_figure(
     spring_err: dict[str, float],
     worst_angle: dict[str, float],
 ) -> Figure:
-    """Effective modulus, its error and the shear coupling against fiber angle.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    df
-        The (model, angle) rows.
-    mat, sigma, n_tets
-        Material, applied stress, tets of the block.
-    spring_err, worst_angle
-        Largest error per model and its angle (for the caption).
-
-    Returns
-    -------
-    Figure
+    """Effective modulus, its error and the shear coupling against fiber angle (the largest
+    error per model and its angle go in the caption).
     """
     plt = pyplot()
 

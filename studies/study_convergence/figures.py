@@ -16,21 +16,7 @@ def _present(a: Analysis) -> list[str]:
 
 
 def rate_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
-    """The L2 and ``w`` errors of every model against h, log-log, with fitted rates.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    a
-        The scene's analysis.
-    suffix
-        File-name suffix (several scenes).
-
-    Returns
-    -------
-    Figure
-    """
+    """The L2 and ``w`` errors of every model against h, log-log, with fitted rates."""
     plt = pyplot()
 
     from ..plots import loglog_rates
@@ -68,21 +54,7 @@ def rate_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
 
 
 def tip_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
-    """``w`` over the reference per level, and ``|spring / P1 − 1|`` against h.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    a
-        The scene's analysis.
-    suffix
-        File-name suffix (several scenes).
-
-    Returns
-    -------
-    Figure
-    """
+    """``w`` over the reference per level, and ``|spring / P1 − 1|`` against h."""
     plt = pyplot()
 
     from ..plots import loglog_rates

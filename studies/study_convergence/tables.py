@@ -56,19 +56,7 @@ class Tracked:
 
 
 def tracked(p: Plan, ref: dict) -> tuple[Tracked, tuple[float, str] | None]:
-    """What the tip columns track, and the scene's closed-form value of it if it has one.
-
-    Parameters
-    ----------
-    p
-        The scene's plan.
-    ref
-        The reference's result.
-
-    Returns
-    -------
-    Tracked, (value, source) or None
-    """
+    """What the tip columns track, and the scene's closed-form value of it if it has one."""
     hook = reference(p.scene, None)
     if hook is not None:
         probe, component, value, source = hook
@@ -118,23 +106,9 @@ class Analysis:
 
 
 def analyse(p: Plan, cases: list[dict], results: list[dict]) -> Analysis:
-    """Errors of every level against the reference (the last case), rates and the gap.
-
-    Parameters
-    ----------
-    p
-        The plan.
-    cases, results
-        :meth:`Plan.cases` and their results.
-
-    Returns
-    -------
-    Analysis
-
-    Raises
-    ------
-    springfem.errors.SolverError
-        If the reference solve failed.
+    """Errors of every level against the reference (the last case), rates and the gap, from
+    :meth:`Plan.cases` and their results; a :class:`~springfem.errors.SolverError` if the
+    reference solve failed.
     """
     from springfem.errors import SolverError
 
@@ -214,21 +188,7 @@ def _gap(a: Analysis, w_cosine: float) -> None:
 
 
 def write_tables(ctx: StudyContext, a: Analysis, suffix: str = "") -> list[Table]:
-    """Write the level and rate tables of one scene.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    a
-        The scene's analysis.
-    suffix
-        File-name suffix (several scenes).
-
-    Returns
-    -------
-    list of Table
-    """
+    """Write the level and rate tables of one scene."""
     p, label = a.plan, a.plan.scene.label
     how = (
         "its divisions times the factor"

@@ -22,21 +22,7 @@ def _tet_axis(ax) -> None:
 def scaling_figure(
     ctx: StudyContext, sdf: pd.DataFrame, tdf: pd.DataFrame, slope: dict[str, float], caption: str
 ) -> Figure:
-    """CPU time per explicit step and per static solve against tet count (log-log).
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    sdf, tdf, slope
-        The frames and slopes (:mod:`.tables`).
-    caption
-        The figure's caption.
-
-    Returns
-    -------
-    Figure
-    """
+    """CPU time per explicit step and per static solve against tet count (log-log)."""
     plt = pyplot()
 
     n_step = sdf["tets"].to_numpy(float)

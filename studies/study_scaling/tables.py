@@ -12,19 +12,7 @@ from .cases import REPEATS, STATIC_METHODS
 def frames(
     steps: list[dict], static_cases: list[dict], static: list[dict]
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """The explicit-step frame (one row per mesh) and the static frame (per solve).
-
-    Parameters
-    ----------
-    steps
-        :func:`~.cases.step_case` results.
-    static_cases, static
-        The static cases and their :func:`~.cases.static_case` results.
-
-    Returns
-    -------
-    sdf, tdf : DataFrame
-    """
+    """The explicit-step frame (one row per mesh) and the static frame (one row per solve)."""
     sdf = pd.DataFrame(
         [
             {
@@ -59,17 +47,8 @@ def frames(
 
 
 def slopes(sdf: pd.DataFrame, tdf: pd.DataFrame) -> dict[str, float]:
-    """Fitted log-log slopes of cost against tet count per series.
-
-    Parameters
-    ----------
-    sdf, tdf
-        :func:`frames`.
-
-    Returns
-    -------
-    dict
-        ``step_spring``, ``step_fem``, ``setup_spring``, ``setup_fem`` and ``static_<method>``.
+    """Fitted log-log slopes of cost against tet count per series: ``step_spring``,
+    ``step_fem``, ``setup_spring``, ``setup_fem`` and ``static_<method>``.
     """
     n_step = sdf["tets"].to_numpy(float)
     slope = {
@@ -87,21 +66,7 @@ def slopes(sdf: pd.DataFrame, tdf: pd.DataFrame) -> dict[str, float]:
 def write_tables(
     ctx: StudyContext, sdf: pd.DataFrame, tdf: pd.DataFrame, slope: dict[str, float]
 ) -> list[Table]:
-    """Write the explicit-step, static-solve and slope tables.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    sdf, tdf
-        :func:`frames`.
-    slope
-        :func:`slopes`.
-
-    Returns
-    -------
-    list of Table
-    """
+    """Write the explicit-step, static-solve and slope tables."""
     fits = pd.DataFrame([{"series": k, "fitted slope": v} for k, v in slope.items()])
     return [
         ctx.table(

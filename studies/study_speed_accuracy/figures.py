@@ -29,28 +29,8 @@ def pareto_figure(
     ctx: StudyContext, df: pd.DataFrame, column: str, reference: str, front_text: str,
     label: str, suffix: str = "",
 ) -> Figure:  # fmt: skip
-    """Every solve's CPU time against its error (log-log) with the Pareto front.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    df
-        The points (:func:`~.tables.points_frame`).
-    column
-        The error column.
-    reference
-        The reference, for the axis label.
-    front_text
-        The findings' sentence about the front (ends the caption).
-    label
-        The scene's label.
-    suffix
-        File-name suffix (several scenes).
-
-    Returns
-    -------
-    Figure
+    """Every solve's CPU time against its error ``column`` (log-log) with the Pareto front;
+    the findings' sentence about the front, ``front_text``, ends the caption.
     """
     plt = pyplot()
 

@@ -11,21 +11,7 @@ from .cases import Settings
 
 
 def locking_figure(ctx: StudyContext, dk: pd.DataFrame, q: Settings) -> Figure:
-    """Tip deflection over Timoshenko and volume change against Poisson's ratio.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    dk
-        The locking frame.
-    q
-        The study's settings.
-
-    Returns
-    -------
-    Figure
-    """
+    """Tip deflection over Timoshenko and volume change against Poisson's ratio."""
     plt = pyplot()
 
     nus = list(q.nus)
@@ -58,23 +44,7 @@ def locking_figure(ctx: StudyContext, dk: pd.DataFrame, q: Settings) -> Figure:
 def failure_map_figure(
     ctx: StudyContext, dm: pd.DataFrame, q: Settings, methods: tuple[str, ...]
 ) -> Figure:
-    """The failure map per method: ok, inverted or blew up on the load × dt grid.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    dm
-        The failure-map frame.
-    q
-        The study's settings.
-    methods
-        The methods shown, one panel each.
-
-    Returns
-    -------
-    Figure
-    """
+    """The failure map, one panel per method: ok, inverted or blew up on the load × dt grid."""
     plt = pyplot()
     from matplotlib.colors import ListedColormap
 

@@ -28,19 +28,10 @@ COLUMNS = {
 
 
 def frames(cases: dict[str, list[dict]], results: dict[str, list[dict]]) -> dict[str, pd.DataFrame]:
-    """The four series as frames.
-
-    Parameters
-    ----------
-    cases, results
-        Series name -> its cases and their results (see :func:`~.cases.grids`).
-
-    Returns
-    -------
-    dict
-        ``dt`` (scene, method, tets, predicted and measured step, ratio), ``load`` (load
-        factor, status, largest |u| over the body's size, message), ``lock`` (ν, tip ratio,
-        volume change, inverted) and ``map`` (load factor, dt factor, status).
+    """The four series as frames: ``dt`` (scene, method, tets, predicted and measured step,
+    ratio), ``load`` (load factor, status, largest |u| over the body's size, message),
+    ``lock`` (ν, tip ratio, volume change, inverted) and ``map`` (load factor, dt factor,
+    status).
     """
     out = {}
     for k, keys in KEYS.items():
@@ -62,19 +53,8 @@ def _tets(case: dict) -> int:
 
 
 def write_tables(ctx: StudyContext, f: dict[str, pd.DataFrame]) -> list[Table]:
-    """Write the tables of the series that ran.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    f
-        :func:`frames`.
-
-    Returns
-    -------
-    list of Table
-        Critical step, largest load, locking (if run), failure map.
+    """Write the tables of the series that ran: critical step, largest load, locking, failure
+    map.
     """
     captions = {
         "dt": (

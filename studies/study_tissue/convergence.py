@@ -47,18 +47,9 @@ PROBLEM = {"land-ventricle": "2", "land-ventricle-fibres": "3 (passive)"}
 
 
 def observed_order(h: np.ndarray, f: np.ndarray) -> tuple[float, float, str]:
-    """Observed order and Richardson value from three (h, f) pairs, ``h`` decreasing.
-
-    Parameters
-    ----------
-    h, f
-        Three element sizes (any order) and the values on them.
-
-    Returns
-    -------
-    p, f0, note
-        ``f = f0 + C h^p``; NaN with the reason in ``note`` when the differences change
-        sign (oscillating) or no order in (0.05, 12) fits (``note`` is empty otherwise).
+    """Observed order ``p`` and Richardson value ``f0`` of ``f = f0 + C h^p`` from three
+    (h, f) pairs (any order), and a ``note``: NaN with the reason in ``note`` when the
+    differences change sign (oscillating) or no order in (0.05, 12) fits (else ``""``).
     """
     from scipy.optimize import brentq
 

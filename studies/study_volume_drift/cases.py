@@ -120,15 +120,6 @@ BUNDLED_TIME = {
 def bundled_scenes(s: Settings) -> list[StudyScene]:
     """The drift cube compressed and pulled (every series), and the sag (static, step).
 
-    Parameters
-    ----------
-    s
-        The settings.
-
-    Returns
-    -------
-    list of StudyScene
-
     Examples
     --------
     >>> [x.label for x in bundled_scenes(Settings.full())]
@@ -160,20 +151,9 @@ def body_size(scene: Scene) -> float:
 
 
 def quarter_wave_period(scene: Scene, rule: str = "p-wave") -> float:
-    """``4 l / c`` of a rod as long as the body's largest extent ``l``.
-
-    Parameters
-    ----------
-    scene
-        The scene.
-    rule
-        ``p-wave``: ``c`` from the stiffest longitudinal modulus (diagonal) of the
-        material's small-strain matrix; ``rod``: the bar velocity ``sqrt(E / rho)``.
-
-    Returns
-    -------
-    float
-        Seconds.
+    """``4 l / c`` (seconds) of a rod as long as the body's largest extent ``l``; ``rule``
+    ``p-wave``: ``c`` from the stiffest longitudinal modulus (diagonal) of the material's
+    small-strain matrix, ``rod``: the bar velocity ``sqrt(E / rho)``.
     """
     mat = scene.material
     if rule == "rod":
@@ -197,18 +177,6 @@ def grids(scenes: list[StudyScene], s: Settings) -> dict[str, list[dict]]:
     full load (role ``static``), and the P1 FEM at the other load factors (role ``load``).
     ``step``: every spring variant after a suddenly applied load. ``ramp``: every spring
     variant along a slow load ramp.
-
-    Parameters
-    ----------
-    scenes
-        The study's scenes.
-    s
-        The settings.
-
-    Returns
-    -------
-    dict
-        ``static``, ``step``, ``ramp`` -> cases.
     """
     out: dict[str, list[dict]] = {"static": [], "step": [], "ramp": []}
     for sc in scenes:

@@ -23,19 +23,7 @@ def _reference_lines(ax, runs: Runs, scene: str) -> None:
 
 
 def time_figure(ctx: StudyContext, runs: Runs) -> Figure:
-    """Drift against time after a suddenly applied load, one column per scene.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    runs
-        The study's runs.
-
-    Returns
-    -------
-    Figure
-    """
+    """Drift against time after a suddenly applied load, one column per scene."""
     plt = pyplot()
 
     panels = [s.label for s in runs.scenes if "step" in runs.kinds(s.label)]
@@ -103,17 +91,6 @@ def _time_caption(runs: Runs, scene: str) -> str:
 def load_figure(ctx: StudyContext, runs: Runs) -> Figure:
     """Whole-body drift against signed load factor along the slow ramps, with the static
     equilibria and the closed form.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    runs
-        The study's runs.
-
-    Returns
-    -------
-    Figure
     """
     plt = pyplot()
 

@@ -102,17 +102,7 @@ class Runs:
 
 
 def static_frame(cases: list[dict[str, Any]], results: list[dict[str, Any]]) -> pd.DataFrame:
-    """One row per static case: scene, model, load factor, drifts, status, law.
-
-    Parameters
-    ----------
-    cases, results
-        The static cases and their results (:func:`~.cases.static_case`).
-
-    Returns
-    -------
-    DataFrame
-    """
+    """One row per static case: scene, model, load factor, drifts, status, law."""
     keys = ("dV", "element_drift", "dL", "inverted", "dV (P2 volume)")
     rows = [
         {
@@ -131,19 +121,7 @@ def static_frame(cases: list[dict[str, Any]], results: list[dict[str, Any]]) -> 
 
 
 def final_table(ctx: StudyContext, runs: Runs) -> Table:
-    """The drifts at the end of each explicit run, with each scene's references.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    runs
-        The study's runs.
-
-    Returns
-    -------
-    Table
-    """
+    """The drifts at the end of each explicit run, with each scene's references."""
     rows = []
     for c, r in runs.dynamic:
         f = r.get("final", {})
@@ -203,19 +181,7 @@ def final_table(ctx: StudyContext, runs: Runs) -> Table:
 
 
 def static_table(ctx: StudyContext, runs: Runs) -> Table:
-    """The static equilibria of every scene.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    runs
-        The study's runs.
-
-    Returns
-    -------
-    Table
-    """
+    """The static equilibria of every scene."""
     return ctx.table(
         runs.static,
         "static_drift",
@@ -229,16 +195,7 @@ def static_table(ctx: StudyContext, runs: Runs) -> Table:
 
 
 def compare_words(x: float, ref: float) -> str:
-    """``"1.15× the drift (more)"`` for captions and findings.
-
-    Parameters
-    ----------
-    x, ref
-        A drift and the one it is compared with.
-
-    Returns
-    -------
-    str
+    """``"1.15× the drift (more)"``: the drift ``x`` against ``ref``, for captions and findings.
 
     Examples
     --------
