@@ -32,6 +32,8 @@ from typing import Any
 from springfem.files import atomic_write_text, remove_stale_temp_files
 from springfem.files import jsonable as _jsonable
 
+from .executor import run_tasks
+
 CACHE_VERSION = "1"
 
 
@@ -117,8 +119,6 @@ class CaseCache:
 
         ``work`` must be importable by the workers when the cases run on a cluster.
         """
-        from .executor import run_tasks
-
         cases = list(cases)
         results: list[dict[str, Any] | None] = [self.get(c) for c in cases]
         todo = [i for i, r in enumerate(results) if r is None]

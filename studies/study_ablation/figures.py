@@ -36,28 +36,12 @@ def error_cost_figure(
                 (h,) = ax.loglog(r.solve_time, r.error, markers[r.variant], mfc="none", **kw)
                 handles.setdefault(r.variant + " (not converged: last state)", h)
         w = winners[winners.scene == name]
-        if len(w) and "its error" in w and np.isfinite(w["its error"].iloc[0]):
-            (h,) = ax.loglog(
-                w["its solve time"].iloc[0],
-                w["its error"].iloc[0],
-                "o",
-                ms=17,
-                mfc="none",
-                mec="k",
-            )
-            handles["cheapest adequate"] = h
-        col = "its error (with exact)"
-        if len(w) and col in w and np.isfinite(w[col].iloc[0]):
-            (h,) = ax.loglog(
-                w["its solve time (with exact)"].iloc[0],
-                w["its error (with exact)"].iloc[0],
-                "o",
-                ms=21,
-                mfc="none",
-                mec="r",
-                ls="none",
-            )
-            handles["cheapest adequate (with exact)"] = h
+        for tag, ms, mec in (("", 17, "k"), (" (with exact)", 21, "r")):  # circle the winners
+            col = f"its error{tag}"
+            if len(w) and col in w and np.isfinite(w[col].iloc[0]):
+                t = w[f"its solve time{tag}"].iloc[0]
+                (h,) = ax.loglog(t, w[col].iloc[0], "o", ms=ms, mfc="none", mec=mec)
+                handles[f"cheapest adequate{tag}"] = h
         if name in fem_times:
             handles["FEM P1 solve time"] = ax.axvline(fem_times[name], color="k", ls=":", lw=1)
         failed = ", ".join(g[(g.status != "ok") & ~np.isfinite(g.error)].variant)

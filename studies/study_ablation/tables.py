@@ -86,6 +86,10 @@ def ablation_table(ctx: StudyContext, df: pd.DataFrame, fem_times: dict[str, flo
     )
 
 
+def _field(row: pd.Series | None, column: str, missing: Any) -> Any:
+    return missing if row is None else row[column]
+
+
 def winners_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, float]]:
     """Per scene: the best variant, the cheapest adequate ones, the failures; and the headline's
     best and full-model (``axial+energy+volume``) errors per scene.
@@ -110,15 +114,9 @@ def winners_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, float]]:
                 "cheapest adequate": win.variant,
                 "its error": win.error,
                 "its solve time": win.solve_time,
-                "cheapest adequate (analytic cal.)": (
-                    win_ladder.variant if win_ladder is not None else "none"
-                ),
-                "its error (analytic cal.)": (
-                    win_ladder.error if win_ladder is not None else np.nan
-                ),
-                f"cheapest with error <= {MAX_ERROR:g}": (
-                    win_abs.variant if win_abs is not None else "none"
-                ),
+                "cheapest adequate (analytic cal.)": _field(win_ladder, "variant", "none"),
+                "its error (analytic cal.)": _field(win_ladder, "error", np.nan),
+                f"cheapest with error <= {MAX_ERROR:g}": _field(win_abs, "variant", "none"),
                 "fails": ", ".join(g[g.status != "ok"].variant) or "none",
             }
         )
@@ -129,13 +127,9 @@ def winners_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, float]]:
                 {
                     "best (with exact)": best_x.variant.iloc[0],
                     "best error (with exact)": best_x.error.iloc[0],
-                    "cheapest adequate (with exact)": (
-                        win_x.variant if win_x is not None else "none"
-                    ),
-                    "its error (with exact)": win_x.error if win_x is not None else np.nan,
-                    "its solve time (with exact)": (
-                        win_x.solve_time if win_x is not None else np.nan
-                    ),
+                    "cheapest adequate (with exact)": _field(win_x, "variant", "none"),
+                    "its error (with exact)": _field(win_x, "error", np.nan),
+                    "its solve time (with exact)": _field(win_x, "solve_time", np.nan),
                     "exact fails": ", ".join(
                         g_all[(g_all.status != "ok") & g_all.variant.isin(EXACT_VARIANTS)].variant
                     )

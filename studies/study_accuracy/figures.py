@@ -8,6 +8,7 @@ import pandas as pd
 from springfem.scene import Scene
 
 from .. import metrics
+from ..plots import grouped_bars
 from ..registry import Figure, StudyContext
 from ..tables import pyplot
 from .cases import ERROR_KINDS, nan_float
@@ -30,9 +31,6 @@ def field_conclusion(scene: Scene, r: dict, e: dict) -> str:
 
 def bar_figure(ctx: StudyContext, errors: pd.DataFrame, probes: pd.DataFrame) -> Figure:
     plt = pyplot()
-
-    from ..plots import grouped_bars
-
     fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.2))
     groups = list(errors["scene"])
     grouped_bars(

@@ -104,11 +104,10 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
     if len(open_split):
         headline.update(split_findings(open_split, failed)[1])
     tables.append(split_table(ctx, split))
+    names = ", ".join(dict.fromkeys(s.table.get("name") or s.label for s in scenes))
     return StudyOutput(
         name=ctx.name,
-        title="Anisotropy: response along and across the fibre ("
-        + ", ".join(dict.fromkeys(s.table.get("name") or s.label for s in scenes))
-        + ")",
+        title=f"Anisotropy: response along and across the fibre ({names})",
         findings=findings,
         tables=tables,
         figures=figures,

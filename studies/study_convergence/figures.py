@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..plots import loglog_rates
 from ..registry import Figure, StudyContext
 from ..tables import pyplot
 from .cases import SPRING
@@ -18,9 +19,6 @@ def _present(a: Analysis) -> list[str]:
 def rate_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
     """The L2 and ``w`` errors of every model against h, log-log, with fitted rates."""
     plt = pyplot()
-
-    from ..plots import loglog_rates
-
     df = a.levels[a.levels["status"] == "ok"]
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
     curves_l2, curves_w = {}, {}
@@ -56,9 +54,6 @@ def rate_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
 def tip_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
     """``w`` over the reference per level, and ``|spring / P1 − 1|`` against h."""
     plt = pyplot()
-
-    from ..plots import loglog_rates
-
     df = a.levels[a.levels["status"] == "ok"]
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.2))
     for m, mk in zip(_present(a), "o*sD", strict=False):

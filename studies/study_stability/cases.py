@@ -17,7 +17,7 @@ from springfem.errors import SolverError
 from springfem.scene import Scene
 
 from .. import models
-from ..analytic import reference_for
+from ..analytic import extent, reference_for
 from ..scenes import StudyScene, case_scene
 from .critical_step import measure_critical_step
 
@@ -172,12 +172,6 @@ def _inverted(scene: Scene, u: np.ndarray) -> int:
     return int((scene.mesh.volumes(scene.mesh.points + u.reshape(-1, 3)) <= 0).sum())
 
 
-def body_size(scene: Scene) -> float:
-    """The largest extent of the body's bounding box (the scene's length unit)."""
-    lo, hi = scene.mesh.bounding_box()
-    return float(np.max(np.asarray(hi) - np.asarray(lo)))
-
-
 # ----------------------------------------------------------------------- critical step
 
 
@@ -209,7 +203,7 @@ def load_case(case: dict) -> dict:
     if not got.ok:
         return {"status": "diverged", "message": got.message[:160], "u/size": float("nan")}
     u = got.u
-    ratio = float(np.linalg.norm(u, axis=1).max() / body_size(scene))
+    ratio = float(np.linalg.norm(u, axis=1).max() / max(extent(scene)))
     inv = _inverted(scene, u)
     if inv:
         return {"status": "inverted", "u/size": ratio, "message": f"{inv} inverted elements"}

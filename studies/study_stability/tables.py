@@ -5,18 +5,14 @@ from __future__ import annotations
 import pandas as pd
 
 from ..registry import StudyContext, Table
+from ..scenes import case_scene
 
-#: The case keys each series' frame keeps, with their column names.
+#: The case keys each series' frame keeps beside the scene and method, with their column names.
 KEYS = {
-    "dt": {"scene": "scene", "method": "method"},
-    "load": {"scene": "scene", "method": "method", "factor": "load_factor"},
-    "lock": {"scene": "scene", "method": "method", "nu": "nu"},
-    "map": {
-        "scene": "scene",
-        "method": "method",
-        "factor": "load_factor",
-        "dt_factor": "dt_factor",
-    },
+    "dt": {},
+    "load": {"factor": "load_factor"},
+    "lock": {"nu": "nu"},
+    "map": {"factor": "load_factor", "dt_factor": "dt_factor"},
 }
 #: The result columns each series' table shows.
 COLUMNS = {
@@ -37,19 +33,14 @@ def frames(cases: dict[str, list[dict]], results: dict[str, list[dict]]) -> dict
     for k, keys in KEYS.items():
         rows = []
         for c, r in zip(cases[k], results[k], strict=True):
-            row = {name: c[key] for key, name in keys.items()}
+            row = {"scene": c["scene"], "method": c["method"]}
+            row.update({name: c[key] for key, name in keys.items()})
             if k == "dt":
-                row["tets"] = _tets(c)
+                row["tets"] = case_scene(c).mesh.n_tets
             rows.append({**row, **r})
         out[k] = pd.DataFrame(rows, columns=None if rows else COLUMNS[k])
         out[k] = out[k].reindex(columns=COLUMNS[k])
     return out
-
-
-def _tets(case: dict) -> int:
-    from ..scenes import case_scene
-
-    return case_scene(case).mesh.n_tets
 
 
 def write_tables(ctx: StudyContext, f: dict[str, pd.DataFrame]) -> list[Table]:

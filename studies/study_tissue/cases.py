@@ -2,7 +2,7 @@
 
 Examples
 --------
->>> s = stretch_scene("across", 1.2, 1)
+>>> s = cube("across", 1.2, 1, "guccione").build()
 >>> s.frames[0, 0].tolist(), s.boundaries[-1].value.tolist()
 ([0.0, 1.0, 0.0], [0.19999999999999996, 0.0, 0.0])
 """
@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-from springfem.scene import Scene, scene_from_dict
+from springfem.scene import Scene
 
 from .. import models
 from ..scenes import StudyScene, case_scene
@@ -92,11 +92,6 @@ class Settings:
                    lv_scene="land-ventricle-fibres", lv_size=6.0, lv_steps=3,
                    lv_variants=VARIANTS[:2], conv_scenes=("land-ventricle-fibres",),
                    conv_sizes=(6.0, 5.0), conv_steps=3)  # fmt: skip
-
-
-def stretch_scene(direction: str, stretch: float, n: int, law: str = "guccione") -> Scene:
-    """The scene of :func:`stretch_data` (see there)."""
-    return scene_from_dict(stretch_data(direction, stretch, n, law))
 
 
 def stretch_data(direction: str, stretch: float, n: int, law: str = "guccione") -> dict:

@@ -88,11 +88,10 @@ def run(ctx: StudyContext, scenes: list[StudyScene], s: Settings) -> StudyOutput
         figures.append(time_figure(ctx, runs))
     if cases["ramp"]:
         figures.append(load_figure(ctx, runs))
+    names = ", ".join(sc.label for sc in scenes)
     return StudyOutput(
         name=ctx.name,
-        title="Volume drift: volume springs, LMS rules and FEM ("
-        + ", ".join(sc.label for sc in scenes)
-        + ")",
+        title=f"Volume drift: volume springs, LMS rules and FEM ({names})",
         findings=findings,
         tables=[final_table(ctx, runs), static_table(ctx, runs)],
         figures=figures,

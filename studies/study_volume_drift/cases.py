@@ -17,6 +17,7 @@ from springfem.scene import Scene
 from springmodel.options import LMSOptions
 
 from .. import models
+from ..analytic import extent
 from ..scenes import StudyScene
 
 STUDY, VERSION = "volume_drift", 2
@@ -144,12 +145,6 @@ def time_scale(s: StudyScene) -> TimeScale:
     return TimeScale() if s.user else BUNDLED_TIME.get(str(s.table.get("name")), TimeScale())
 
 
-def body_size(scene: Scene) -> float:
-    """The largest extent of the body's bounding box."""
-    lo, hi = scene.mesh.bounding_box()
-    return float(np.max(np.asarray(hi) - np.asarray(lo)))
-
-
 def quarter_wave_period(scene: Scene, rule: str = "p-wave") -> float:
     """``4 l / c`` (seconds) of a rod as long as the body's largest extent ``l``; ``rule``
     ``p-wave``: ``c`` from the stiffest longitudinal modulus (diagonal) of the material's
@@ -157,11 +152,11 @@ def quarter_wave_period(scene: Scene, rule: str = "p-wave") -> float:
     """
     mat = scene.material
     if rule == "rod":
-        return 4.0 * body_size(scene) / np.sqrt(mat.E / mat.density)
+        return 4.0 * max(extent(scene)) / np.sqrt(mat.E / mat.density)
     from springfem.materials import material_matrix
 
     c_max = float(np.max(np.diag(material_matrix(mat))[:3]))
-    return 4.0 * body_size(scene) / np.sqrt(c_max / mat.density)
+    return 4.0 * max(extent(scene)) / np.sqrt(c_max / mat.density)
 
 
 def fem_models(scene: Scene) -> tuple[str, ...]:
