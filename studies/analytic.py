@@ -51,7 +51,8 @@ from .scenes import StudyScene
 Reference = tuple[str, int, float, str]
 
 
-def _extent(scene: Scene) -> list[float]:
+def extent(scene: Scene) -> list[float]:
+    """The extents of the scene's bounding box along x, y and z (its length unit)."""
     lo, hi = scene.mesh.bounding_box()
     return [float(x) for x in np.asarray(hi) - np.asarray(lo)]
 
@@ -62,7 +63,7 @@ def _first_load(scene: Scene) -> np.ndarray:
 
 def timoshenko(scene: Scene) -> Reference:
     """The cantilever's tip deflection along ``z`` (sign of the traction)."""
-    size = _extent(scene)
+    size = extent(scene)
     load = _first_load(scene)
     mat = scene.material
     force = abs(load[2]) * size[1] * size[2]
@@ -75,7 +76,7 @@ def uniaxial(modulus: str, label: str) -> Callable[[Scene], Reference]:
 
     def stretch(scene: Scene) -> Reference:
         E = getattr(scene.material, modulus)
-        return "corner", 0, float(_first_load(scene)[0] / E * _extent(scene)[0]), label
+        return "corner", 0, float(_first_load(scene)[0] / E * extent(scene)[0]), label
 
     return stretch
 
@@ -201,13 +202,13 @@ def fibre_angle(scene: Scene) -> float:
 def off_axis(scene: Scene) -> Reference:
     """The stretch ``σ L / E(θ)`` along x at the probe ``corner`` (:func:`off_axis_modulus`)."""
     E = off_axis_modulus(scene.material, fibre_angle(scene))
-    return "corner", 0, float(_first_load(scene)[0] / E * _extent(scene)[0]), "off-axis formula"
+    return "corner", 0, float(_first_load(scene)[0] / E * extent(scene)[0]), "off-axis formula"
 
 
 def uniaxial_z(scene: Scene) -> Reference:
     """The stretch ``σ L / E`` along ``z`` of an isotropic block at the probe ``corner``."""
     E = scene.material.E
-    return "corner", 2, float(_first_load(scene)[2] / E * _extent(scene)[2]), "σ/E · L"
+    return "corner", 2, float(_first_load(scene)[2] / E * extent(scene)[2]), "σ/E · L"
 
 
 #: Closed-form references by name.

@@ -88,6 +88,11 @@ def _warp_note() -> str:
     return "NVIDIA Warp is installed but its peer kernel is not wired here: skipped"
 
 
+def _meta(kernel: str, precision: str, threads: str, nbytes: int | None, fem: str) -> dict:
+    return {"kernel": kernel, "precision": precision, "threads": threads, "bytes": nbytes,
+            "fem": fem}  # fmt: skip
+
+
 def force_rows(samples: dict, meta: dict, m: int, bandwidth: float) -> list[dict]:
     """One row per timed case: medians, per-round ratio to the FEM kernel of the same
     precision and threads, bytes per element and the bandwidth-bound limit.
@@ -156,23 +161,12 @@ def bench_forces(
             for law, name in (("neo-hookean", fem_name), ("linear", f"FEM linear {p} {nthreads}")):
                 fem = ExplicitFem(scene, law=law, parallel=par, precision=p)
                 cases[name] = lambda f=fem: f.kernel(x, out)
-                meta[name] = {
-                    "kernel": f"fem-{law}",
-                    "precision": p,
-                    "threads": nthreads,
-                    "bytes": _FEM_BYTES[p],
-                    "fem": fem_name,
-                }
+                meta[name] = _meta(f"fem-{law}", p, nthreads, _FEM_BYTES[p], fem_name)
             kernel = SpringKernel(el, options, parallel=par, precision=p)
             name = f"spring {short_label(options)} {p} {nthreads}"
             cases[name] = lambda k=kernel: k.forces(x, None, out)
-            meta[name] = {
-                "kernel": f"spring[{short_label(options)}]",
-                "precision": p,
-                "threads": nthreads,
-                "bytes": kernel.bytes_per_element,
-                "fem": fem_name,
-            }
+            label = f"spring[{short_label(options)}]"
+            meta[name] = _meta(label, p, nthreads, kernel.bytes_per_element, fem_name)
         if variants:
             for o in spring_variants():
                 els = build_spring_elements(mesh.points, mesh.tets, scene.frames, o, scene.material)
@@ -180,20 +174,14 @@ def bench_forces(
                 v = np.zeros_like(x) if o.axial_damping or o.volume_damping else None
                 name = f"spring {short_label(o)} {p} 1 (variant)"
                 cases[name] = lambda k=kernel, v=v: k.forces(x, v, out)
-                meta[name] = {
-                    "kernel": f"spring[{short_label(o)}]",
-                    "precision": p,
-                    "threads": "1",
-                    "bytes": kernel.bytes_per_element,
-                    "fem": f"FEM neo-Hookean {p} 1",
-                }
+                meta[name] = _meta(f"spring[{short_label(o)}]", p, "1",
+                                   kernel.bytes_per_element, f"FEM neo-Hookean {p} 1")  # fmt: skip
     if variants and "float64" in precisions:
         for name, call, info in stiffening_parts(scene, mesh, x, out):
             cases[name], meta[name] = call, info
     cases["spring numpy oracle"] = lambda: springs.internal_forces(x, None, el, options)
-    meta["spring numpy oracle"] = {"kernel": "spring-oracle", "precision": "float64",
-                                   "threads": "1", "bytes": None,
-                                   "fem": "FEM neo-Hookean float64 1"}  # fmt: skip
+    meta["spring numpy oracle"] = _meta("spring-oracle", "float64", "1", None,
+                                        "FEM neo-Hookean float64 1")  # fmt: skip
     bandwidth = stream_bandwidth()
     load_before = load_average()
     samples = interleaved(cases, rounds=repeats)
@@ -202,21 +190,14 @@ def bench_forces(
     f_oracle = springs.internal_forces(x, None, el, options)
     f_kernel = SpringKernel(el, options, parallel=False).forces(x)
     seed = f"spring {short_label(options)} float64 1"
-    ratios = {
-        f"threads_speedup[{n}]": median_ratio(samples, n.replace(" all", " 1"), n)
-        for n in meta
-        if n.endswith(" all") and n.replace(" all", " 1") in samples
-    }
-    for n in meta:  # serial CPU time / parallel CPU time: 1 = threads add no work
-        if n.endswith(" all") and n.replace(" all", " 1") in samples:
-            ratios[f"threads_cpu_efficiency[{n}]"] = median_ratio(
-                samples, n.replace(" all", " 1"), n, "cpu"
-            )
+    pairs = [(n.replace(" all", " 1"), n) for n in meta if n.endswith(" all")]
+    pairs = [(one, n) for one, n in pairs if one in samples]
+    ratios = {f"threads_speedup[{n}]": median_ratio(samples, one, n) for one, n in pairs}
+    for one, n in pairs:  # serial CPU time / parallel CPU time: 1 = threads add no work
+        ratios[f"threads_cpu_efficiency[{n}]"] = median_ratio(samples, one, n, "cpu")
     if seed in samples:
         ratios["oracle_over_seed_float64"] = median_ratio(samples, "spring numpy oracle", seed)
-    info = machine()
-    info["load_average_before"] = load_before
-    info["load_average_after"] = load_average()
+    info = machine(load_before)
     rule = {"default_parallel": SpringKernel(el, options).parallel, "min_elements": min_par}
     rule["speedup"] = ratios.get(f"threads_speedup[{seed[:-2]} all]")
     return {
@@ -281,7 +262,6 @@ def bench_step(n_tets: int = 100_000, repeats: int = 5, steps: int = STEP_COUNT)
     """A whole explicit step against its bare force pass, both timed in every round."""
     from reference_fem.explicit import ExplicitFem
     from reference_fem.scenes import bench_scene
-    from springfem.mechanics import explicit
     from springmodel.model import SpringModel, variant_label
 
     scene = bench_scene(n_tets)
@@ -295,11 +275,7 @@ def bench_step(n_tets: int = 100_000, repeats: int = 5, steps: int = STEP_COUNT)
     x = deformed_state(scene.mesh.points)
     cases = {}
     for name, s in systems.items():
-        plain = WithoutEnergy(s)
-        # the time step is tiny: the state barely moves and the cost does not depend on it
-        cases[f"{name}: step"] = lambda p=plain: explicit(
-            p, dt=1e-9, steps=steps, record_every=steps
-        )
+        cases[f"{name}: step"] = lambda s=s: explicit_steps(s, steps)
         cases[f"{name}: forces"] = lambda s=s: [s.forces(x, None, 1.0) for _ in range(steps)]
     load_before = load_average()
     samples = interleaved(cases, rounds=repeats)
@@ -321,9 +297,7 @@ def bench_step(n_tets: int = 100_000, repeats: int = 5, steps: int = STEP_COUNT)
         )
     sp = "spring model, {}: step"
     fe = "explicit P1 FEM neo-Hookean, {}: step"
-    info = machine()
-    info["load_average_before"] = load_before
-    info["load_average_after"] = load_average()
+    info = machine(load_before)
     return {
         "benchmark": "step",
         "n_tets": m,

@@ -31,15 +31,7 @@ def _f(v, fmt):
 
 
 def print_forces(res: dict, file=None) -> None:
-    """Print a :func:`studies.bench.bench_forces` result as a table.
-
-    Parameters
-    ----------
-    res
-        The result dict.
-    file
-        Stream (default ``sys.stdout``).
-    """
+    """Print a :func:`studies.bench.bench_forces` result as a table on ``file`` (default stdout)."""
     file = file or sys.stdout
     _header(res, "bench forces", file)
     bw = res["bandwidth_bytes_per_s"] / 1e9
@@ -86,15 +78,7 @@ def print_forces(res: dict, file=None) -> None:
 
 
 def print_step(res: dict, file=None) -> None:
-    """Print a :func:`studies.bench.bench_step` result as a table.
-
-    Parameters
-    ----------
-    res
-        The result dict.
-    file
-        Stream (default ``sys.stdout``).
-    """
+    """Print a :func:`studies.bench.bench_step` result as a table on ``file`` (default stdout)."""
     file = file or sys.stdout
     _header(res, "bench step", file)
     print(
@@ -119,15 +103,8 @@ def print_step(res: dict, file=None) -> None:
 
 
 def print_threads(res: dict, file=None) -> None:
-    """Print a :func:`studies.bench_threads.bench_threads` result as a table.
-
-    Parameters
-    ----------
-    res
-        The result dict.
-    file
-        Stream (default ``sys.stdout``).
-    """
+    """Print a :func:`studies.bench_threads.bench_threads` result as a table on ``file``
+    (default stdout)."""
     file = file or sys.stdout
     mach = res["machine"]
     print(

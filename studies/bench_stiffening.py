@@ -44,19 +44,9 @@ def _parts(scene, mesh):
 
 
 def stiffened_case(scene, mesh, x: np.ndarray, out: np.ndarray):
-    """The force pass of the stiffened exact element as the model runs it.
-
-    Parameters
-    ----------
-    scene, mesh
-        The bench scene and its mesh.
-    x, out
-        Positions ``(n, 3)`` and the kernel's output buffer.
-
-    Returns
-    -------
-    tuple
-        ``(name, call, meta)``: the case's name, its force pass and its row of metadata.
+    """The force pass of the stiffened exact element as the model runs it, on positions ``x``
+    into the kernel's buffer ``out``: ``(name, call, meta)``, the case's name, its force pass
+    and its row of metadata.
     """
     kernel, part = _parts(scene, mesh)
     meta = {"kernel": "spring[exact+stiffening]", **_META}
@@ -75,19 +65,8 @@ def _recompiled(flags: tuple) -> object:
 
 
 def stiffening_parts(scene, mesh, x: np.ndarray, out: np.ndarray) -> list[tuple]:
-    """The whole stiffened pass and its parts (module docstring), as bench cases.
-
-    Parameters
-    ----------
-    scene, mesh
-        The bench scene and its mesh.
-    x, out
-        Positions ``(n, 3)`` and the kernel's output buffer.
-
-    Returns
-    -------
-    list
-        ``(name, call, meta)`` per case.
+    """The whole stiffened pass and its parts (module docstring), as ``(name, call, meta)``
+    bench cases on positions ``x`` into the kernel's buffer ``out``.
     """
     from springmodel.stiffening_kernel import stiffening_pass
 

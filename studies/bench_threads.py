@@ -139,8 +139,7 @@ def bench_threads(n_tets: int = 300_000, repeats: int = 7) -> dict:
             }
         )
         speedups[m] = min(speedups.get(m, np.inf), speed)
-    info = machine()
-    info["load_average_before"], info["load_average_after"] = load_before, load_average()
+    info = machine(load_before)
     threads = numba.get_num_threads()
     return {
         "benchmark": "threads",

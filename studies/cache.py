@@ -34,6 +34,8 @@ from typing import Any
 from springfem.files import atomic_write_text, remove_stale_temp_files
 from springfem.files import jsonable as _jsonable
 
+from .executor import run_tasks
+
 CACHE_VERSION = "1"
 
 
@@ -66,7 +68,11 @@ def source_fingerprint(*paths: str | os.PathLike) -> str:
 
 
 class CaseCache:
-    """A folder of finished cases of one study.
+    """A folder of finished cases of one study, computed in-process or on a Dask cluster.
+
+    Each finished case is written atomically as it arrives (from this process or from a
+    worker, :mod:`studies.executor`), so a killed worker or client loses no finished case
+    and a rerun computes only what is missing.
 
     Parameters
     ----------
@@ -74,12 +80,23 @@ class CaseCache:
         Cases live in ``root/study``.
     fingerprint
         Code fingerprint mixed into every key (see :func:`source_fingerprint`).
+    workers, scheduler
+        Run the missing cases on a local cluster of ``workers`` processes (0: one per core)
+        or on the cluster of ``scheduler`` (neither: in-process, one after another).
     """
 
-    def __init__(self, root: str | os.PathLike, study: str, fingerprint: str = ""):
+    def __init__(
+        self,
+        root: str | os.PathLike,
+        study: str,
+        fingerprint: str = "",
+        workers: int | None = None,
+        scheduler: str | None = None,
+    ):
         self.dir = Path(root) / study
         self.dir.mkdir(parents=True, exist_ok=True)
         self.fingerprint = fingerprint
+        self.workers, self.scheduler = workers, scheduler
         remove_stale_temp_files(self.dir)  # left by a run killed mid-write
 
     def path(self, case: dict[str, Any]) -> Path:
@@ -121,7 +138,10 @@ class CaseCache:
         progress: bool = True,
         desc: str | None = None,
     ) -> list[dict[str, Any]]:
-        """Results of ``work(case)`` for each case, computing only the missing ones."""
+        """Results of ``work(case)`` for each case, computing only the missing ones.
+
+        ``work`` must be importable by the workers when the cases run on a cluster.
+        """
         cases = list(cases)
         results: list[dict[str, Any] | None] = [self.get(c) for c in cases]
         todo = [i for i, r in enumerate(results) if r is None]
@@ -130,12 +150,24 @@ class CaseCache:
             from tqdm import tqdm
 
             bar = tqdm(total=len(todo), desc=desc or self.dir.name, unit="case", leave=False)
-        for i in todo:
-            res = _jsonable(work(cases[i]))
-            self.put(cases[i], res)
-            results[i] = res
+
+        def finished(j: int, res: dict[str, Any]) -> None:
+            res = _jsonable(res)
+            self.put(cases[todo[j]], res)  # atomically, as it arrives
+            results[todo[j]] = res
             if bar is not None:
                 bar.update(1)
-        if bar is not None:
-            bar.close()
+
+        try:
+            run_tasks(
+                [cases[i] for i in todo],
+                work,
+                finished,
+                workers=self.workers,
+                scheduler=self.scheduler,
+                keys=[f"{self.dir.name}-{case_key(cases[i], self.fingerprint)}" for i in todo],
+            )
+        finally:
+            if bar is not None:
+                bar.close()
         return results  # type: ignore[return-value]

@@ -84,6 +84,18 @@ class StudyContext:
         self.out.mkdir(parents=True, exist_ok=True)
         return self.out / filename
 
+    def table(self, df, stem: str, caption: str) -> Table:
+        """Write ``df`` as ``<stem>.csv`` and ``<stem>.md`` here (:mod:`studies.tables`)."""
+        from .tables import write_table
+
+        return Table(write_table(df, self.path(stem)), caption)
+
+    def figure(self, fig, filename: str, caption: str) -> Figure:
+        """Save the matplotlib figure ``fig`` here as PNG (and close it)."""
+        from .tables import save_figure
+
+        return Figure(save_figure(fig, self.path(filename)), caption)
+
 
 @dataclass
 class Figure:

@@ -35,77 +35,6 @@ from . import study_tissue  # noqa: F401, E402
 # isort: on
 
 
-class ExecutorCache(CaseCache):
-    """A case cache whose missing cases run on a Dask cluster (:mod:`studies.executor`).
-
-    Each finished case is written as it arrives (like ``springfem sweep``), so a killed
-    worker or client loses no finished case and a rerun computes only what is missing.
-
-    Parameters
-    ----------
-    root, study, fingerprint
-        As :class:`~studies.cache.CaseCache`.
-    workers, scheduler
-        A local cluster of ``workers`` processes (0: one per core), or an existing scheduler.
-    """
-
-    def __init__(self, root, study, fingerprint="", workers=None, scheduler=None):
-        super().__init__(root, study, fingerprint)
-        self.workers, self.scheduler = workers, scheduler
-
-    def run(self, cases, work, progress=True, desc=None):
-        """Results of ``work(case)`` for each case; the missing ones computed on the cluster.
-
-        Parameters
-        ----------
-        cases
-            JSON-able cases.
-        work
-            The case function (importable by the workers).
-        progress
-            Show a progress bar.
-        desc
-            Its label.
-
-        Returns
-        -------
-        list of dict
-            One result per case, in order.
-        """
-        from .cache import case_key
-        from .executor import run_tasks
-
-        cases = list(cases)
-        results = [self.get(c) for c in cases]
-        todo = [i for i, r in enumerate(results) if r is None]
-        bar = None
-        if progress and todo:
-            from tqdm import tqdm
-
-            bar = tqdm(total=len(todo), desc=desc or self.dir.name, unit="case", leave=False)
-
-        def finished(j: int, res) -> None:
-            res = _jsonable(res)
-            self.put(cases[todo[j]], res)  # atomically, as it arrives
-            results[todo[j]] = res
-            if bar is not None:
-                bar.update(1)
-
-        try:
-            run_tasks(
-                [cases[i] for i in todo],
-                work,
-                finished,
-                workers=self.workers,
-                scheduler=self.scheduler,
-                keys=[f"{self.dir.name}-{case_key(cases[i], self.fingerprint)}" for i in todo],
-            )
-        finally:
-            if bar is not None:
-                bar.close()
-        return results
-
-
 def run_study(
     name: str,
     out: str | Path = "reports",
@@ -160,10 +89,7 @@ def run_study(
         *sorted(here.glob("*.py")),  # the models, comparisons and metrics every study uses
         here / "scenes",
     )
-    if workers is None and scheduler is None:
-        cache = CaseCache(root / ".cache", spec.name, fingerprint=code)
-    else:
-        cache = ExecutorCache(root / ".cache", spec.name, code, workers, scheduler)
+    cache = CaseCache(root / ".cache", spec.name, code, workers, scheduler)
     ctx = StudyContext(spec.name, root / spec.name, quick, cache, progress)
     remove_stale_temp_files(ctx.out)  # tables/figures of a run killed mid-write
     t0 = time.perf_counter()

@@ -26,7 +26,7 @@ import pandas as pd
 
 from springfem.files import atomic_write_text, safe_filename
 
-from .tables import save_figure
+from .tables import pyplot, save_figure
 
 
 def _cell(v: Any) -> Any:
@@ -125,7 +125,7 @@ def sweep_figures(df: pd.DataFrame, keys: Sequence[str], reference: str, out: Pa
     -------
     list of Path
     """
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     data = _compared(df, reference)
     models = list(dict.fromkeys(data["model"]))

@@ -20,15 +20,19 @@ def write_table(df: pd.DataFrame, path_stem: str | os.PathLike, floatfmt: str = 
     return stem.with_suffix(".md")
 
 
-def markdown(df: pd.DataFrame, floatfmt: str = ".4g") -> str:
-    """The table as Markdown text."""
-    return df.to_markdown(index=False, floatfmt=floatfmt)
+def pyplot():
+    """``matplotlib.pyplot`` on the ``Agg`` backend (no display needed)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
 
 
 def save_figure(fig, path: str | os.PathLike, dpi: int = 120) -> Path:
     """Save a matplotlib figure atomically as PNG and close it."""
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.png")

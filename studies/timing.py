@@ -116,21 +116,25 @@ def load_average() -> list[float]:
     return [round(v, 2) for v in os.getloadavg()]
 
 
-def machine() -> dict:
-    """Threads, numba threading layer and load average: the context of every timing."""
+def machine(load_before: list[float] | None = None) -> dict:
+    """Threads, numba threading layer and load average: the context of every timing (with
+    ``load_before``, also the load averages before and after the timing)."""
     import numba
 
     try:
         layer = numba.threading_layer()
     except ValueError:  # no parallel function has run yet
         layer = "not initialised"
-    return {
+    out = {
         "cpus": os.cpu_count(),
         "numba_threads": numba.get_num_threads(),
         "threading_layer": layer,
         "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY", "default"),
         "load_average": load_average(),
     }
+    if load_before is not None:
+        out["load_average_before"], out["load_average_after"] = load_before, load_average()
+    return out
 
 
 def deformed_state(points: np.ndarray, seed: int = 0) -> np.ndarray:

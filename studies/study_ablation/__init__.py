@@ -32,7 +32,7 @@ singular tangent: the axial-only network has zero-energy modes; or no convergenc
 recorded as ``fails`` with the solver's message.
 
 The cheapest adequate model of a scene is the variant with the smallest static solve time
-among those whose model error is within :data:`TOLERANCE` (relative) of the best spring
+among those whose model error is within :data:`.cases.TOLERANCE` (relative) of the best spring
 variant's error.
 
 The study is split into :mod:`.cases` (variants, settings, one solve), :mod:`.tables`
@@ -40,7 +40,7 @@ The study is split into :mod:`.cases` (variants, settings, one solve), :mod:`.ta
 
 Examples
 --------
->>> list(VARIANTS)[:2]
+>>> list(ALL_VARIANTS)[:2]
 ['spring-axial', 'spring-axial+volume']
 """
 
@@ -52,39 +52,18 @@ from ..registry import StudyContext, StudyOutput, study
 from ..scenes import StudyScene
 from .cases import (
     ALL_VARIANTS,
-    DR_TOL,
-    MAX_ERROR,
-    SCENE_NAMES,
-    TIME_TIE,
-    TOLERANCE,
-    VARIANTS,
     VERSION,
     Settings,
     bundled_scenes,
     fem_case,
-    model_error,
     reference_model,
     spring_case,
 )
 from .figures import error_cost_figure
 from .findings import report_findings
-from .tables import ablation_table, cheapest_adequate, result_rows, winners_frame, winners_table
+from .tables import ablation_table, result_rows, winners_frame, winners_table
 
-__all__ = [
-    "DR_TOL",
-    "MAX_ERROR",
-    "SCENE_NAMES",
-    "TIME_TIE",
-    "TOLERANCE",
-    "VARIANTS",
-    "Settings",
-    "bundled_scenes",
-    "cheapest_adequate",
-    "fem_case",
-    "model_error",
-    "run",
-    "spring_case",
-]
+__all__ = ["Settings", "bundled_scenes", "run"]
 
 
 @study("ablation", Settings, bundled_scenes)

@@ -119,17 +119,7 @@ class Settings:
 
 
 def bundled_scenes(settings: Settings) -> list[StudyScene]:
-    """The bundled scenes on the settings' meshes, then the cantilever's other meshes.
-
-    Parameters
-    ----------
-    settings
-        The study's settings.
-
-    Returns
-    -------
-    list of StudyScene
-    """
+    """The bundled scenes on the settings' meshes, then the cantilever's other meshes."""
     return comparison_scenes(settings.divisions, settings.extra)
 
 

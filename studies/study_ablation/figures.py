@@ -6,34 +6,17 @@ import numpy as np
 import pandas as pd
 
 from ..registry import Figure, StudyContext
-from ..tables import save_figure
+from ..tables import pyplot
 from .cases import ALL_VARIANTS, TOLERANCE
 
 
 def error_cost_figure(
     ctx: StudyContext, df: pd.DataFrame, winners: pd.DataFrame, fem_times: dict[str, float]
 ) -> Figure:
-    """Model error against static solve time, one panel per scene, winners circled.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    df
-        The (scene, variant) rows.
-    winners
-        The winners per scene.
-    fem_times
-        Scene -> FEM P1 solve time (a vertical line).
-
-    Returns
-    -------
-    Figure
+    """Model error against static solve time, one panel per scene, winners circled, the FEM P1
+    solve time a vertical line.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     names = list(df.scene.unique())
     ncol = min(len(names), 3)
@@ -57,28 +40,12 @@ def error_cost_figure(
                 (h,) = ax.loglog(r.solve_time, r.error, markers[r.variant], mfc="none", **kw)
                 handles.setdefault(r.variant + " (not converged: last state)", h)
         w = winners[winners.scene == name]
-        if len(w) and "its error" in w and np.isfinite(w["its error"].iloc[0]):
-            (h,) = ax.loglog(
-                w["its solve time"].iloc[0],
-                w["its error"].iloc[0],
-                "o",
-                ms=17,
-                mfc="none",
-                mec="k",
-            )
-            handles["cheapest adequate"] = h
-        col = "its error (with exact)"
-        if len(w) and col in w and np.isfinite(w[col].iloc[0]):
-            (h,) = ax.loglog(
-                w["its solve time (with exact)"].iloc[0],
-                w["its error (with exact)"].iloc[0],
-                "o",
-                ms=21,
-                mfc="none",
-                mec="r",
-                ls="none",
-            )
-            handles["cheapest adequate (with exact)"] = h
+        for tag, ms, mec in (("", 17, "k"), (" (with exact)", 21, "r")):  # circle the winners
+            col = f"its error{tag}"
+            if len(w) and col in w and np.isfinite(w[col].iloc[0]):
+                t = w[f"its solve time{tag}"].iloc[0]
+                (h,) = ax.loglog(t, w[col].iloc[0], "o", ms=ms, mfc="none", mec=mec)
+                handles[f"cheapest adequate{tag}"] = h
         if name in fem_times:
             handles["FEM P1 solve time"] = ax.axvline(fem_times[name], color="k", ls=":", lw=1)
         failed = ", ".join(g[(g.status != "ok") & ~np.isfinite(g.error)].variant)
@@ -103,8 +70,9 @@ def error_cost_figure(
         + (f" ({w['its error']:.3g})" if pd.notna(w.get("its error")) else "")
         for _, w in winners.iterrows()
     )
-    return Figure(
-        save_figure(fig, ctx.path("error_vs_cost.png")),
+    return ctx.figure(
+        fig,
+        "error_vs_cost.png",
         "Model error against static solve time for each spring variant (hollow: the "
         "last state of a run that did not converge; variants that fail outright are "
         "named in the panel); circled: the cheapest variant within "

@@ -15,26 +15,8 @@ def report_findings(
     dr_steps: int,
     notes: list[str],
 ) -> tuple[list[str], dict[str, float]]:
-    """The findings and the failure counts per scene.
-
-    Parameters
-    ----------
-    df
-        The (scene, variant) rows.
-    winners
-        The winners per scene.
-    fem_times
-        Scene -> FEM P1 solve time.
-    dr_steps
-        Dynamic-relaxation budget of the LMS variant.
-    notes
-        Sentences written while running (FEM references that failed).
-
-    Returns
-    -------
-    findings : list of str
-    headline : dict
-        Failed variants per scene.
+    """The findings and the headline's failed variants per scene (``notes``: sentences written
+    while running, such as FEM references that failed).
     """
     findings = list(notes)
     headline: dict[str, float] = {}
@@ -134,17 +116,7 @@ def report_findings(
 
 
 def exact_findings(winners: pd.DataFrame) -> list[str]:
-    """Where the exact element changes the cheapest adequate model (one sentence).
-
-    Parameters
-    ----------
-    winners
-        The winners table (with the '(with exact)' columns).
-
-    Returns
-    -------
-    list of str
-    """
+    """Where the exact element changes the cheapest adequate model (one sentence)."""
     if "cheapest adequate (with exact)" not in winners.columns:
         return []
     parts = []

@@ -8,7 +8,6 @@ import numpy as np
 import pandas as pd
 
 from ..registry import StudyContext, Table
-from ..tables import write_table
 from .cases import (
     ALL_VARIANTS,
     EXACT_VARIANTS,
@@ -47,20 +46,8 @@ def cheapest_adequate(
 
 
 def result_rows(name: str, cases: list[dict], results: list[dict], u_ref: Any) -> list[dict]:
-    """One row per variant of one scene: status, model error, cost, solver facts.
-
-    Parameters
-    ----------
-    name
-        The scene.
-    cases, results
-        Its spring cases and their results (:func:`~.cases.spring_case`).
-    u_ref
-        The FEM P1 vertex displacements.
-
-    Returns
-    -------
-    list of dict
+    """One row per variant of one scene (its :func:`~.cases.spring_case` cases and results):
+    status, model error against the FEM P1 vertex displacements ``u_ref``, cost, solver facts.
     """
     rows = []
     for c, r in zip(cases, results):
@@ -85,25 +72,12 @@ def result_rows(name: str, cases: list[dict], results: list[dict], u_ref: Any) -
 
 
 def ablation_table(ctx: StudyContext, df: pd.DataFrame, fem_times: dict[str, float]) -> Table:
-    """Write the table of every (scene, variant) with the FEM P1 time for scale.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    df
-        The rows of :func:`result_rows`.
-    fem_times
-        Scene -> FEM P1 solve time.
-
-    Returns
-    -------
-    Table
-    """
+    """Write the table of every (scene, variant) with the FEM P1 time for scale."""
     table = df.drop(columns=["k_ratio_median"]).copy()
     table["fem_p1_time"] = table.scene.map(fem_times)
-    return Table(
-        write_table(table, ctx.path("ablation")),
+    return ctx.table(
+        table,
+        "ablation",
         "Spring-model parts switched on one by one, per scene: status, model error "
         "(relative L2 of vertex displacements against FEM P1 on the same mesh), largest "
         "probe error, static solve wall time (s; the LMS variant: dynamic relaxation), "
@@ -112,19 +86,13 @@ def ablation_table(ctx: StudyContext, df: pd.DataFrame, fem_times: dict[str, flo
     )
 
 
+def _field(row: pd.Series | None, column: str, missing: Any) -> Any:
+    return missing if row is None else row[column]
+
+
 def winners_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, float]]:
-    """Per scene: the best variant, the cheapest adequate ones, the failures.
-
-    Parameters
-    ----------
-    df
-        The rows of :func:`result_rows`.
-
-    Returns
-    -------
-    winners : DataFrame
-    headline : dict
-        Best and full-model (``axial+energy+volume``) errors per scene.
+    """Per scene: the best variant, the cheapest adequate ones, the failures; and the headline's
+    best and full-model (``axial+energy+volume``) errors per scene.
     """
     headline: dict[str, float] = {}
     wrows = []
@@ -146,15 +114,9 @@ def winners_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, float]]:
                 "cheapest adequate": win.variant,
                 "its error": win.error,
                 "its solve time": win.solve_time,
-                "cheapest adequate (analytic cal.)": (
-                    win_ladder.variant if win_ladder is not None else "none"
-                ),
-                "its error (analytic cal.)": (
-                    win_ladder.error if win_ladder is not None else np.nan
-                ),
-                f"cheapest with error <= {MAX_ERROR:g}": (
-                    win_abs.variant if win_abs is not None else "none"
-                ),
+                "cheapest adequate (analytic cal.)": _field(win_ladder, "variant", "none"),
+                "its error (analytic cal.)": _field(win_ladder, "error", np.nan),
+                f"cheapest with error <= {MAX_ERROR:g}": _field(win_abs, "variant", "none"),
                 "fails": ", ".join(g[g.status != "ok"].variant) or "none",
             }
         )
@@ -165,13 +127,9 @@ def winners_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, float]]:
                 {
                     "best (with exact)": best_x.variant.iloc[0],
                     "best error (with exact)": best_x.error.iloc[0],
-                    "cheapest adequate (with exact)": (
-                        win_x.variant if win_x is not None else "none"
-                    ),
-                    "its error (with exact)": win_x.error if win_x is not None else np.nan,
-                    "its solve time (with exact)": (
-                        win_x.solve_time if win_x is not None else np.nan
-                    ),
+                    "cheapest adequate (with exact)": _field(win_x, "variant", "none"),
+                    "its error (with exact)": _field(win_x, "error", np.nan),
+                    "its solve time (with exact)": _field(win_x, "solve_time", np.nan),
                     "exact fails": ", ".join(
                         g_all[(g_all.status != "ok") & g_all.variant.isin(EXACT_VARIANTS)].variant
                     )
@@ -192,21 +150,10 @@ def winners_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, float]]:
 
 
 def winners_table(ctx: StudyContext, winners: pd.DataFrame) -> Table:
-    """Write the winners table.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    winners
-        :func:`winners_frame`.
-
-    Returns
-    -------
-    Table
-    """
-    return Table(
-        write_table(winners, ctx.path("winners")),
+    """Write the winners table."""
+    return ctx.table(
+        winners,
+        "winners",
         f"Per scene: the most accurate spring variant; the cheapest variant (smallest "
         f"static solve time, ties within {TIME_TIE:.0%} broken towards fewer parts) whose "
         f"model error is within {TOLERANCE:.0%} of the best, over all variants and over "

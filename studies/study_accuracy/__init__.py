@@ -22,9 +22,8 @@ import numpy as np
 from .. import analytic
 from ..compare import MODELS
 from ..compare_output import error_figure, figure_fields
-from ..registry import Figure, StudyContext, StudyOutput, Table, study
+from ..registry import Figure, StudyContext, StudyOutput, study
 from ..scenes import StudyScene
-from ..tables import write_table
 from .cases import (
     DISCRETISATION_HEADLINE,
     ERROR_KINDS,
@@ -70,8 +69,9 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
     res = dict(zip(names, results, strict=True))
 
     errors = error_table(res)
-    t_err = Table(
-        write_table(errors, ctx.path("accuracy_errors")),
+    t_err = ctx.table(
+        errors,
+        "accuracy_errors",
         "Relative errors over the mesh vertices per scene: model error = spring vs P1 on the "
         "same mesh (same law as the reference), total = spring vs the reference, "
         "discretisation = P1 vs the reference; L2 = ‖u − u_ref‖/‖u_ref‖, max = largest nodal "
@@ -79,8 +79,9 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
     )
 
     probes = probe_table(res, refs, lateral)
-    t_probe = Table(
-        write_table(probes, ctx.path("accuracy_probes")),
+    t_probe = ctx.table(
+        probes,
+        "accuracy_probes",
         "Main probe displacement component per scene: analytic value (Timoshenko beam, "
         "uniaxial stress σL/E), spring model, same-mesh P1 and the reference; 'lateral' is the "
         "transverse (Poisson) displacement at the stretch probes (u_y for stretch-fiber, "

@@ -72,17 +72,8 @@ class Settings:
 
 
 def bundled_scenes(settings: Settings) -> list[StudyScene]:
-    """The bundled scenes on the settings' meshes, then the cantilever's extra meshes.
-
-    Parameters
-    ----------
-    settings
-        The study's settings.
-
-    Returns
-    -------
-    list of StudyScene
-        Roles ``compare`` (and ``figure`` for :attr:`Settings.figure_scenes`).
+    """The bundled scenes on the settings' meshes, then the cantilever's extra meshes, with
+    roles ``compare`` (and ``figure`` for :attr:`Settings.figure_scenes`).
 
     Examples
     --------
@@ -97,20 +88,7 @@ def bundled_scenes(settings: Settings) -> list[StudyScene]:
 
 
 def scene_case(scene: StudyScene, settings: Settings) -> dict[str, Any]:
-    """The cache case of one scene: its table decides the result.
-
-    Parameters
-    ----------
-    scene
-        The scene.
-    settings
-        The study's settings.
-
-    Returns
-    -------
-    dict
-        The JSON-able case.
-    """
+    """The JSON-able cache case of one scene: its table decides the result."""
     return scene.case(
         "accuracy", VERSION, fields=scene.serves("figure"), exact=bool(settings.exact)
     )

@@ -8,8 +8,9 @@ import pandas as pd
 from springfem.scene import Scene
 
 from .. import metrics
+from ..plots import grouped_bars
 from ..registry import Figure, StudyContext
-from ..tables import save_figure
+from ..tables import pyplot
 from .cases import ERROR_KINDS, nan_float
 
 
@@ -29,13 +30,7 @@ def field_conclusion(scene: Scene, r: dict, e: dict) -> str:
 
 
 def bar_figure(ctx: StudyContext, errors: pd.DataFrame, probes: pd.DataFrame) -> Figure:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ..plots import grouped_bars
-
+    plt = pyplot()
     fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.2))
     groups = list(errors["scene"])
     grouped_bars(
@@ -64,8 +59,9 @@ def bar_figure(ctx: StudyContext, errors: pd.DataFrame, probes: pd.DataFrame) ->
     b.axhline(0.0, color="k", lw=0.8)
     b.set_title("main probe component vs reference (negative = stiffer)", fontsize=10)
     worst = errors.loc[errors["model err L2"].idxmax()]
-    return Figure(
-        save_figure(fig, ctx.path("accuracy_errors.png")),
+    return ctx.figure(
+        fig,
+        "accuracy_errors.png",
         "Left: relative L2 displacement error per scene, split into the spring element's model "
         "error, its total error and P1's discretisation error. Right: signed error of the main "
         "probe component (and the stretch scenes' lateral contraction) against the reference. "

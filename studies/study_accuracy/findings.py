@@ -11,21 +11,8 @@ from .cases import nan_float
 def report_findings(
     res: dict, errors: pd.DataFrame, probes: pd.DataFrame, quick: bool
 ) -> list[str]:
-    """The report's sentences on the accuracy study.
-
-    Parameters
-    ----------
-    res
-        Scene name -> case result (see :func:`~studies.study_accuracy.cases.work`).
-    errors, probes
-        The error and probe tables.
-    quick
-        Whether the run used the quick preset (said in the first sentence).
-
-    Returns
-    -------
-    list of str
-        One finding per sentence.
+    """The report's sentences on the accuracy study, one finding each (``res``: scene name ->
+    :func:`~.cases.work` result; ``quick``: said in the first sentence).
     """
     f = []
     e = errors.set_index("scene")
@@ -122,17 +109,7 @@ def shape_sentence(e: pd.DataFrame) -> str:
 
 
 def exact_findings(e: pd.DataFrame) -> list[str]:
-    """Where the exact element changes the conclusions (one sentence per scene group).
-
-    Parameters
-    ----------
-    e
-        The error table indexed by scene.
-
-    Returns
-    -------
-    list of str
-    """
+    """Where the exact element changes the conclusions (one sentence per scene group)."""
     if "exact model err L2" not in e.columns:
         return []
     f = []

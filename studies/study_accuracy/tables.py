@@ -12,18 +12,9 @@ from .cases import ERROR_KINDS, EXACT_KINDS, nan_float
 
 
 def error_table(res: dict[str, dict]) -> pd.DataFrame:
-    """Model, total and discretisation errors (L2, max) and volume changes per scene.
-
-    Parameters
-    ----------
-    res
-        Scene name -> case result (see :func:`~studies.study_accuracy.cases.work`).
-
-    Returns
-    -------
-    DataFrame
-        One row per scene (in the order of ``res``); the exact variant's columns
-        (``exact_model`` = vs linear P1, ``exact_model_nh`` = vs P1 neo-Hookean) when run.
+    """Model, total and discretisation errors (L2, max) and volume changes, one row per scene
+    of ``res`` (scene name -> :func:`~.cases.work` result), with the exact variant's columns
+    (``exact_model`` = vs linear P1, ``exact_model_nh`` = vs P1 neo-Hookean) when run.
     """
     rows = []
     for name in res:
@@ -55,19 +46,8 @@ def probe_table(
 ) -> pd.DataFrame:
     """The main probe component per scene: analytic value, spring, P1, reference, ratios.
 
-    Parameters
-    ----------
-    res
-        Scene name -> case result.
-    refs
-        Scene name -> its closed-form reference (:func:`studies.analytic.reference`).
-    lateral
-        Scene name -> the transverse (Poisson) component shown beside it, if any.
-
-    Returns
-    -------
-    DataFrame
-        One row per scene.
+    ``refs``: scene name -> its closed-form reference (:func:`studies.analytic.reference`);
+    ``lateral``: scene name -> the transverse (Poisson) component shown beside it, if any.
     """
     prow = []
     for name in res:

@@ -40,35 +40,17 @@ from springfem.errors import InputError
 from ..registry import StudyContext, StudyOutput, study
 from ..scenes import StudyScene, require
 from .cases import (
-    MODELS,
     Settings,
-    affine_fit,
     bundled_scenes,
-    fibre_block,
     grid,
     refusal,
     solve_case,
-    split_errors,
-    stretch_measures,
-    vertex_fibres,
 )
 from .figures import modulus_figure
 from .findings import modulus_findings, split_findings
 from .tables import frames, modulus_table, ratio_frame, ratio_table, split_table, worst_errors
 
-__all__ = [
-    "MODELS",
-    "Settings",
-    "affine_fit",
-    "bundled_scenes",
-    "fibre_block",
-    "refusal",
-    "run",
-    "solve_case",
-    "split_errors",
-    "stretch_measures",
-    "vertex_fibres",
-]
+__all__ = ["Settings", "bundled_scenes", "run"]
 
 
 @study("anisotropy", Settings, bundled_scenes)
@@ -122,11 +104,10 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
     if len(open_split):
         headline.update(split_findings(open_split, failed)[1])
     tables.append(split_table(ctx, split))
+    names = ", ".join(dict.fromkeys(s.table.get("name") or s.label for s in scenes))
     return StudyOutput(
         name=ctx.name,
-        title="Anisotropy: response along and across the fibre ("
-        + ", ".join(dict.fromkeys(s.table.get("name") or s.label for s in scenes))
-        + ")",
+        title=f"Anisotropy: response along and across the fibre ({names})",
         findings=findings,
         tables=tables,
         figures=figures,

@@ -64,17 +64,6 @@ def fibre_block(angle: float, n: int) -> StudyScene:
     degrees from x in the x-y plane (fibre ``(cos θ, sin θ, 0)``, sheet
     ``(-sin θ, cos θ, 0)``), pulled along x; its reference is the off-axis formula.
 
-    Parameters
-    ----------
-    angle
-        Fibre angle (degrees).
-    n
-        Divisions per side.
-
-    Returns
-    -------
-    StudyScene
-
     Examples
     --------
     >>> fibre_block(90.0, 2).table["axes"]["sheet"][0]
@@ -88,31 +77,12 @@ def fibre_block(angle: float, n: int) -> StudyScene:
 
 
 def bundled_scenes(settings: Settings) -> list[StudyScene]:
-    """The rotated blocks of the settings' angles.
-
-    Parameters
-    ----------
-    settings
-        The settings.
-
-    Returns
-    -------
-    list of StudyScene
-    """
+    """The rotated blocks of the settings' angles."""
     return [fibre_block(a, settings.n) for a in settings.angles]
 
 
 def refusal(scene: StudyScene) -> str | None:
     """Why the study cannot run on ``scene`` (``None``: it can).
-
-    Parameters
-    ----------
-    scene
-        The scene.
-
-    Returns
-    -------
-    str or None
 
     Examples
     --------
@@ -136,17 +106,7 @@ def refusal(scene: StudyScene) -> str | None:
 
 
 def grid(scenes: list[StudyScene]) -> list[dict[str, Any]]:
-    """One case per scene and model.
-
-    Parameters
-    ----------
-    scenes
-        The study's scenes.
-
-    Returns
-    -------
-    list of dict
-    """
+    """One case per scene and model."""
     return [s.case(STUDY, VERSION, model=m) for s in scenes for m in MODELS]
 
 
@@ -162,17 +122,8 @@ def solve_case(case: dict[str, Any]) -> dict[str, Any]:
 
 
 def affine_fit(points: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Small-strain tensor of the least-squares affine fit ``u ≈ A X + b``.
-
-    Parameters
-    ----------
-    points, u
-        ``(n, 3)`` positions and displacements.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(3, 3)``.
+    """Small-strain tensor ``(3, 3)`` of the least-squares affine fit ``u ≈ A X + b`` of the
+    displacements ``u`` at ``points``.
     """
     X = np.column_stack([points, np.ones(len(points))])
     coef, *_ = np.linalg.lstsq(X, u, rcond=None)
@@ -181,20 +132,9 @@ def affine_fit(points: np.ndarray, u: np.ndarray) -> np.ndarray:
 
 
 def stretch_measures(scene: Scene, u: np.ndarray) -> dict[str, float]:
-    """The block's response to its pull along x.
-
-    Parameters
-    ----------
-    scene
-        The block.
-    u
-        ``(n, 3)`` vertex displacements.
-
-    Returns
-    -------
-    dict
-        ``E_eff = σ / ε_xx`` (``ε_xx``: mean x displacement of the ``x_max`` vertices over
-        the length), ``eps_xx``, and ``gamma_xy``, ``eps_fit_xx`` of the affine fit.
+    """The block's response to its pull along x: ``E_eff = σ / ε_xx`` (``ε_xx``: mean x
+    displacement of the ``x_max`` vertices over the length), ``eps_xx``, and ``gamma_xy``,
+    ``eps_fit_xx`` of the affine fit.
     """
     pts = scene.mesh.points
     L = float(pts[:, 0].max() - pts[:, 0].min())
@@ -211,21 +151,8 @@ def stretch_measures(scene: Scene, u: np.ndarray) -> dict[str, float]:
 
 
 def vertex_fibres(tets: np.ndarray, frames: np.ndarray, n_points: int) -> np.ndarray:
-    """Fibre direction per vertex: principal eigenvector of ``sum f f^T`` over its tets.
-
-    Parameters
-    ----------
-    tets
-        ``(m, 4)`` vertex ids.
-    frames
-        ``(m, 3, 3)`` element frames (row 0: fibre).
-    n_points
-        Number of vertices.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(n, 3)`` unit vectors (sign arbitrary).
+    """Fibre direction per vertex (unit, sign arbitrary): principal eigenvector of ``sum f f^T``
+    over its tets (``frames`` row 0).
 
     Examples
     --------
@@ -255,23 +182,11 @@ def split_errors(scene: Scene, u: np.ndarray, u_ref: np.ndarray) -> dict[str, fl
 
     At every vertex the error ``e = u - u_ref`` splits into ``e·f`` and ``e - (e·f) f``
     (``f``: :func:`vertex_fibres`), each relative to ``||u_ref||`` (they add in quadrature
-    to the total); the strains are those of the P1 interpolation per tet, and the errors of
-    the fibre strain and of the mean cross-fibre normal strain are relative to the L2 norm
-    of the reference's strain tensors (a projected strain may vanish where the tensor
-    does not: under a pull at an angle to the fibre, the cross-fibre mean changes sign).
-
-    Parameters
-    ----------
-    scene
-        The scene (mesh and element frames).
-    u, u_ref
-        ``(n, 3)`` vertex displacements.
-
-    Returns
-    -------
-    dict
-        ``fibre``, ``cross``, ``total`` (displacement), ``strain_fibre``, ``strain_cross``
-        (L2 errors of the strain fields relative to the reference's strain).
+    to the total): ``fibre``, ``cross``, ``total``. The strains are those of the P1
+    interpolation per tet, and the errors of the fibre strain and of the mean cross-fibre
+    normal strain (``strain_fibre``, ``strain_cross``) are relative to the L2 norm of the
+    reference's strain tensors (a projected strain may vanish where the tensor does not:
+    under a pull at an angle to the fibre, the cross-fibre mean changes sign).
     """
     m = scene.mesh
     f = vertex_fibres(m.tets, scene.frames, m.n_points)

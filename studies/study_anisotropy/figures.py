@@ -9,7 +9,7 @@ from springfem.scene import Material
 
 from ..analytic import off_axis_modulus, off_axis_strain
 from ..registry import Figure, StudyContext
-from ..tables import save_figure
+from ..tables import pyplot
 from .cases import MARKERS, MODELS
 
 
@@ -22,27 +22,10 @@ def modulus_figure(
     spring_err: dict[str, float],
     worst_angle: dict[str, float],
 ) -> Figure:
-    """Effective modulus, its error and the shear coupling against fiber angle.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    df
-        The (model, angle) rows.
-    mat, sigma, n_tets
-        Material, applied stress, tets of the block.
-    spring_err, worst_angle
-        Largest error per model and its angle (for the caption).
-
-    Returns
-    -------
-    Figure
+    """Effective modulus, its error and the shear coupling against fiber angle (the largest
+    error per model and its angle go in the caption).
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.6))
     th = np.linspace(0.0, 90.0, 181)
@@ -79,8 +62,9 @@ def modulus_figure(
         a.grid(alpha=0.3)
         a.legend(fontsize=7)
     sa, sn = "spring-analytic", "spring-nnls"
-    return Figure(
-        save_figure(fig, ctx.path("modulus_vs_angle.png")),
+    return ctx.figure(
+        fig,
+        "modulus_vs_angle.png",
         f"Effective modulus, its error and the shear coupling against fibre angle "
         f"({n_tets} tets). FEM P1 and P2 reproduce the off-axis formula to "
         f"{max(spring_err['P1'], spring_err['P2']):.1e} (a homogeneous field is "

@@ -23,24 +23,9 @@ def modulus_findings(
 ) -> tuple[list[str], dict[str, float]]:
     """The findings and headline of the rotated blocks against the off-axis formula.
 
-    Parameters
-    ----------
-    df
-        The (scene, model) modulus rows.
-    ratios, ratio_an
-        The ratio table and the analytic ratio.
-    mat
-        The blocks' material.
-    worst, worst_angle
-        Largest error per model and its angle.
-
-    Returns
-    -------
-    findings : list of str
-    headline : dict
-        ``ratio_analytic``, ``ratio_<model>`` (E(0)/E(90), 4 decimals) and
-        ``max_rel_error_<model>`` (largest |E_eff / E(θ) - 1| over the angles; 4 decimals
-        for the analytic and nnls calibrations, 6 else).
+    The headline: ``ratio_analytic``, ``ratio_<model>`` (E(0)/E(90), 4 decimals) and
+    ``max_rel_error_<model>`` (largest |E_eff / E(θ) - 1| over the angles; 4 decimals for
+    the analytic and nnls calibrations, 6 else).
     """
     sa, sn, sx = "spring-analytic", "spring-nnls", "spring-exact"
     r = ratios.set_index("model")
@@ -89,21 +74,9 @@ def modulus_findings(
 def split_findings(
     split: pd.DataFrame, failed: dict[str, list[str]]
 ) -> tuple[list[str], dict[str, float]]:
-    """The findings and headline of the error split along / across the fibre.
-
-    Parameters
-    ----------
-    split
-        The (scene, model, reference) split rows.
-    failed
-        Scene -> the models that did not solve.
-
-    Returns
-    -------
-    findings : list of str
-    headline : dict
-        ``fibre_err_<model>_vs_<reference>``, ``cross_err_<model>_vs_<reference>``: the
-        largest over the scenes.
+    """The findings and headline of the error split along / across the fibre; the headline's
+    ``fibre_err_<model>_vs_<reference>``, ``cross_err_<model>_vs_<reference>`` are the
+    largest over the scenes.
     """
     worst = split.groupby(["against", "model"], sort=False).max(numeric_only=True)
     scenes = list(dict.fromkeys(split.scene))

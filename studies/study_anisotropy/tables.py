@@ -14,7 +14,6 @@ from springfem.errors import SolverError
 from ..analytic import fibre_angle, off_axis_strain, reference
 from ..registry import StudyContext, Table
 from ..scenes import StudyScene
-from ..tables import write_table
 from .cases import MODELS, REFERENCES, split_errors, stretch_measures
 
 SPLIT_COLUMNS = {
@@ -32,27 +31,11 @@ def frames(
     """The error-split rows of every scene and the modulus rows of the scenes with the
     off-axis closed form.
 
-    Parameters
-    ----------
-    scenes
-        The scenes.
-    cases, results
-        The solves (:func:`~.cases.grid`, :func:`~.cases.solve_case`).
-
-    Returns
-    -------
-    split : DataFrame
-        One row per (scene, model, reference): :data:`SPLIT_COLUMNS`.
-    modulus : DataFrame
-        One row per (scene, model) with a closed form: angle, ``E_eff``, ``E_analytic``,
-        ``rel_error``, shear coupling and its closed form, status.
-    failed : dict
-        Scene -> the models that did not solve.
-
-    Raises
-    ------
-    SolverError
-        If a reference (P2 or P1) did not solve.
+    Returns ``split`` (one row per (scene, model, reference): :data:`SPLIT_COLUMNS`),
+    ``modulus`` (one row per (scene, model) with a closed form: angle, ``E_eff``,
+    ``E_analytic``, ``rel_error``, shear coupling and its closed form, status) and ``failed``
+    (scene -> the models that did not solve); raises :class:`SolverError` if a reference (P2
+    or P1) did not solve.
     """
     split, modulus, failed = [], [], {}
     for s in scenes:
@@ -104,21 +87,10 @@ def frames(
 
 
 def split_table(ctx: StudyContext, split: pd.DataFrame) -> Table:
-    """Write the error-split table.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    split
-        :func:`frames`' split rows.
-
-    Returns
-    -------
-    Table
-    """
-    return Table(
-        write_table(split, ctx.path("fibre_split")),
+    """Write the error-split table."""
+    return ctx.table(
+        split,
+        "fibre_split",
         "Each model's displacement error against P2 and against same-mesh P1, split into "
         "the fibre direction and across it (relative to ‖u_ref‖; the two add in quadrature "
         "to the L2 error), and the L2 errors of the fibre strain f·εf and of the mean "
@@ -127,29 +99,16 @@ def split_table(ctx: StudyContext, split: pd.DataFrame) -> Table:
 
 
 def modulus_table(ctx: StudyContext, df: pd.DataFrame, sigma: float, n_tets: int) -> Table:
-    """Write the wide table of E_eff per model and angle.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    df
-        :func:`frames`' modulus rows.
-    sigma, n_tets
-        Applied stress and tets of the blocks (for the caption).
-
-    Returns
-    -------
-    Table
-    """
+    """Write the wide table of E_eff per model and angle."""
     wide = df.pivot(index="angle", columns="model", values="E_eff")[list(MODELS)]
     wide.insert(0, "analytic", df.groupby("angle")["E_analytic"].first())
     for m in MODELS:
         if m.startswith("spring"):
             wide[f"{m} error"] = wide[m] / wide["analytic"] - 1.0
     wide = wide.reset_index().rename(columns={"angle": "θ (deg)"})
-    return Table(
-        write_table(wide, ctx.path("modulus")),
+    return ctx.table(
+        wide,
+        "modulus",
         f"Effective modulus E_eff = σ/ε_xx (Pa) against fibre angle θ on the {n_tets}-tet "
         f"block (σ = {sigma:g} Pa): off-axis formula, spring model (analytic and nnls "
         "calibration, exact element with coupling), FEM P1 and P2, and the spring models' "
@@ -158,18 +117,8 @@ def modulus_table(ctx: StudyContext, df: pd.DataFrame, sigma: float, n_tets: int
 
 
 def ratio_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, float]:
-    """E(0°), E(90°) and their ratio per model, with the analytic row first.
-
-    Parameters
-    ----------
-    df
-        :func:`frames`' modulus rows.
-
-    Returns
-    -------
-    ratios : DataFrame
-    ratio_an : float
-        The analytic ``E_f / E_c`` (``nan`` without both angles).
+    """E(0°), E(90°) and their ratio per model, with the analytic row first, and the analytic
+    ``E_f / E_c`` (``nan`` without both angles).
     """
 
     def at(m: str | None, a: float) -> float:
@@ -201,38 +150,17 @@ def ratio_frame(df: pd.DataFrame) -> tuple[pd.DataFrame, float]:
 
 
 def ratio_table(ctx: StudyContext, ratios: pd.DataFrame) -> Table:
-    """Write the anisotropy-ratio table.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    ratios
-        :func:`ratio_frame`.
-
-    Returns
-    -------
-    Table
-    """
-    return Table(
-        write_table(ratios, ctx.path("anisotropy_ratio")),
+    """Write the anisotropy-ratio table."""
+    return ctx.table(
+        ratios,
+        "anisotropy_ratio",
         "Stiffness along (0°) and across (90°) the fibres and the anisotropy ratio "
         "E(0)/E(90) of each model against the analytic E_f/E_c.",
     )
 
 
 def worst_errors(df: pd.DataFrame) -> tuple[dict[str, float], dict[str, float]]:
-    """Largest |relative error| of E_eff per model and the angle where it occurs.
-
-    Parameters
-    ----------
-    df
-        :func:`frames`' modulus rows.
-
-    Returns
-    -------
-    worst, worst_angle : dict
-    """
+    """Largest |relative error| of E_eff per model and the angle where it occurs."""
     worst = {m: float(np.nanmax(np.abs(df[df.model == m].rel_error))) for m in MODELS}
     worst_angle = {
         m: float(df[df.model == m].set_index("angle").rel_error.abs().idxmax())

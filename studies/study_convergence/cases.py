@@ -61,18 +61,8 @@ class Settings:
 
 
 def fem_models(law: str) -> tuple[str, str]:
-    """The FEM models of a scene: P1 and P2 with its law (neo-Hookean FEM for a neo-Hookean
+    """The FEM models ``(P1, P2)`` of a scene: its law (neo-Hookean FEM for a neo-Hookean
     scene, else the small-strain law or a tissue law's own).
-
-    Parameters
-    ----------
-    law
-        The scene's material law.
-
-    Returns
-    -------
-    tuple of str
-        ``(P1 model, P2 model)``.
 
     Examples
     --------
@@ -85,15 +75,6 @@ def fem_models(law: str) -> tuple[str, str]:
 def bundled_scenes(settings: Settings) -> list[StudyScene]:
     """The cantilever bar (0.1 × 0.01 × 0.01 m, end shear) on ``[10, 1, 1]`` hexahedra, six
     tets each, with Timoshenko's tip deflection as its closed-form reference.
-
-    Parameters
-    ----------
-    settings
-        The settings (the levels refine this mesh).
-
-    Returns
-    -------
-    list of StudyScene
 
     Examples
     --------
@@ -152,17 +133,6 @@ class Plan:
 
 def plan(s: StudyScene, q: Settings) -> Plan:
     """The levels a scene runs (see :func:`.levels.select_levels`).
-
-    Parameters
-    ----------
-    s
-        The scene.
-    q
-        The settings.
-
-    Returns
-    -------
-    Plan
 
     Examples
     --------

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..plots import loglog_rates
 from ..registry import Figure, StudyContext
-from ..tables import save_figure
+from ..tables import pyplot
 from .cases import SPRING
 from .findings import limit_sentence
 from .tables import L2, Analysis
@@ -16,28 +17,8 @@ def _present(a: Analysis) -> list[str]:
 
 
 def rate_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
-    """The L2 and ``w`` errors of every model against h, log-log, with fitted rates.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    a
-        The scene's analysis.
-    suffix
-        File-name suffix (several scenes).
-
-    Returns
-    -------
-    Figure
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ..plots import loglog_rates
-
+    """The L2 and ``w`` errors of every model against h, log-log, with fitted rates."""
+    plt = pyplot()
     df = a.levels[a.levels["status"] == "ok"]
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
     curves_l2, curves_w = {}, {}
@@ -62,36 +43,17 @@ def rate_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
     e = df[df["model"].isin([SPRING, p1])].pivot(index="factor", columns="model", values=L2)
     n_below = int((e[SPRING] < e[p1]).sum()) if {SPRING, p1} <= set(e.columns) else 0
     text = ", ".join(f"{m} {rates[m]['l2']:.2f}" for m in rates)
-    return Figure(
-        save_figure(fig, ctx.path(f"convergence{suffix}.png")),
+    return ctx.figure(
+        fig,
+        f"convergence{suffix}.png",
         f"Errors against the {p2} reference under refinement, log-log, fitted rates in the "
         f"legend (L2: {text}); {SPRING}'s error is below {p1}'s on {n_below} of {len(e)} levels.",
     )
 
 
 def tip_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
-    """``w`` over the reference per level, and ``|spring / P1 − 1|`` against h.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    a
-        The scene's analysis.
-    suffix
-        File-name suffix (several scenes).
-
-    Returns
-    -------
-    Figure
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ..plots import loglog_rates
-
+    """``w`` over the reference per level, and ``|spring / P1 − 1|`` against h."""
+    plt = pyplot()
     df = a.levels[a.levels["status"] == "ok"]
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.2))
     for m, mk in zip(_present(a), "o*sD", strict=False):
@@ -117,8 +79,9 @@ def tip_figure(ctx: StudyContext, a: Analysis, suffix: str = "") -> Figure:
                  f"|{SPRING} / {p1} − 1| of w", {name: a.gap_rate}, xticks=sorted(h))  # fmt: skip
     bx.set_title("does the spring–P1 gap close under refinement?", fontsize=10)
     fig.tight_layout()
-    return Figure(
-        save_figure(fig, ctx.path(f"tip_deflection{suffix}.png")),
+    return ctx.figure(
+        fig,
+        f"tip_deflection{suffix}.png",
         f"Left: {a.track.label} normalised by the P2 reference under refinement. Right: the "
         "spring model's w relative to P1 on the same mesh. " + limit_sentence(a),
     )

@@ -37,18 +37,8 @@ def limit_sentence(a: Analysis) -> str:
 
 
 def report_findings(a: Analysis, quick: bool) -> list[str]:
-    """The findings of one scene.
-
-    Parameters
-    ----------
-    a
-        The scene's analysis.
-    quick
-        The quick preset (its reference is only one level above the last P2 point).
-
-    Returns
-    -------
-    list of str
+    """The findings of one scene (``quick``: its reference is only one level above the last P2
+    point).
     """
     p, r = a.plan, a.rate
     name = p.scene.label
@@ -110,18 +100,10 @@ def report_findings(a: Analysis, quick: bool) -> list[str]:
 def headline(a: Analysis) -> dict[str, float]:
     """The headline numbers of one scene: rates, errors at the finest level, the gap.
 
-    Parameters
-    ----------
-    a
-        The scene's analysis.
-
-    Returns
-    -------
-    dict
-        ``rate_l2_<model>``, ``rate_<w>_<model>`` (P1, P2), ``<w>_err_finest_<model>``
-        (the spring models and P1), ``spring-energy_over_P1_finest``,
-        ``rate_spring-energy_P1_gap`` and, with a closed form, ``ref_over_<its name>``;
-        ``<w>`` is the tracked probe's name (``tip``).
+    ``rate_l2_<model>``, ``rate_<w>_<model>`` (P1, P2), ``<w>_err_finest_<model>`` (the
+    spring models and P1), ``spring-energy_over_P1_finest``, ``rate_spring-energy_P1_gap``
+    and, with a closed form, ``ref_over_<its name>``; ``<w>`` is the tracked probe's name
+    (``tip``).
     """
     r, w, (p1, p2) = a.rate, a.track.name, a.plan.fem
     fin = a.rates.set_index("model")

@@ -53,17 +53,6 @@ def _doublings(factor: int) -> int | None:
 def level_label(table: Mapping, factor: int) -> str:
     """A level's name in tables and headline keys: a box's divisions (``20x2x2``), else
     ``x<factor>``.
-
-    Parameters
-    ----------
-    table
-        The scene table.
-    factor
-        The refinement factor.
-
-    Returns
-    -------
-    str
     """
     if grid_box(table):
         return "x".join(str(int(d) * factor) for d in table["mesh"]["divisions"])
@@ -71,25 +60,8 @@ def level_label(table: Mapping, factor: int) -> str:
 
 
 def refined_scene(table: Mapping, path: str | None, factor: int) -> Scene:
-    """The scene with its mesh refined by ``factor``.
-
-    Parameters
-    ----------
-    table
-        The scene table.
-    path
-        The scene file (anchors a relative mesh path).
-    factor
-        The refinement factor (any for a box grid, else a power of two).
-
-    Returns
-    -------
-    Scene
-
-    Raises
-    ------
-    ValueError
-        If the scene cannot be refined by ``factor``.
+    """The scene of ``table`` (``path`` anchors a relative mesh path) with its mesh refined by
+    ``factor`` (any for a box grid, else a power of two: a :class:`ValueError` otherwise).
     """
     if grid_box(table):
         divisions = [int(d) * factor for d in table["mesh"]["divisions"]]
@@ -117,24 +89,8 @@ def mean_edge(mesh: TetMesh) -> float:
 
 
 def coarse_index(case: Mapping, mesh: TetMesh) -> np.ndarray:
-    """Where each level-1 vertex of a case's scene sits in its refined ``mesh``.
-
-    Parameters
-    ----------
-    case
-        The case (its ``table`` and ``path``).
-    mesh
-        A refined level's mesh.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(n1,)`` indices into ``mesh.points``.
-
-    Raises
-    ------
-    AssertionError
-        If a level-1 vertex is not a vertex of ``mesh``.
+    """Indices into ``mesh.points`` (a refined level's) of the level-1 vertices of a case's
+    scene; an :class:`AssertionError` if one is not a vertex of ``mesh``.
     """
     from scipy.spatial import cKDTree
 
@@ -148,28 +104,11 @@ def coarse_index(case: Mapping, mesh: TetMesh) -> np.ndarray:
 def select_levels(
     table: Mapping, n_tets: int, wanted: Sequence[int], max_tets: int
 ) -> tuple[list[int], list[str]]:
-    """The levels of ``wanted`` a scene runs: those it can be refined by, within the budget.
+    """The levels of ``wanted`` a scene runs (ascending), and what was left out and why.
 
-    Level ``r`` has ``n_tets r³`` tets. Levels beyond ``max_tets`` are left out, but the
-    two coarsest possible levels always run (a rate needs two).
-
-    Parameters
-    ----------
-    table
-        The scene table.
-    n_tets
-        Tets of the scene's own mesh.
-    wanted
-        Refinement factors.
-    max_tets
-        The budget of one level.
-
-    Returns
-    -------
-    levels : list of int
-        The levels that run, ascending.
-    notes : list of str
-        What was left out and why.
+    A scene runs the levels it can be refined by; level ``r`` has ``n_tets r³`` tets and
+    levels beyond ``max_tets`` are left out, but the two coarsest possible levels always run
+    (a rate needs two).
 
     Examples
     --------

@@ -16,7 +16,6 @@ import pandas as pd
 from .. import metrics
 from ..analytic import reference
 from ..registry import StudyContext, Table
-from ..tables import write_table
 from .cases import COSINE, SPRING, Plan, richardson_limit
 from .levels import grid_box, level_label
 
@@ -57,19 +56,7 @@ class Tracked:
 
 
 def tracked(p: Plan, ref: dict) -> tuple[Tracked, tuple[float, str] | None]:
-    """What the tip columns track, and the scene's closed-form value of it if it has one.
-
-    Parameters
-    ----------
-    p
-        The scene's plan.
-    ref
-        The reference's result.
-
-    Returns
-    -------
-    Tracked, (value, source) or None
-    """
+    """What the tip columns track, and the scene's closed-form value of it if it has one."""
     hook = reference(p.scene, None)
     if hook is not None:
         probe, component, value, source = hook
@@ -119,23 +106,9 @@ class Analysis:
 
 
 def analyse(p: Plan, cases: list[dict], results: list[dict]) -> Analysis:
-    """Errors of every level against the reference (the last case), rates and the gap.
-
-    Parameters
-    ----------
-    p
-        The plan.
-    cases, results
-        :meth:`Plan.cases` and their results.
-
-    Returns
-    -------
-    Analysis
-
-    Raises
-    ------
-    springfem.errors.SolverError
-        If the reference solve failed.
+    """Errors of every level against the reference (the last case), rates and the gap, from
+    :meth:`Plan.cases` and their results; a :class:`~springfem.errors.SolverError` if the
+    reference solve failed.
     """
     from springfem.errors import SolverError
 
@@ -215,37 +188,25 @@ def _gap(a: Analysis, w_cosine: float) -> None:
 
 
 def write_tables(ctx: StudyContext, a: Analysis, suffix: str = "") -> list[Table]:
-    """Write the level and rate tables of one scene.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    a
-        The scene's analysis.
-    suffix
-        File-name suffix (several scenes).
-
-    Returns
-    -------
-    list of Table
-    """
+    """Write the level and rate tables of one scene."""
     p, label = a.plan, a.plan.scene.label
     how = (
         "its divisions times the factor"
         if grid_box(p.scene.table)
         else "uniform refinement (each tet into 8 per doubling)"
     )
-    levels = Table(
-        write_table(a.levels, ctx.path(f"convergence_levels{suffix}")),
+    levels = ctx.table(
+        a.levels,
+        f"convergence_levels{suffix}",
         f"{label} refined by {how}: w = {a.track.label} and errors against {p.fem[1]} on level "
         f"{p.ref} ({a.ref['tets']} tets, w = {a.w_ref:.6g}); h = h₁ / factor with h₁ = "
         f"{p.h1:.4g} the mean edge length of the scene's mesh (its length unit)"
         + (f"; {'; '.join(p.notes)}" if p.notes else "")
         + ".",
     )
-    rates = Table(
-        write_table(a.rates, ctx.path(f"convergence_rates{suffix}")),
+    rates = ctx.table(
+        a.rates,
+        f"convergence_rates{suffix}",
         "Fitted rates (slope of log error over log h, all levels) and w extrapolated from "
         f"each model's three finest levels (w = L + C h^p); {p.fem[0]}'s true limit is the "
         "reference's, so its extrapolated value shows the extrapolation's own bias.",

@@ -1,6 +1,6 @@
 """Study ``scaling``: cost per explicit step and per static solve against the number of tets.
 
-The benchmark block of :func:`bench_table` (2:1:1, clamped at one end,
+The benchmark block of :func:`.cases.bench_table` (2:1:1, clamped at one end,
 end traction, six tets per hexahedron) from about 1e3 to 1e5 tets:
 
 - one explicit step (forces + symplectic-Euler update through
@@ -29,11 +29,7 @@ from __future__ import annotations
 from ..registry import StudyContext, StudyOutput, study
 from ..scenes import StudyScene
 from .cases import (
-    REPEATS,
-    STATIC_METHODS,
-    TORSION,
     Settings,
-    bench_table,
     bundled_scenes,
     grids,
     static_case,
@@ -43,17 +39,7 @@ from .figures import scaling_figure
 from .findings import report_findings
 from .tables import frames, slopes, write_tables
 
-__all__ = [
-    "REPEATS",
-    "STATIC_METHODS",
-    "TORSION",
-    "Settings",
-    "bench_table",
-    "grids",
-    "run",
-    "static_case",
-    "step_case",
-]
+__all__ = ["Settings", "bundled_scenes", "run"]
 
 
 #: Why the study does not run on a user's scene.

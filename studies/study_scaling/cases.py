@@ -50,16 +50,6 @@ def bench_table(n_tets: int = 100_000) -> dict:
     """The table of the benchmark block: 2:1:1 with about ``n_tets`` tets (six per
     hexahedron), clamped at ``x_min`` and pulled down at ``x_max``, FEM P1 with AMG.
 
-    Parameters
-    ----------
-    n_tets
-        Approximate number of tets.
-
-    Returns
-    -------
-    dict
-        The table for :func:`springfem.scene.scene_from_dict`.
-
     Examples
     --------
     >>> bench_table(1_000)["mesh"]["divisions"]
@@ -85,17 +75,7 @@ def bench_scene(n_tets: int, role: str) -> StudyScene:
 
 
 def bundled_scenes(p: Settings) -> list[StudyScene]:
-    """The blocks of the explicit-step (``step``) and static-solve (``static``) series.
-
-    Parameters
-    ----------
-    p
-        The study's settings.
-
-    Returns
-    -------
-    list of StudyScene
-    """
+    """The blocks of the explicit-step (``step``) and static-solve (``static``) series."""
     return [bench_scene(n, "step") for n in p.step] + [bench_scene(n, "static") for n in p.static]
 
 
@@ -187,20 +167,8 @@ STATIC_METHODS = {
 
 
 def grids(scenes: list[StudyScene], p: Settings) -> tuple[list[dict], list[dict]]:
-    """The explicit-step and static-solve cases.
-
-    Parameters
-    ----------
-    scenes
-        The blocks (roles ``step``, ``static``).
-    p
-        The study's settings.
-
-    Returns
-    -------
-    step_cases, static_cases : list of dict
-        Cases for :func:`step_case` and :func:`static_case` (no neo-Hookean FEM above
-        ``p.neo_max`` tets).
+    """The explicit-step and static-solve cases of the blocks (roles ``step``, ``static``;
+    no neo-Hookean FEM above ``p.neo_max`` tets).
     """
     step_cases = [
         s.case("scaling", VERSION, kind="step", repeats=REPEATS, torsion=TORSION)

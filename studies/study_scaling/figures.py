@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 
 from ..registry import Figure, StudyContext
-from ..tables import save_figure
+from ..tables import pyplot
 from .cases import STATIC_METHODS
 
 
@@ -22,22 +22,8 @@ def _tet_axis(ax) -> None:
 def scaling_figure(
     ctx: StudyContext, sdf: pd.DataFrame, tdf: pd.DataFrame, slope: dict[str, float], caption: str
 ) -> Figure:
-    """CPU time per explicit step and per static solve against tet count (log-log).
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    sdf, tdf, slope
-        The frames and slopes (:mod:`.tables`).
-    caption
-        The figure's caption.
-
-    Returns
-    -------
-    Figure
-    """
-    import matplotlib.pyplot as plt
+    """CPU time per explicit step and per static solve against tet count (log-log)."""
+    plt = pyplot()
 
     n_step = sdf["tets"].to_numpy(float)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.4))
@@ -53,22 +39,20 @@ def scaling_figure(
     ref_x = np.array([n_step.min(), n_step.max()])
     ref_y = sdf["fem_ms_per_step"].iloc[-1] * ref_x / ref_x[-1]
     ax.loglog(ref_x, ref_y, "k:", lw=1, label="slope 1")
-    _tet_axis(ax)
-    ax.set_xlabel("tets")
-    ax.set_ylabel("CPU ms per explicit step")
-    ax.set_title("Explicit step (serial)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
     ax = axes[1]
     colours = {"spring": "tab:red", "P1": "tab:blue", "P1-NH": "tab:cyan"}
     for m, label in STATIC_METHODS.items():
         g = tdf[tdf["method"] == m]
         rate = slope["static_" + m.split("/")[0]]
         ax.loglog(g["tets"], g["cpu_s"], "s-", color=colours[m], label=f"{label}: slope {rate:.2f}")
-    _tet_axis(ax)
-    ax.set_xlabel("tets")
-    ax.set_ylabel("CPU s per static solve")
-    ax.set_title("Static solve (set-up included)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    return Figure(save_figure(fig, ctx.path("scaling.png")), caption)
+    for ax, ylabel, title in (
+        (axes[0], "CPU ms per explicit step", "Explicit step (serial)"),
+        (axes[1], "CPU s per static solve", "Static solve (set-up included)"),
+    ):
+        _tet_axis(ax)
+        ax.set_xlabel("tets")
+        ax.set_ylabel(ylabel)
+        ax.set_title(title)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    return ctx.figure(fig, "scaling.png", caption)

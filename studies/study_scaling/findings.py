@@ -17,18 +17,7 @@ def _amg_threshold() -> int:
 def report_findings(
     sdf: pd.DataFrame, tdf: pd.DataFrame, slope: dict[str, float]
 ) -> tuple[list[str], dict[str, float]]:
-    """The findings and the headline slopes (set-up slopes excepted: too noisy).
-
-    Parameters
-    ----------
-    sdf, tdf, slope
-        The frames and slopes (:mod:`.tables`).
-
-    Returns
-    -------
-    findings : list of str
-    headline : dict
-    """
+    """The findings and the headline slopes (set-up slopes excepted: too noisy)."""
     findings: list[str] = []
     headline: dict[str, float] = {}
     for key, value in slope.items():

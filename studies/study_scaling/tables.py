@@ -6,26 +6,13 @@ import pandas as pd
 
 from ..metrics import fitted_rate
 from ..registry import StudyContext, Table
-from ..tables import write_table
 from .cases import REPEATS, STATIC_METHODS
 
 
 def frames(
     steps: list[dict], static_cases: list[dict], static: list[dict]
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """The explicit-step frame (one row per mesh) and the static frame (per solve).
-
-    Parameters
-    ----------
-    steps
-        :func:`~.cases.step_case` results.
-    static_cases, static
-        The static cases and their :func:`~.cases.static_case` results.
-
-    Returns
-    -------
-    sdf, tdf : DataFrame
-    """
+    """The explicit-step frame (one row per mesh) and the static frame (one row per solve)."""
     sdf = pd.DataFrame(
         [
             {
@@ -60,17 +47,8 @@ def frames(
 
 
 def slopes(sdf: pd.DataFrame, tdf: pd.DataFrame) -> dict[str, float]:
-    """Fitted log-log slopes of cost against tet count per series.
-
-    Parameters
-    ----------
-    sdf, tdf
-        :func:`frames`.
-
-    Returns
-    -------
-    dict
-        ``step_spring``, ``step_fem``, ``setup_spring``, ``setup_fem`` and ``static_<method>``.
+    """Fitted log-log slopes of cost against tet count per series: ``step_spring``,
+    ``step_fem``, ``setup_spring``, ``setup_fem`` and ``static_<method>``.
     """
     n_step = sdf["tets"].to_numpy(float)
     slope = {
@@ -88,36 +66,25 @@ def slopes(sdf: pd.DataFrame, tdf: pd.DataFrame) -> dict[str, float]:
 def write_tables(
     ctx: StudyContext, sdf: pd.DataFrame, tdf: pd.DataFrame, slope: dict[str, float]
 ) -> list[Table]:
-    """Write the explicit-step, static-solve and slope tables.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    sdf, tdf
-        :func:`frames`.
-    slope
-        :func:`slopes`.
-
-    Returns
-    -------
-    list of Table
-    """
+    """Write the explicit-step, static-solve and slope tables."""
     fits = pd.DataFrame([{"series": k, "fitted slope": v} for k, v in slope.items()])
     return [
-        Table(
-            write_table(sdf, ctx.path("explicit_step")),
+        ctx.table(
+            sdf,
+            "explicit_step",
             f"Cost of one explicit step (serial kernels, forces + update through the solver loop; "
             f"CPU ms, median of {REPEATS} alternating repeats; wall ms beside) and of the set-up "
             f"(CPU s), spring model vs explicit P1 neo-Hookean FEM on the same mesh.",
         ),
-        Table(
-            write_table(tdf, ctx.path("static_solve")),
+        ctx.table(
+            tdf,
+            "static_solve",
             "One static solve from the scene (set-up, assembly, Newton or linear solve): CPU and "
             "wall seconds, Newton iterations and the linear solver used.",
         ),
-        Table(
-            write_table(fits, ctx.path("slopes")),
+        ctx.table(
+            fits,
+            "slopes",
             "Fitted log-log slopes of cost against tet count (1 = linear scaling).",
         ),
     ]

@@ -89,15 +89,6 @@ class Settings:
 def bundled_scenes(settings: Settings) -> list[StudyScene]:
     """The convergence study's bar (:func:`studies.study_convergence.bundled_scenes`): its
     levels 1, 2, 4 and the reference 6 are 10x1x1, 20x2x2, 40x4x4 and 60x6x6 hexahedra.
-
-    Parameters
-    ----------
-    settings
-        The settings.
-
-    Returns
-    -------
-    list of StudyScene
     """
     return convergence.bundled_scenes(convergence.Settings())
 
@@ -125,23 +116,7 @@ def explicit_fem_refusal(scene: Scene) -> str | None:
 
 
 def points(s: StudyScene, scene: Scene, levels: list[int], q: Settings) -> list[dict]:
-    """Every (method, level, setting) point of a scene.
-
-    Parameters
-    ----------
-    s
-        The scene.
-    scene
-        It built (level 1).
-    levels
-        The levels it runs.
-    q
-        The settings.
-
-    Returns
-    -------
-    list of dict
-    """
+    """Every (method, level, setting) point of a scene (``scene``: it built, level 1)."""
     fem = [m for m in FEM_STATIC if models.get(m).applies(scene) is None]
     explicit_fem = explicit_fem_refusal(scene) is None
     out = []
@@ -192,18 +167,9 @@ def _trajectory(scene: Scene, m: models.Model, u: np.ndarray, facts: dict) -> So
 
 
 def solver(solution: str, setting: dict):
-    """``solve(model, scene) -> Solution`` of a solution method (for :func:`models.run`).
-
-    Parameters
-    ----------
-    solution
-        ``static``, ``implicit`` or ``explicit``.
-    setting
-        Its settings (``tol``, ``dt_factor``, ``dt_safety``).
-
-    Returns
-    -------
-    callable
+    """``solve(model, scene) -> Solution`` of a solution method (``static``, ``implicit`` or
+    ``explicit``) with its ``setting`` (``tol``, ``dt_factor``, ``dt_safety``), for
+    :func:`models.run`.
     """
     from springfem.mechanics import explicit_static, implicit, stable_time_step
 

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 
 from ..registry import Figure, StudyContext
-from ..tables import save_figure
+from ..tables import pyplot
 
 #: Marker per model, colour per solution method (by model for the static FEM).
 MARKERS = {"spring-energy": "o", "spring-exact": "*", "P1": "s", "P1-NH": "s", "P2": "D",
@@ -29,30 +29,10 @@ def pareto_figure(
     ctx: StudyContext, df: pd.DataFrame, column: str, reference: str, front_text: str,
     label: str, suffix: str = "",
 ) -> Figure:  # fmt: skip
-    """Every solve's CPU time against its error (log-log) with the Pareto front.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    df
-        The points (:func:`~.tables.points_frame`).
-    column
-        The error column.
-    reference
-        The reference, for the axis label.
-    front_text
-        The findings' sentence about the front (ends the caption).
-    label
-        The scene's label.
-    suffix
-        File-name suffix (several scenes).
-
-    Returns
-    -------
-    Figure
+    """Every solve's CPU time against its error ``column`` (log-log) with the Pareto front;
+    the findings' sentence about the front, ``front_text``, ends the caption.
     """
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     good = df[(df["status"] == "ok") & (df[column] > 0)]
     fig, ax = plt.subplots(figsize=(8.5, 5.6))
@@ -79,4 +59,4 @@ def pareto_figure(
         f"CPU time against error of every solve of {label} (log-log; labels: refinement "
         f"factor of its mesh), with the Pareto front. {front_text}"
     )
-    return Figure(save_figure(fig, ctx.path(f"pareto{suffix}.png")), caption)
+    return ctx.figure(fig, f"pareto{suffix}.png", caption)

@@ -16,27 +16,10 @@ def report_findings(
 ) -> tuple[list[str], dict[str, float], str]:
     """The findings, the headline errors and the Pareto-front sentence of one scene.
 
-    Parameters
-    ----------
-    df
-        The points (:func:`~.tables.points_frame`).
-    steps
-        The step costs on the finest level (``None``: none).
-    how
-        The measure of the points.
-    finest
-        The finest level's label (``20x2x2``).
-    label
-        The scene's label.
-
-    Returns
-    -------
-    findings : list of str
-    headline : dict
-        Errors on the finest level (no timings, rounded to 4 decimals), ``<measure>_<model>
-        _<solution>_<level>``; point and failure counts.
-    front_text : str
-        The sentence about the Pareto front (also the figure's caption).
+    ``steps``: the step costs on the finest level (``None``: none); ``finest``: its label
+    (``20x2x2``). The headline holds the errors on the finest level (no timings, rounded to
+    4 decimals), ``<measure>_<model>_<solution>_<level>``, and point and failure counts; the
+    front's sentence is also the figure's caption.
     """
     err, key = how.column, how.key
     findings: list[str] = []

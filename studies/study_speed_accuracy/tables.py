@@ -82,19 +82,7 @@ class Measure:
 
 
 def measure(s: StudyScene, ref: dict) -> Measure:
-    """The measure of a scene's points (see the module docstring).
-
-    Parameters
-    ----------
-    s
-        The scene.
-    ref
-        The reference's result.
-
-    Returns
-    -------
-    Measure
-    """
+    """The measure of a scene's points (see the module docstring)."""
     hook = reference(s, None)
     if hook is not None:
         probe, component, value, source = hook
@@ -112,21 +100,6 @@ def points_frame(
 ) -> pd.DataFrame:
     """One row per point: method, level, setting, status, CPU and wall time, errors against
     the reference (and the probe over its closed form), steps, message, on the Pareto front.
-
-    Parameters
-    ----------
-    s
-        The scene.
-    cases, results
-        The points and their results (:func:`~.cases.point_work`).
-    ref
-        The reference's result.
-    how
-        The measure.
-
-    Returns
-    -------
-    DataFrame
     """
     u_ref = np.asarray(ref["u"], float)
     rows = []
@@ -162,20 +135,8 @@ def points_frame(
 
 
 def step_frame(s: StudyScene, factors: list[int], steps: list[dict]) -> pd.DataFrame:
-    """One row per level: the cost of one explicit step, spring model and explicit P1 FEM.
-
-    Parameters
-    ----------
-    s
-        The scene.
-    factors
-        The levels.
-    steps
-        Their results (:func:`~.cases.step_cost_work`).
-
-    Returns
-    -------
-    DataFrame
+    """One row per level: the cost of one explicit step, spring model and explicit P1 FEM
+    (``steps``: the levels' :func:`~.cases.step_cost_work` results).
     """
     a, b = method_name(SPRING, "explicit"), method_name(EXPLICIT_FEM, "explicit")
     return pd.DataFrame(
@@ -205,28 +166,8 @@ def write_tables(
     how: Measure,
     suffix: str = "",
 ) -> list[Table]:
-    """Write the points and step-cost tables (and the failures, if any).
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    s
-        The scene.
-    df, sdf
-        :func:`points_frame` and :func:`step_frame` (``None``: no step costs).
-    ref
-        The reference's result.
-    ref_text
-        The reference (method and level).
-    how
-        The measure.
-    suffix
-        File-name suffix (several scenes).
-
-    Returns
-    -------
-    list of Table
+    """Write the points and step-cost tables (``sdf`` ``None``: no step costs) and the
+    failures, if any; ``ref_text`` names the reference (method and level).
     """
     show = df.drop(columns=["message"]).copy()
     if how.probe is not None:
@@ -238,8 +179,9 @@ def write_tables(
         ratio = ref["probes"][how.probe][component] / value
         context = f"; its {how.probe} is {ratio:.4f} × {source}"
     tables = [
-        Table(
-            write_table(show, ctx.path(f"points{suffix}")),
+        ctx.table(
+            show,
+            f"points{suffix}",
             f"{s.label}: every (method, level, setting) point: CPU time (`seconds`) and wall "
             "time from the scene to the answer (model build and time-step estimate included; "
             "the solves are serial, so CPU time is the wall time of an idle machine, while a "
@@ -250,8 +192,9 @@ def write_tables(
     ]
     if sdf is not None:
         tables.append(
-            Table(
-                write_table(sdf, ctx.path(f"step_cost{suffix}")),
+            ctx.table(
+                sdf,
+                f"step_cost{suffix}",
                 "Cost of one explicit step (forces + update through the same solver loop), "
                 "spring model vs explicit P1 neo-Hookean FEM on the same mesh: medians of "
                 f"{STEP_REPEATS} alternating repeats of {STEP_COUNT}-500 steps; wall and CPU "

@@ -17,7 +17,7 @@ from springfem.errors import SolverError
 from springfem.scene import Scene
 
 from .. import models
-from ..analytic import reference_for
+from ..analytic import extent, reference_for
 from ..scenes import StudyScene, case_scene
 from .critical_step import measure_critical_step
 
@@ -89,18 +89,7 @@ class Settings:
 
 def bar(nx: int, ny: int, roles: tuple[str, ...]) -> StudyScene:
     """The bundled cantilever (0.1 × 0.01 × 0.01 m, E = 10 kPa, end traction 0.1 Pa) on
-    ``nx × ny × ny`` hexahedra, energy torsion, serving ``roles``.
-
-    Parameters
-    ----------
-    nx, ny
-        Hexahedra along the bar and across it (six tets each).
-    roles
-        The series it serves.
-
-    Returns
-    -------
-    StudyScene
+    ``nx × ny × ny`` hexahedra (six tets each), energy torsion, serving the series ``roles``.
 
     Examples
     --------
@@ -114,17 +103,7 @@ def bar(nx: int, ny: int, roles: tuple[str, ...]) -> StudyScene:
 
 
 def bundled_scenes(q: Settings) -> list[StudyScene]:
-    """The bundled bars of each series (one bar per mesh, serving every series on it).
-
-    Parameters
-    ----------
-    q
-        The settings.
-
-    Returns
-    -------
-    list of StudyScene
-    """
+    """The bundled bars of each series (one bar per mesh, serving every series on it)."""
     roles: dict[tuple[int, int], list[str]] = {}
     for mesh in q.dt_meshes:
         roles.setdefault(tuple(mesh), []).append("dt")
@@ -135,21 +114,11 @@ def bundled_scenes(q: Settings) -> list[StudyScene]:
 
 
 def series_methods(law: str) -> dict[str, tuple[str, ...]]:
-    """The methods of each series for a material law.
+    """The model names of each series (``dt``, ``load``, ``map``) for a material law.
 
     The explicit FEM has isotropic laws only; on an anisotropic or tissue scene the explicit
     series run the spring variants alone and the static series solve FEM with the scene's
     own law (``P1``).
-
-    Parameters
-    ----------
-    law
-        The scene's material law.
-
-    Returns
-    -------
-    dict
-        ``dt``, ``load``, ``map`` -> model names.
 
     Examples
     --------
@@ -164,19 +133,8 @@ def series_methods(law: str) -> dict[str, tuple[str, ...]]:
 
 
 def grids(scenes: list[StudyScene], q: Settings) -> dict[str, list[dict]]:
-    """The cases of the four series on the scenes that serve them.
-
-    Parameters
-    ----------
-    scenes
-        The study's scenes.
-    q
-        The settings.
-
-    Returns
-    -------
-    dict
-        ``dt``, ``load``, ``lock``, ``map`` -> cases.
+    """The cases of the four series (``dt``, ``load``, ``lock``, ``map``) on the scenes that
+    serve them.
     """
     out: dict[str, list[dict]] = {"dt": [], "load": [], "lock": [], "map": []}
     for s in scenes:
@@ -214,12 +172,6 @@ def _inverted(scene: Scene, u: np.ndarray) -> int:
     return int((scene.mesh.volumes(scene.mesh.points + u.reshape(-1, 3)) <= 0).sum())
 
 
-def body_size(scene: Scene) -> float:
-    """The largest extent of the body's bounding box (the scene's length unit)."""
-    lo, hi = scene.mesh.bounding_box()
-    return float(np.max(np.asarray(hi) - np.asarray(lo)))
-
-
 # ----------------------------------------------------------------------- critical step
 
 
@@ -251,7 +203,7 @@ def load_case(case: dict) -> dict:
     if not got.ok:
         return {"status": "diverged", "message": got.message[:160], "u/size": float("nan")}
     u = got.u
-    ratio = float(np.linalg.norm(u, axis=1).max() / body_size(scene))
+    ratio = float(np.linalg.norm(u, axis=1).max() / max(extent(scene)))
     inv = _inverted(scene, u)
     if inv:
         return {"status": "inverted", "u/size": ratio, "message": f"{inv} inverted elements"}

@@ -21,22 +21,9 @@ def measure_critical_step(system, steps: int, bisections: int) -> tuple[float, f
     """Bisect the largest stable explicit step of ``system`` (loads off) in ``[0.5, 2]`` dt_crit.
 
     A step is stable when ``steps`` central-difference steps from a tiny random velocity do
-    not blow up (no :class:`SolverError`).
-
-    Parameters
-    ----------
-    system
-        A :class:`~springfem.mechanics.MechanicalSystem`.
-    steps
-        Steps per trial run.
-    bisections
-        Bisections of the bracket.
-
-    Returns
-    -------
-    dt_pred, omega_max, ratio
-        The predicted step ``2 / omega_max``, ``omega_max``, and the measured step over the
-        predicted one (``nan``: unstable at 0.5; ``2.0``: stable at the top of the bracket).
+    not blow up (no :class:`SolverError`). Returns the predicted step ``2 / omega_max``,
+    ``omega_max``, and the measured step over the predicted one after ``bisections``
+    bisections (``nan``: unstable at 0.5; ``2.0``: stable at the top of the bracket).
     """
     from springfem.mechanics import explicit, stable_time_step
 

@@ -6,27 +6,13 @@ import numpy as np
 import pandas as pd
 
 from ..registry import Figure, StudyContext
-from ..tables import save_figure
+from ..tables import pyplot
 from .cases import Settings
 
 
 def locking_figure(ctx: StudyContext, dk: pd.DataFrame, q: Settings) -> Figure:
-    """Tip deflection over Timoshenko and volume change against Poisson's ratio.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    dk
-        The locking frame.
-    q
-        The study's settings.
-
-    Returns
-    -------
-    Figure
-    """
-    import matplotlib.pyplot as plt
+    """Tip deflection over Timoshenko and volume change against Poisson's ratio."""
+    plt = pyplot()
 
     nus = list(q.nus)
     fig, ax = plt.subplots(1, 2, figsize=(10, 4))
@@ -45,8 +31,9 @@ def locking_figure(ctx: StudyContext, dk: pd.DataFrame, q: Settings) -> Figure:
         a.legend()
     hi = dk[dk.nu == max(nus)].set_index("method")["tip_ratio"]
     lo = dk[dk.nu == min(nus)].set_index("method")["tip_ratio"]
-    return Figure(
-        save_figure(fig, ctx.path("locking.png")),
+    return ctx.figure(
+        fig,
+        "locking.png",
         f"Tip deflection over Timoshenko against ν: from ν = {min(nus)} to "
         f"{max(nus)}, P1 goes {lo['P1']:.2f} → {hi['P1']:.2f}, "
         f"P2 {lo['P2']:.2f} → {hi['P2']:.2f}, spring "
@@ -57,24 +44,8 @@ def locking_figure(ctx: StudyContext, dk: pd.DataFrame, q: Settings) -> Figure:
 def failure_map_figure(
     ctx: StudyContext, dm: pd.DataFrame, q: Settings, methods: tuple[str, ...]
 ) -> Figure:
-    """The failure map per method: ok, inverted or blew up on the load × dt grid.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    dm
-        The failure-map frame.
-    q
-        The study's settings.
-    methods
-        The methods shown, one panel each.
-
-    Returns
-    -------
-    Figure
-    """
-    import matplotlib.pyplot as plt
+    """The failure map, one panel per method: ok, inverted or blew up on the load × dt grid."""
+    plt = pyplot()
     from matplotlib.colors import ListedColormap
 
     lf, df_ = list(q.map_loads), list(q.map_dt_factors)
@@ -101,8 +72,9 @@ def failure_map_figure(
                 a.text(j, i, list(codes)[grid[i, j]], ha="center", va="center", fontsize=7)
     axes[0].set_ylabel("load factor")
     ok_share = dm.groupby("method")["status"].apply(lambda s: float((s == "ok").mean()))
-    return Figure(
-        save_figure(fig, ctx.path("failure_map.png")),
+    return ctx.figure(
+        fig,
+        "failure_map.png",
         "Failure map (green ok, orange inverted elements, red blew up) of "
         "explicit damped runs; share of the grid that runs ok: "
         + ", ".join(f"{m} {v:.0%}" for m, v in ok_share.items())

@@ -8,22 +8,9 @@ from .cases import LOCK_METHODS, UNPHYSICAL, Settings
 
 
 def report_findings(f: dict[str, pd.DataFrame], q: Settings) -> tuple[list[str], dict[str, float]]:
-    """One finding per series that ran, and the headline.
-
-    Parameters
-    ----------
-    f
-        The series' frames (:func:`~.tables.frames`).
-    q
-        The study's settings.
-
-    Returns
-    -------
-    findings : list of str
-    headline : dict
-        Median measured/predicted step per method (over the scenes), the largest load
-        solved per method, the tip ratio at the largest ν per method, the share of the
-        failure map that runs ok per method.
+    """One finding per series that ran, and the headline: the median measured/predicted step
+    per method (over the scenes), the largest load solved per method, the tip ratio at the
+    largest ν per method, the share of the failure map that runs ok per method.
     """
     findings: list[str] = []
     headline: dict[str, float] = {}

@@ -5,19 +5,14 @@ from __future__ import annotations
 import pandas as pd
 
 from ..registry import StudyContext, Table
-from ..tables import write_table
+from ..scenes import case_scene
 
-#: The case keys each series' frame keeps, with their column names.
+#: The case keys each series' frame keeps beside the scene and method, with their column names.
 KEYS = {
-    "dt": {"scene": "scene", "method": "method"},
-    "load": {"scene": "scene", "method": "method", "factor": "load_factor"},
-    "lock": {"scene": "scene", "method": "method", "nu": "nu"},
-    "map": {
-        "scene": "scene",
-        "method": "method",
-        "factor": "load_factor",
-        "dt_factor": "dt_factor",
-    },
+    "dt": {},
+    "load": {"factor": "load_factor"},
+    "lock": {"nu": "nu"},
+    "map": {"factor": "load_factor", "dt_factor": "dt_factor"},
 }
 #: The result columns each series' table shows.
 COLUMNS = {
@@ -29,53 +24,28 @@ COLUMNS = {
 
 
 def frames(cases: dict[str, list[dict]], results: dict[str, list[dict]]) -> dict[str, pd.DataFrame]:
-    """The four series as frames.
-
-    Parameters
-    ----------
-    cases, results
-        Series name -> its cases and their results (see :func:`~.cases.grids`).
-
-    Returns
-    -------
-    dict
-        ``dt`` (scene, method, tets, predicted and measured step, ratio), ``load`` (load
-        factor, status, largest |u| over the body's size, message), ``lock`` (ν, tip ratio,
-        volume change, inverted) and ``map`` (load factor, dt factor, status).
+    """The four series as frames: ``dt`` (scene, method, tets, predicted and measured step,
+    ratio), ``load`` (load factor, status, largest |u| over the body's size, message),
+    ``lock`` (ν, tip ratio, volume change, inverted) and ``map`` (load factor, dt factor,
+    status).
     """
     out = {}
     for k, keys in KEYS.items():
         rows = []
         for c, r in zip(cases[k], results[k], strict=True):
-            row = {name: c[key] for key, name in keys.items()}
+            row = {"scene": c["scene"], "method": c["method"]}
+            row.update({name: c[key] for key, name in keys.items()})
             if k == "dt":
-                row["tets"] = _tets(c)
+                row["tets"] = case_scene(c).mesh.n_tets
             rows.append({**row, **r})
         out[k] = pd.DataFrame(rows, columns=None if rows else COLUMNS[k])
         out[k] = out[k].reindex(columns=COLUMNS[k])
     return out
 
 
-def _tets(case: dict) -> int:
-    from ..scenes import case_scene
-
-    return case_scene(case).mesh.n_tets
-
-
 def write_tables(ctx: StudyContext, f: dict[str, pd.DataFrame]) -> list[Table]:
-    """Write the tables of the series that ran.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    f
-        :func:`frames`.
-
-    Returns
-    -------
-    list of Table
-        Critical step, largest load, locking (if run), failure map.
+    """Write the tables of the series that ran: critical step, largest load, locking, failure
+    map.
     """
     captions = {
         "dt": (
@@ -100,8 +70,4 @@ def write_tables(ctx: StudyContext, f: dict[str, pd.DataFrame]) -> list[Table]:
             "with inverted elements.",
         ),
     }
-    return [
-        Table(write_table(f[k], ctx.path(name)), caption)
-        for k, (name, caption) in captions.items()
-        if len(f[k])
-    ]
+    return [ctx.table(f[k], name, caption) for k, (name, caption) in captions.items() if len(f[k])]

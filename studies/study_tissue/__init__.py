@@ -27,9 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..registry import StudyContext, StudyOutput, Table, study
+from ..registry import StudyContext, StudyOutput, study
 from ..scenes import StudyScene
-from ..tables import write_table
 from .cases import (
     FEM_MODELS,
     VARIANTS,
@@ -104,13 +103,13 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
     for _, r in rich[np.isfinite(rich.extrapolated)].iterrows():
         headline[f"apex_{r.surface}_problem_{r.problem.split()[0]}_extrapolated"] = r.extrapolated
     apex = [
-        Table(write_table(cdf, ctx.path("apex_convergence")), "Apex z (mm) of the P2/P1 "
-              "mixed FEM per mesh: gmsh size, effective h (the regular-tet edge of the mean "
-              "tet volume), DOFs, wall time (s)."),
-        Table(write_table(rich, ctx.path("apex_richardson")), "Richardson extrapolation "
-              "from the three finest meshes (observed order; the coarser triple's order "
-              "checks the asymptotic range) beside the published problem-2 apex z "
-              "(FEniCS-pulse, finsberg/pulse PR 98: -26.53 / -28.18 mm)."),
+        ctx.table(cdf, "apex_convergence", "Apex z (mm) of the P2/P1 mixed FEM per mesh: "
+                  "gmsh size, effective h (the regular-tet edge of the mean tet volume), DOFs, "
+                  "wall time (s)."),
+        ctx.table(rich, "apex_richardson", "Richardson extrapolation from the three finest "
+                  "meshes (observed order; the coarser triple's order checks the asymptotic "
+                  "range) beside the published problem-2 apex z (FEniCS-pulse, finsberg/pulse "
+                  "PR 98: -26.53 / -28.18 mm)."),
     ]  # fmt: skip
     return StudyOutput(
         name=ctx.name,

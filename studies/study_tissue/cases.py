@@ -2,7 +2,7 @@
 
 Examples
 --------
->>> s = stretch_scene("across", 1.2, 1)
+>>> s = cube("across", 1.2, 1, "guccione").build()
 >>> s.frames[0, 0].tolist(), s.boundaries[-1].value.tolist()
 ([0.0, 1.0, 0.0], [0.19999999999999996, 0.0, 0.0])
 """
@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-from springfem.scene import Scene, scene_from_dict
+from springfem.scene import Scene
 
 from .. import models
 from ..scenes import StudyScene, case_scene
@@ -94,41 +94,10 @@ class Settings:
                    conv_sizes=(6.0, 5.0), conv_steps=3)  # fmt: skip
 
 
-def stretch_scene(direction: str, stretch: float, n: int, law: str = "guccione") -> Scene:
-    """The scene of :func:`stretch_data` (see there).
-
-    Parameters
-    ----------
-    direction, stretch, n, law
-        See :func:`stretch_data`.
-
-    Returns
-    -------
-    Scene
-    """
-    return scene_from_dict(stretch_data(direction, stretch, n, law))
-
-
 def stretch_data(direction: str, stretch: float, n: int, law: str = "guccione") -> dict:
-    """A unit cube (mm) of a :data:`STRETCH_LAWS` material pulled to ``stretch`` along x, the
-    fibre along x (``along``) or y (``across``), the lateral faces free (rigid motions
-    removed only).
-
-    Parameters
-    ----------
-    direction
-        ``along`` or ``across``.
-    stretch
-        The prescribed stretch of the x edge.
-    n
-        Divisions per side.
-    law
-        ``guccione`` (:data:`GUCCIONE`) or ``holzapfel-ogden`` (:data:`HOLZAPFEL_OGDEN`).
-
-    Returns
-    -------
-    dict
-        The scene table.
+    """The table of a unit cube (mm) of a :data:`STRETCH_LAWS` material (``law``: ``guccione``
+    or ``holzapfel-ogden``) pulled to ``stretch`` along x on ``n³`` boxes, the fibre along x
+    (``along``) or y (``across``), the lateral faces free (rigid motions removed only).
     """
     fiber = [1.0, 0.0, 0.0] if direction == "along" else [0.0, 1.0, 0.0]
     sheet = [0.0, 1.0, 0.0] if direction == "along" else [1.0, 0.0, 0.0]
@@ -161,17 +130,8 @@ def _solve(scene: Scene, model: str, partial: bool = False):
 
 
 def stretch_case(case: dict) -> dict:
-    """Nominal stress ``P_xx`` (kPa: the x reaction on the unit ``x_max`` face).
-
-    Parameters
-    ----------
-    case
-        The cube's case (:func:`scenes`): ``direction``, ``stretch``, ``law``, ``model``.
-
-    Returns
-    -------
-    dict
-        ``stress`` (NaN on failure), ``wall_time`` and ``error`` (message or "").
+    """Nominal stress ``P_xx`` (kPa: the x reaction on the unit ``x_max`` face) of a cube's
+    case: ``stress`` (NaN on failure), ``wall_time`` and ``error`` (message or "").
     """
     sol, err = _solve(case_scene(case), case["model"])
     if sol is None:
@@ -181,17 +141,8 @@ def stretch_case(case: dict) -> dict:
 
 
 def beam_case(case: dict) -> dict:
-    """The Land beam's deformed tip z (mm) for one model (the bundled ``land-beam``).
-
-    Parameters
-    ----------
-    case
-        The beam's case: ``model`` (a registered model).
-
-    Returns
-    -------
-    dict
-        ``tip_z``, ``wall_time`` and ``error``.
+    """The Land beam's deformed tip z (mm) for one model (the bundled ``land-beam``):
+    ``tip_z``, ``wall_time`` and ``error``.
     """
     sol, err = _solve(case_scene(case), case["model"])
     if sol is None:
@@ -203,18 +154,10 @@ def beam_case(case: dict) -> dict:
 def ventricle_case(case: dict) -> dict:
     """A Land ventricle's apex z and cavity volumes for one model.
 
-    Parameters
-    ----------
-    case
-        A ventricle's case: ``model`` (a registered model).
-
-    Returns
-    -------
-    dict
-        ``endo_apex_z``, ``epi_apex_z`` (the probes at the rest apexes (0, 0, -17) and
-        (0, 0, -20), mesh vertices of the gmsh ellipsoid), ``cavity`` (initial/final, FEM:
-        the pressure-volume rows), ``wall_time``, ``dofs``, ``tets``, ``load_factor`` (below
-        1: the values at the load a failed solve reached, with its ``error``) and ``error``.
+    Returns ``endo_apex_z``, ``epi_apex_z`` (the probes at the rest apexes (0, 0, -17) and
+    (0, 0, -20), mesh vertices of the gmsh ellipsoid), ``cavity`` (initial/final, FEM: the
+    pressure-volume rows), ``wall_time``, ``dofs``, ``tets``, ``load_factor`` (below 1: the
+    values at the load a failed solve reached, with its ``error``) and ``error``.
     """
 
     sol, err = _solve(case_scene(case), case["model"], partial=True)
@@ -257,15 +200,6 @@ def ventricle(name: str, size: float, steps: int, role: str) -> StudyScene:
 def scenes(settings: Settings) -> list[StudyScene]:
     """The study's scenes: the stress-stretch cubes (``stretch``), the Land beam (``beam``),
     the ventricle (``ventricle``) and the apex mesh-convergence ventricles (``apex``).
-
-    Parameters
-    ----------
-    settings
-        The study's settings.
-
-    Returns
-    -------
-    list of StudyScene
     """
     cubes = [
         cube(d, s, settings.n, law)

@@ -36,6 +36,8 @@ import pandas as pd
 
 from springfem.ellipsoid import wall_volume
 
+from ..tables import pyplot
+
 #: Published apex z (mm) per bundled scene: FEniCS-pulse's problem 2 (pulse PR 98).
 PUBLISHED = {"land-ventricle": {"endo": -26.5328, "epi": -28.1790}}
 #: Land et al. 2015: typical relative difference between the groups' fine solutions.
@@ -45,18 +47,9 @@ PROBLEM = {"land-ventricle": "2", "land-ventricle-fibres": "3 (passive)"}
 
 
 def observed_order(h: np.ndarray, f: np.ndarray) -> tuple[float, float, str]:
-    """Observed order and Richardson value from three (h, f) pairs, ``h`` decreasing.
-
-    Parameters
-    ----------
-    h, f
-        Three element sizes (any order) and the values on them.
-
-    Returns
-    -------
-    p, f0, note
-        ``f = f0 + C h^p``; NaN with the reason in ``note`` when the differences change
-        sign (oscillating) or no order in (0.05, 12) fits (``note`` is empty otherwise).
+    """Observed order ``p`` and Richardson value ``f0`` of ``f = f0 + C h^p`` from three
+    (h, f) pairs (any order), and a ``note``: NaN with the reason in ``note`` when the
+    differences change sign (oscillating) or no order in (0.05, 12) fits (else ``""``).
     """
     from scipy.optimize import brentq
 
@@ -134,14 +127,7 @@ def _asymptotic(p: float, p_prev: float, note: str) -> str:
 
 def convergence_figure(ctx, df: pd.DataFrame, rich: pd.DataFrame):
     """Apex z against h per problem, the Richardson value at h = 0 and the published band."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ..registry import Figure
-    from ..tables import save_figure
-
+    plt = pyplot()
     scenes = list(dict.fromkeys(df.scene))
     fig, axes = plt.subplots(1, len(scenes), figsize=(5.2 * len(scenes), 4.0), squeeze=False,
                              layout="constrained")  # fmt: skip
@@ -172,15 +158,14 @@ def convergence_figure(ctx, df: pd.DataFrame, rich: pd.DataFrame):
         ax.set_title(f"Land problem {PROBLEM.get(scene, scene)} (P2/P1 mixed)", fontsize=9)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=6, loc="center", framealpha=0.9)
-    path = save_figure(fig, ctx.path("apex_convergence.png"))
-    plt.close(fig)
-    return Figure(path, "Deformed apex z of the endocardium (blue) and epicardium (red) "
-                  "against the element size; stars at h = 0: Richardson extrapolation from "
-                  "the three finest meshes (hollow: the order is not shown to be in the "
-                  "asymptotic range); dashed: the least-squares f0 + C h^2 fit; dotted lines "
-                  "and shaded bands: the published problem-2 values (FEniCS-pulse) +/- 0.5 % "
-                  "(Land et al. 2015's typical spread between codes). Problem 3 is the "
-                  "passive inflation (no published value).")  # fmt: skip
+    return ctx.figure(fig, "apex_convergence.png", "Deformed apex z of the endocardium (blue) "
+                      "and epicardium (red) against the element size; stars at h = 0: "
+                      "Richardson extrapolation from the three finest meshes (hollow: the order "
+                      "is not shown to be in the asymptotic range); dashed: the least-squares "
+                      "f0 + C h^2 fit; dotted lines and shaded bands: the published problem-2 "
+                      "values (FEniCS-pulse) +/- 0.5 % (Land et al. 2015's typical spread "
+                      "between codes). Problem 3 is the passive inflation (no published "
+                      "value).")  # fmt: skip
 
 
 def convergence_findings(rich: pd.DataFrame) -> list[str]:

@@ -8,16 +8,12 @@ import numpy as np
 import pandas as pd
 
 from ..registry import Figure, StudyContext, Table
-from ..tables import save_figure, write_table
+from ..tables import pyplot
 
-#: Land et al. 2015 problem 1: the published range of the beam's deformed tip z (mm).
+#: Land et al. 2015 problem 1: the published range of the beam's deformed tip z (mm). Rows
+#: name their model as :mod:`studies.models` does (``fem``: the P2 reference; ``P1``: the
+#: same-mesh P1).
 BEAM_RANGE = (4.14, 4.20)
-
-
-def _label(case: dict) -> str:
-    """The row's model: a name of :mod:`studies.models` (``fem``: the P2 reference; ``P1``:
-    the same-mesh P1)."""
-    return case["model"]
 
 
 def _rel(value: float, ref: float) -> float:
@@ -27,7 +23,7 @@ def _rel(value: float, ref: float) -> float:
 def stretch_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
     """One row per (law, direction, stretch, model): stress and its error against the FEM."""
     rows = [{"law": c.get("law", "guccione"), "direction": c["direction"],
-             "stretch": c["stretch"], "model": _label(c), "stress": r["stress"],
+             "stretch": c["stretch"], "model": c["model"], "stress": r["stress"],
              "error": r["error"]}
             for c, r in zip(cases, results, strict=True)]  # fmt: skip
     df = pd.DataFrame(rows)
@@ -42,7 +38,7 @@ def stretch_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
 
 def beam_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
     """One row per model: the beam's deformed tip z, its error against the FEM, time."""
-    rows = [{"model": _label(c), "tip_z": r["tip_z"], "wall_time": r["wall_time"],
+    rows = [{"model": c["model"], "tip_z": r["tip_z"], "wall_time": r["wall_time"],
              "error": r["error"]} for c, r in zip(cases, results, strict=True)]  # fmt: skip
     df = pd.DataFrame(rows)
     df["tip_z"] = pd.to_numeric(df["tip_z"])
@@ -65,7 +61,7 @@ def ventricle_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
     rows = []
     for c, r in zip(cases, results, strict=True):
         cav = r.get("cavity") or {}
-        rows.append({"model": _label(c), "endo_apex_z": r["endo_apex_z"],
+        rows.append({"model": c["model"], "endo_apex_z": r["endo_apex_z"],
                      "epi_apex_z": r["epi_apex_z"], "cavity_initial": cav.get("initial"),
                      "cavity_final": cav.get("final"), "wall_time": r["wall_time"],
                      "load_factor": r.get("load_factor", 1.0), "error": r["error"]})  # fmt: skip
@@ -104,16 +100,13 @@ def tables(ctx: StudyContext, sdf, bdf, vdf, settings) -> list[Table]:
          "rel_error_p1 vs the same-mesh P1 FEM, cavity_rel_p1 of the final cavity vs P1's "
          "(none for a partial row: its values are at the load_factor it reached)."),
     ):  # fmt: skip
-        out.append(Table(write_table(df, ctx.path(stem)), caption))
+        out.append(ctx.table(df, stem, caption))
     return out
 
 
 def pv_figure(ctx: StudyContext, sdf, lv_cases, lv_results, settings) -> Figure:
     """Stress-stretch curves (left) and the ventricle's pressure-volume curve (right)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
     for ax, law in zip(axes[:2], ("guccione", "holzapfel-ogden"), strict=True):
@@ -133,24 +126,23 @@ def pv_figure(ctx: StudyContext, sdf, lv_cases, lv_results, settings) -> Figure:
         if rows:
             pv = np.asarray(rows, dtype=float)
             p_end = pv[-1, 1]
-            b.plot(pv[:, 2] / 1000.0, pv[:, 1], "o-", ms=3, label=_label(c))
+            b.plot(pv[:, 2] / 1000.0, pv[:, 1], "o-", ms=3, label=c["model"])
     for c, r in zip(lv_cases, lv_results, strict=True):
         cav = r.get("cavity") or {}
         if c["model"].startswith("spring") and cav.get("final") and math.isfinite(p_end):
             lf = r.get("load_factor", 1.0)
             b.plot(cav["final"] / 1000.0, p_end * lf, "s", ms=6,
-                   label=_label(c) + ("" if lf >= 1 else f" (stopped at {lf:.2f})"))  # fmt: skip
+                   label=c["model"] + ("" if lf >= 1 else f" (stopped at {lf:.2f})"))  # fmt: skip
     b.set_xlabel("cavity volume (ml)")
     b.set_ylabel("endocardial pressure (kPa)")
     b.legend(fontsize=7)
     b.grid(True, alpha=0.3)
-    path = save_figure(fig, ctx.path("tissue.png"))
-    plt.close(fig)
-    return Figure(path, "Left and middle: nominal stress against stretch along and across the "
-                  "fibre (log scale), Guccione and Holzapfel-Ogden, FEM solid, spring variants "
-                  "dashed. Right: the Land ventricle's pressure-volume curve over the FEM's "
-                  "load steps (P2 reference and same-mesh P1); squares: the spring variants' "
-                  "final cavity, at the load factor each reached.")  # fmt: skip
+    return ctx.figure(fig, "tissue.png", "Left and middle: nominal stress against stretch "
+                      "along and across the fibre (log scale), Guccione and Holzapfel-Ogden, "
+                      "FEM solid, spring variants dashed. Right: the Land ventricle's "
+                      "pressure-volume curve over the FEM's load steps (P2 reference and "
+                      "same-mesh P1); squares: the spring variants' final cavity, at the load "
+                      "factor each reached.")  # fmt: skip
 
 
 def findings(sdf, bdf, vdf) -> tuple[list[str], dict[str, float]]:

@@ -49,24 +49,13 @@ from __future__ import annotations
 from ..analytic import volume_change
 from ..registry import StudyContext, StudyOutput, study
 from ..scenes import StudyScene, require
-from .cases import DYNAMIC, K_MAX, K_MIN, Settings, bundled_scenes, grids
+from .cases import Settings, bundled_scenes, grids
 from .figures import load_figure, time_figure
 from .findings import report_findings
 from .tables import Runs, final_table, static_frame, static_table
-from .work import WORK, drift_measures, dynamic_case, static_case
+from .work import WORK
 
-__all__ = [
-    "DYNAMIC",
-    "K_MAX",
-    "K_MIN",
-    "Settings",
-    "bundled_scenes",
-    "drift_measures",
-    "dynamic_case",
-    "grids",
-    "run",
-    "static_case",
-]
+__all__ = ["Settings", "bundled_scenes", "run"]
 
 
 @study("volume_drift", Settings, bundled_scenes)
@@ -99,11 +88,10 @@ def run(ctx: StudyContext, scenes: list[StudyScene], s: Settings) -> StudyOutput
         figures.append(time_figure(ctx, runs))
     if cases["ramp"]:
         figures.append(load_figure(ctx, runs))
+    names = ", ".join(sc.label for sc in scenes)
     return StudyOutput(
         name=ctx.name,
-        title="Volume drift: volume springs, LMS rules and FEM ("
-        + ", ".join(sc.label for sc in scenes)
-        + ")",
+        title=f"Volume drift: volume springs, LMS rules and FEM ({names})",
         findings=findings,
         tables=[final_table(ctx, runs), static_table(ctx, runs)],
         figures=figures,

@@ -17,6 +17,7 @@ from springfem.scene import Scene
 from springmodel.options import LMSOptions
 
 from .. import models
+from ..analytic import extent
 from ..scenes import StudyScene
 
 STUDY, VERSION = "volume_drift", 2
@@ -120,15 +121,6 @@ BUNDLED_TIME = {
 def bundled_scenes(s: Settings) -> list[StudyScene]:
     """The drift cube compressed and pulled (every series), and the sag (static, step).
 
-    Parameters
-    ----------
-    s
-        The settings.
-
-    Returns
-    -------
-    list of StudyScene
-
     Examples
     --------
     >>> [x.label for x in bundled_scenes(Settings.full())]
@@ -153,35 +145,18 @@ def time_scale(s: StudyScene) -> TimeScale:
     return TimeScale() if s.user else BUNDLED_TIME.get(str(s.table.get("name")), TimeScale())
 
 
-def body_size(scene: Scene) -> float:
-    """The largest extent of the body's bounding box."""
-    lo, hi = scene.mesh.bounding_box()
-    return float(np.max(np.asarray(hi) - np.asarray(lo)))
-
-
 def quarter_wave_period(scene: Scene, rule: str = "p-wave") -> float:
-    """``4 l / c`` of a rod as long as the body's largest extent ``l``.
-
-    Parameters
-    ----------
-    scene
-        The scene.
-    rule
-        ``p-wave``: ``c`` from the stiffest longitudinal modulus (diagonal) of the
-        material's small-strain matrix; ``rod``: the bar velocity ``sqrt(E / rho)``.
-
-    Returns
-    -------
-    float
-        Seconds.
+    """``4 l / c`` (seconds) of a rod as long as the body's largest extent ``l``; ``rule``
+    ``p-wave``: ``c`` from the stiffest longitudinal modulus (diagonal) of the material's
+    small-strain matrix, ``rod``: the bar velocity ``sqrt(E / rho)``.
     """
     mat = scene.material
     if rule == "rod":
-        return 4.0 * body_size(scene) / np.sqrt(mat.E / mat.density)
+        return 4.0 * max(extent(scene)) / np.sqrt(mat.E / mat.density)
     from springfem.materials import material_matrix
 
     c_max = float(np.max(np.diag(material_matrix(mat))[:3]))
-    return 4.0 * body_size(scene) / np.sqrt(c_max / mat.density)
+    return 4.0 * max(extent(scene)) / np.sqrt(c_max / mat.density)
 
 
 def fem_models(scene: Scene) -> tuple[str, ...]:
@@ -197,18 +172,6 @@ def grids(scenes: list[StudyScene], s: Settings) -> dict[str, list[dict]]:
     full load (role ``static``), and the P1 FEM at the other load factors (role ``load``).
     ``step``: every spring variant after a suddenly applied load. ``ramp``: every spring
     variant along a slow load ramp.
-
-    Parameters
-    ----------
-    scenes
-        The study's scenes.
-    s
-        The settings.
-
-    Returns
-    -------
-    dict
-        ``static``, ``step``, ``ramp`` -> cases.
     """
     out: dict[str, list[dict]] = {"static": [], "step": [], "ramp": []}
     for sc in scenes:

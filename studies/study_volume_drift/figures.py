@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..registry import Figure, StudyContext
-from ..tables import save_figure
+from ..tables import pyplot
 from .cases import COLORS, DYNAMIC
 from .tables import MEASURE_WORDS, Runs, compare_words
 
@@ -23,23 +23,8 @@ def _reference_lines(ax, runs: Runs, scene: str) -> None:
 
 
 def time_figure(ctx: StudyContext, runs: Runs) -> Figure:
-    """Drift against time after a suddenly applied load, one column per scene.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    runs
-        The study's runs.
-
-    Returns
-    -------
-    Figure
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    """Drift against time after a suddenly applied load, one column per scene."""
+    plt = pyplot()
 
     panels = [s.label for s in runs.scenes if "step" in runs.kinds(s.label)]
     fig, axes = plt.subplots(3, len(panels), figsize=(4.6 * len(panels), 9.5), squeeze=False)
@@ -70,8 +55,9 @@ def time_figure(ctx: StudyContext, runs: Runs) -> Figure:
             ax[i].set_ylim(1e-4, 1.0)
         ax[0].legend(fontsize=7)
         ax[2].legend(fontsize=7)
-    return Figure(
-        save_figure(fig, ctx.path("drift_vs_time.png")),
+    return ctx.figure(
+        fig,
+        "drift_vs_time.png",
         "Volume drift against time after a suddenly applied load (top: whole-body "
         "|ΔV|/V0; middle: element drift; bottom: LMS stiffness ratio, median and min–max "
         "band); dashed: the material's static drift (closed form, else FEM)."
@@ -105,22 +91,8 @@ def _time_caption(runs: Runs, scene: str) -> str:
 def load_figure(ctx: StudyContext, runs: Runs) -> Figure:
     """Whole-body drift against signed load factor along the slow ramps, with the static
     equilibria and the closed form.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    runs
-        The study's runs.
-
-    Returns
-    -------
-    Figure
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     scenes = [s.label for s in runs.scenes if "ramp" in runs.kinds(s.label)]
     fig, ax = plt.subplots(figsize=(7.5, 6.5))
@@ -178,8 +150,9 @@ def load_figure(ctx: StudyContext, runs: Runs) -> Figure:
     def end(model: str) -> float:
         return abs(runs.final(scene, "ramp", model))
 
-    return Figure(
-        save_figure(fig, ctx.path("drift_vs_load.png")),
+    return ctx.figure(
+        fig,
+        "drift_vs_load.png",
         "Whole-body |ΔV|/V0 against signed load factor: spring variants along slow "
         "quasi-static load ramps (lines; squares: Newton equilibria without LMS), same-mesh "
         f"P1 FEM (static) and the closed form. At full load on {scene} the material "

@@ -110,26 +110,16 @@ def _radial_sums(runs: Runs, scene: str) -> str:
 
 
 def report_findings(runs: Runs) -> tuple[list[str], dict[str, float]]:
-    """The findings sentences and the headline drifts.
+    """The findings (one paragraph each) and the headline drifts.
 
-    Parameters
-    ----------
-    runs
-        The study's runs.
-
-    Returns
-    -------
-    findings : list of str
-        One paragraph each.
-    headline : dict
-        Per scene ``<scene>`` (its label in lowercase with underscores) and model ``<m>``:
-        ``<scene>_dV_<m>`` / ``<scene>_ramp_dV_<m>`` (final |dV| of the sudden-load / slow-ramp
-        runs, on a scene with a closed-form volume change; 5 decimals), else
-        ``<scene>_element_drift_<m>`` / ``<scene>_ramp_element_drift_<m>`` (final element
-        drift of the runs that neither diverged nor blew up; 4 decimals);
-        ``<scene>_analytic_dV``; ``<scene>_static_<measure>_<FEM>`` (the material's static
-        FEM); ``<scene>_diverged_variants`` (variants of the specification's element whose
-        sudden-load run diverged).
+    Per scene ``<scene>`` (its label in lowercase with underscores) and model ``<m>``:
+    ``<scene>_dV_<m>`` / ``<scene>_ramp_dV_<m>`` (final |dV| of the sudden-load / slow-ramp
+    runs, on a scene with a closed-form volume change; 5 decimals), else
+    ``<scene>_element_drift_<m>`` / ``<scene>_ramp_element_drift_<m>`` (final element drift
+    of the runs that neither diverged nor blew up; 4 decimals); ``<scene>_analytic_dV``;
+    ``<scene>_static_<measure>_<FEM>`` (the material's static FEM);
+    ``<scene>_diverged_variants`` (variants of the specification's element whose sudden-load
+    run diverged).
     """
     findings: list[str] = []
     headline: dict[str, float] = {}

@@ -15,7 +15,6 @@ import pandas as pd
 
 from ..registry import StudyContext, Table
 from ..scenes import StudyScene
-from ..tables import write_table
 from .cases import K_MAX, K_MIN
 
 #: The drift measures in words.
@@ -103,17 +102,7 @@ class Runs:
 
 
 def static_frame(cases: list[dict[str, Any]], results: list[dict[str, Any]]) -> pd.DataFrame:
-    """One row per static case: scene, model, load factor, drifts, status, law.
-
-    Parameters
-    ----------
-    cases, results
-        The static cases and their results (:func:`~.cases.static_case`).
-
-    Returns
-    -------
-    DataFrame
-    """
+    """One row per static case: scene, model, load factor, drifts, status, law."""
     keys = ("dV", "element_drift", "dL", "inverted", "dV (P2 volume)")
     rows = [
         {
@@ -132,19 +121,7 @@ def static_frame(cases: list[dict[str, Any]], results: list[dict[str, Any]]) -> 
 
 
 def final_table(ctx: StudyContext, runs: Runs) -> Table:
-    """The drifts at the end of each explicit run, with each scene's references.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    runs
-        The study's runs.
-
-    Returns
-    -------
-    Table
-    """
+    """The drifts at the end of each explicit run, with each scene's references."""
     rows = []
     for c, r in runs.dynamic:
         f = r.get("final", {})
@@ -192,8 +169,9 @@ def final_table(ctx: StudyContext, runs: Runs) -> Table:
                     "|dL|/L0": s.dL,
                 }
             )
-    return Table(
-        write_table(pd.DataFrame(rows), ctx.path("final_drift")),
+    return ctx.table(
+        pd.DataFrame(rows),
+        "final_drift",
         "Volume drift at the end of each explicit run (step: a suddenly applied load; ramp: "
         "a slow load ramp) with each scene's references (its closed form, the static FEM): "
         "dV/V0 signed total change, element drift Σ|ΔV_k|/V0, |dL|/L0 mean change of the "
@@ -203,21 +181,10 @@ def final_table(ctx: StudyContext, runs: Runs) -> Table:
 
 
 def static_table(ctx: StudyContext, runs: Runs) -> Table:
-    """The static equilibria of every scene.
-
-    Parameters
-    ----------
-    ctx
-        Where to write.
-    runs
-        The study's runs.
-
-    Returns
-    -------
-    Table
-    """
-    return Table(
-        write_table(runs.static, ctx.path("static_drift")),
+    """The static equilibria of every scene."""
+    return ctx.table(
+        runs.static,
+        "static_drift",
         "Static equilibria under each scene's loads (× load factor): the spring variants "
         "without LMS (Newton, full load; they check that the slow ramps are quasi-static), "
         "same-mesh P1 FEM (the scene's small-strain law, and neo-Hookean for an isotropic "
@@ -228,16 +195,7 @@ def static_table(ctx: StudyContext, runs: Runs) -> Table:
 
 
 def compare_words(x: float, ref: float) -> str:
-    """``"1.15× the drift (more)"`` for captions and findings.
-
-    Parameters
-    ----------
-    x, ref
-        A drift and the one it is compared with.
-
-    Returns
-    -------
-    str
+    """``"1.15× the drift (more)"``: the drift ``x`` against ``ref``, for captions and findings.
 
     Examples
     --------

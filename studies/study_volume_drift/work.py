@@ -23,21 +23,11 @@ DIVERGED = 1.0
 
 
 def drift_measures(scene: Scene, x: np.ndarray) -> dict[str, float]:
-    """Total and element volume drift and radial-sum change at positions ``x``.
+    """Total and element volume drift and radial-sum change at positions ``x`` ``(n, 3)``.
 
-    Parameters
-    ----------
-    scene
-        The scene (rest mesh).
-    x
-        ``(n, 3)`` vertex positions.
-
-    Returns
-    -------
-    dict
-        ``dV`` (total change over the rest volume), ``element_drift``
-        (``sum_k |V_k - V0_k| / V0``), ``dL`` (mean relative change of the radial sums
-        ``sum_j |xi_j|``), ``inverted`` (elements with ``V <= 0``).
+    ``dV`` (total change over the rest volume), ``element_drift`` (``sum_k |V_k - V0_k| /
+    V0``), ``dL`` (mean relative change of the radial sums ``sum_j |xi_j|``), ``inverted``
+    (elements with ``V <= 0``).
     """
     V0 = scene.mesh.volumes()
     V = scene.mesh.volumes(x)

@@ -6,7 +6,9 @@ import pytest
 
 from studies import analytic
 from studies.scenes import StudyScene
-from studies.study_anisotropy import (
+from studies.study_anisotropy.cases import (
+    STUDY,
+    VERSION,
     affine_fit,
     fibre_block,
     refusal,
@@ -14,7 +16,6 @@ from studies.study_anisotropy import (
     split_errors,
     stretch_measures,
 )
-from studies.study_anisotropy.cases import STUDY, VERSION
 
 N = 2
 SIGMA = 300.0  # the stretch-fiber traction

@@ -165,11 +165,11 @@ def test_executor_cache_writes_each_case_and_resumes(tmp_path):
     and a rerun computes nothing (its work would raise)."""
     import os
 
+    from studies.cache import CaseCache
     from studies.executor import WORKER_ENV
-    from studies.runner import ExecutorCache
 
     before = {k: os.environ.get(k) for k in WORKER_ENV}
-    cache = ExecutorCache(tmp_path, "t", "fp", workers=1)
+    cache = CaseCache(tmp_path, "t", "fp", workers=1)
     cases = [{"a": 1}, {"a": 2}, {"a": 3}]
     assert cache.run(cases, dict, progress=False) == cases
     # the workers' one-thread environment does not outlive the cluster in this process
@@ -180,4 +180,4 @@ def test_executor_cache_writes_each_case_and_resumes(tmp_path):
     def boom(case):
         raise AssertionError("recomputed a cached case")
 
-    assert ExecutorCache(tmp_path, "t", "fp", workers=1).run(cases, boom, False) == cases
+    assert CaseCache(tmp_path, "t", "fp", workers=1).run(cases, boom, False) == cases
