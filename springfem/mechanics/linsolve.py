@@ -43,19 +43,69 @@ from typing import Literal
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from springfem.errors import InputError, SolverError
 
 from .amg import hierarchy, krylov
 from .direct import DirectFactor, DirectSolver
 from .limits import interruptible
-from .matrices import SYMMETRY_TOL, eliminate, is_symmetric
 
 __all__ = [
     "DIRECT_MAX_DOFS", "RESIDUAL_ACCEPT", "REUSE_GROWTH", "SUPERLU_MAX_DOFS", "SYMMETRY_TOL",
     "Factorization",
     "LinearSolver", "LinearSolverKind", "eliminate", "is_symmetric", "solve_linear",
 ]  # fmt: skip
+
+#: Relative asymmetry ``|K - K^T| / |K|`` below which a tangent is treated as symmetric
+#: (the central-difference Jacobian of a gradient field is symmetric to ~1e-10).
+SYMMETRY_TOL = 1e-6
+
+
+def is_symmetric(A: sp.spmatrix) -> bool:
+    """Whether ``|A - A^T| <= SYMMETRY_TOL |A|`` (Frobenius norms).
+
+    Parameters
+    ----------
+    A
+        Square sparse matrix.
+
+    Returns
+    -------
+    bool
+        ``True`` for a symmetric matrix up to finite-difference noise.
+    """
+    nrm = spla.norm(A)
+    return bool(nrm == 0 or spla.norm(A - A.T) <= SYMMETRY_TOL * nrm)
+
+
+def eliminate(K: sp.spmatrix, free: np.ndarray) -> sp.csr_matrix:
+    """``P K P + (I - P)`` with ``P = diag(free)``: constrained DOFs decoupled, unit diagonal.
+
+    Parameters
+    ----------
+    K
+        Square matrix.
+    free
+        Boolean mask of the free DOFs.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+        The eliminated matrix.
+
+    Examples
+    --------
+    >>> K = sp.csr_matrix(np.array([[2.0, -1.0], [-1.0, 2.0]]))
+    >>> A = eliminate(K, np.array([True, False]))
+    >>> A.toarray().tolist(), is_symmetric(A)
+    ([[2.0, 0.0], [0.0, 1.0]], True)
+    """
+    d = sp.diags(free.astype(float))
+    A = (d @ sp.csr_matrix(K) @ d + sp.diags((~free).astype(float))).tocsr()
+    A.eliminate_zeros()
+    return A
+
 
 LinearSolverKind = Literal["auto", "direct", "amg"]
 
