@@ -16,6 +16,8 @@ export OMP_WAIT_POLICY ?= passive
 # built once; numba's on-disk kernel cache is safe to fill from two processes (it writes
 # through a temporary file and an atomic rename).
 TEST_WORKERS ?= 2
+# The packages mypy checks in `make test` (clean: any error fails the target).
+TYPED = springfem
 XDIST = $(if $(filter-out 0,$(TEST_WORKERS)),-n $(TEST_WORKERS) --dist loadfile)
 
 .PHONY: demo test test-slow lint docs report quick-report bench clean
@@ -42,6 +44,8 @@ demo: $(VENV)/.installed
 # Default selection (not slow); it checks reports/quick/ when `make quick-report` wrote it.
 test: $(VENV)/.installed-test
 	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy $(TYPED)
 	$(BIN)/python -m pytest -q $(XDIST)
 
 # The slow tests alone (full-size studies, a fresh quick report).
@@ -50,6 +54,8 @@ test-slow: $(VENV)/.installed-test
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy $(TYPED)
 
 # The theory manual and API pages into docs/_build/html; any Sphinx warning fails the build.
 docs: $(VENV)/.installed-docs

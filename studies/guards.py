@@ -51,4 +51,3 @@ def modulus_warning(material: Material, units: str = "SI") -> str | None:
                 "tissue: check the units" + ("" if scale == 1.0 else f" (the scene's: {units})")
             )
     return None
-

@@ -16,7 +16,7 @@ from __future__ import annotations
 import difflib
 import math
 import numbers
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 import numpy as np
@@ -86,6 +86,12 @@ def is_number(v: Any) -> bool:
     return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
 
 
+#: Called with ``(reader, key, kind, choices)`` for every key a parser asks a reader for
+#: (``kind`` ``None`` for a :meth:`TableReader.has` test): how
+#: :mod:`springfem.scene.reference` reads the accepted keys off the parsers.
+ASK_RECORDERS: list[Callable[[TableReader, str, str | None, Any], None]] = []
+
+
 class TableReader:
     """Typed access to one TOML table with error messages naming file and key.
 
@@ -149,6 +155,8 @@ class TableReader:
         bool
         """
         self.known.add(key)
+        for record in ASK_RECORDERS:
+            record(self, key, None, None)
         return key in self.t
 
     def missing(self, key: str) -> SceneError:
@@ -211,6 +219,8 @@ class TableReader:
         """
         self.used.add(key)
         self.known.add(key)
+        for record in ASK_RECORDERS:
+            record(self, key, kind, choices)
         if key not in self.t:
             if default is ...:
                 raise self.missing(key)

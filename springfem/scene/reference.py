@@ -34,7 +34,7 @@ from typing import Any
 
 from ..errors import SpringFemError
 from .build import model_sections, scene_from_dict
-from .reader import TableReader
+from .reader import ASK_RECORDERS, TableReader
 from .types import LAWS
 
 _BOX = {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [1, 1, 1]}
@@ -122,42 +122,32 @@ def _with_bogus(section: str, key: str, value: Any = "?") -> dict:
 
 def _parse_recording(data: dict, out: dict) -> None:
     """Parse ``data`` (errors expected) and merge the keys its readers asked for."""
-    with _recording() as readers:
+    with _recording() as asked:
         with contextlib.suppress(SpringFemError, OSError):
             scene_from_dict(data)
-    for r in readers:
-        sec = out.setdefault(_section(r.where, data), {})
-        for key, info in r.asked.items():
+    for reader, keys in asked.values():
+        sec = out.setdefault(_section(reader.where, data), {})
+        for key, info in keys.items():
             old = sec.get(key)
             if old is None or (old["kind"] is None and info["kind"] is not None):
                 sec[key] = info
 
 
 @contextlib.contextmanager
-def _recording() -> Iterator[list[TableReader]]:
-    """Every :class:`TableReader` made inside the block, with its ``asked`` keys."""
-    made: list[TableReader] = []
-    init, get, has = TableReader.__init__, TableReader.get, TableReader.has
+def _recording() -> Iterator[dict[int, tuple[TableReader, dict[str, dict[str, Any]]]]]:
+    """The keys every :class:`TableReader` is asked for inside the block, per reader."""
+    asked: dict[int, tuple[TableReader, dict[str, dict[str, Any]]]] = {}
 
-    def rec_init(self, *args, **kw):
-        init(self, *args, **kw)
-        self.asked = {}
-        made.append(self)
+    def record(reader: TableReader, key: str, kind: str | None, choices: Any) -> None:
+        keys = asked.setdefault(id(reader), (reader, {}))[1]
+        if keys.get(key, {}).get("kind") is None:  # a get() after a has() tells the type
+            keys[key] = {"kind": kind, "choices": choices}
 
-    def rec_get(self, key, kind="float", *args, **kw):
-        if self.asked.get(key, {}).get("kind") is None:
-            self.asked[key] = {"kind": kind, "choices": kw.get("choices")}
-        return get(self, key, kind, *args, **kw)
-
-    def rec_has(self, key):
-        self.asked.setdefault(key, {"kind": None, "choices": None})
-        return has(self, key)
-
-    TableReader.__init__, TableReader.get, TableReader.has = rec_init, rec_get, rec_has
+    ASK_RECORDERS.append(record)
     try:
-        yield made
+        yield asked
     finally:
-        TableReader.__init__, TableReader.get, TableReader.has = init, get, has
+        ASK_RECORDERS.remove(record)
 
 
 def accepted_keys() -> dict[str, dict[str, dict[str, Any]]]:
@@ -200,8 +190,8 @@ def literal_keys() -> set[str]:
     """
     from . import output, sections, solver, tissue, ventricle
 
-    files = {Path(m.__file__) for m in (sections, tissue, ventricle, output, solver)}
-    files |= {Path(inspect.getfile(parse)) for parse in model_sections().values()}
+    files = {Path(str(m.__file__)) for m in (sections, tissue, ventricle, output, solver)}
+    files |= {Path(str(inspect.getsourcefile(parse))) for parse in model_sections().values()}
     found: set[str] = set()
     for f in files:
         for node in ast.walk(ast.parse(f.read_text())):
