@@ -55,10 +55,44 @@ def animation_path(folder: str | os.PathLike, fmt: str) -> Path:
     return Path(folder) / f"animation.{fmt}"
 
 
+def frame_times(frames: list[Path]) -> list[float] | None:
+    """The times of ``frames`` from the ``.pvd`` file beside them (``None`` without one).
+
+    Parameters
+    ----------
+    frames
+        VTU files of one series.
+
+    Returns
+    -------
+    list of float or None
+    """
+    import xml.etree.ElementTree as ET
+
+    if not frames:
+        return None
+    for pvd in sorted(Path(frames[0]).parent.glob("*.pvd")):
+        try:
+            sets = ET.parse(pvd).getroot().iter("DataSet")
+            by_file = {d.get("file"): float(d.get("timestep", "nan")) for d in sets}
+        except (ET.ParseError, ValueError):
+            continue
+        if all(Path(f).name in by_file for f in frames):
+            return [by_file[Path(f).name] for f in frames]
+    return None
+
+
 def animate_frames(
-    frames: list[Path], path: str | os.PathLike, fps: int = 10, warp: float = 1.0
+    frames: list[Path],
+    path: str | os.PathLike,
+    fps: int = 10,
+    warp: float | None = None,
+    times: list[float] | None = None,
 ) -> Path:
     """Render each VTU frame warped by its displacement and write an animation.
+
+    Every frame shows its time and the displacement magnification; the colour bar (``|u|``
+    one scale for the whole run) has three labels.
 
     Parameters
     ----------
@@ -69,17 +103,22 @@ def animate_frames(
     fps
         Frames per second.
     warp
-        Displacement magnification.
+        Displacement magnification (default: a round factor that makes the largest
+        displacement about a fifth of the body, :func:`studies.plots.nice_warp_factor`;
+        never below 1).
+    times
+        The frames' times (s); default read from the series' ``.pvd`` (:func:`frame_times`).
 
     Returns
     -------
     pathlib.Path
         The animation file.
     """
-    os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
     import imageio.v2 as imageio
-    import pyvista as pv
 
+    from .plots import import_pyvista, nice_warp_factor
+
+    pv = import_pyvista()  # off-screen through EGL: no X-server messages
     path = Path(path)
     if path.suffix == ".mp4" and video_backend() is None:
         raise InputError(
@@ -88,16 +127,31 @@ def animate_frames(
         )
     meshes = [pv.read(str(f)) for f in frames]
     mags = [np.linalg.norm(m.point_data["displacement"], axis=1) for m in meshes]
-    clim = [0.0, max(float(max(m.max() for m in mags)), 1e-300)]
+    u_max = max(float(max(m.max() for m in mags)), 1e-300)
+    clim = [0.0, u_max]
+    if warp is None:
+        lo, hi = np.asarray(meshes[0].bounds).reshape(3, 2).T
+        warp = nice_warp_factor(u_max, float(np.linalg.norm(hi - lo)))
+    times = times if times is not None else frame_times(frames)
+    bar = {"title": "displacement (m)", "n_labels": 3, "fmt": "%.2g", "title_font_size": 12,
+           "label_font_size": 11, "vertical": True, "position_x": 0.84, "position_y": 0.2,
+           "width": 0.07, "height": 0.6, "color": "black"}  # fmt: skip
     bounds = None
     images = []
-    for mesh, mag in zip(meshes, mags, strict=True):
+    for k, (mesh, mag) in enumerate(zip(meshes, mags, strict=True)):
         warped = mesh.warp_by_vector("displacement", factor=warp)
         warped.point_data["|u| (m)"] = mag
         plotter = pv.Plotter(off_screen=True, window_size=WINDOW)
-        plotter.add_mesh(warped, scalars="|u| (m)", clim=clim, show_edges=False)
+        plotter.set_background("white")
+        plotter.add_mesh(warped, scalars="|u| (m)", clim=clim, show_edges=False,
+                         scalar_bar_args=bar)  # fmt: skip
+        stamp = f"t = {times[k]:.4g} s" if times is not None else f"frame {k}"
+        scale = "true scale" if warp == 1.0 else f"displacements x{warp:g}"
+        plotter.add_text(f"{stamp}   ({scale})", position="upper_left", font_size=9,
+                         color="black")  # fmt: skip
         if bounds is None:
             plotter.view_isometric()
+            plotter.camera.zoom(0.8)  # room for the time stamp and the colour bar
             bounds = plotter.camera_position
         plotter.camera_position = bounds
         images.append(plotter.screenshot(return_img=True))

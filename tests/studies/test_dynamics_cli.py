@@ -168,3 +168,19 @@ def test_mp4_without_a_video_backend_warns_and_keeps_the_series(tmp_path, capsys
     assert len(err) == 1 and "mp4 needs the imageio-ffmpeg or av package" in err[0]
     assert (out / "series" / "frame.pvd").is_file() and (out / "result.json").is_file()
     assert not (out / "series" / "animation.mp4").exists()
+
+
+def test_animation_frames_are_stamped_with_the_series_times(tmp_path):
+    """The times come from the series' .pvd, as pyvista's own reader sees them."""
+    import pyvista as pv
+
+    from studies.animation import frame_times
+
+    out = tmp_path / "sag"
+    argv = [a if a != "output.animation=mp4" else "output.animation=gif" for a in _mp4_argv(out)]
+    assert main(argv) == 0
+    series = out / "series"
+    frames = sorted(series.glob("frame_*.vtu"))
+    expected = pv.get_reader(str(series / "frame.pvd")).time_values
+    assert frame_times(frames) == pytest.approx(expected, rel=1e-15)
+    assert (series / "animation.gif").stat().st_size > 0
