@@ -263,7 +263,7 @@ def hyperelastic_element_arrays(
     m, nq, nloc, _ = space.grads.shape
     U = np.asarray(U).reshape(-1, 3)
     fe = np.empty((m, nloc, 3))
-    Ke = np.empty((m, nloc * nloc, 9)) if tangent else None
+    Ke = np.empty((m if tangent else 0, nloc * nloc, 9))  # unused (empty) without tangent
     eye = np.eye(3)
     for start in range(0, m, CHUNK):
         sl = slice(start, min(m, start + CHUNK))
@@ -287,6 +287,4 @@ def hyperelastic_element_arrays(
                     GG = _gradient_products(G[:, q : q + 1], dx[:, q : q + 1])
                     acc = acc + np.matmul(GG, A9[:, q])
                 Ke[sl] = acc
-    if tangent:
-        Ke = Ke.reshape(m, nloc, nloc, 3, 3)
-    return fe, Ke
+    return fe, (Ke.reshape(m, nloc, nloc, 3, 3) if tangent else None)

@@ -40,7 +40,7 @@ True
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Literal, cast
 
 import numba
 import numpy as np
@@ -170,8 +170,10 @@ class ExplicitFem:
         if precision is None:
             from .options import FemOptions
 
-            precision = model_precision(scene, "fem", FemOptions.of(scene).precision)
-        self.precision = precision
+            precision = cast(
+                Precision, model_precision(scene, "fem", FemOptions.of(scene).precision)
+            )
+        self.precision: Precision = precision
         self.scene = scene
         self.law = "linear" if law == "linear" else "neo-hookean"
         self._law = _parse_law(scene, law)
@@ -202,7 +204,7 @@ class ExplicitFem:
         self._follower = has_follower_loads(scene)
         self._f_dead = None if self._follower else external_forces(scene)
         self._K_linear: sp.csr_matrix | None = None
-        self._assembly = None  # (Space, BlockPattern) for the tangent, built on first use
+        self._assembly: tuple[Any, Any] | None = None  # (Space, BlockPattern), on first use
         self.last_inverted = 0
         self.evaluations = 0
         self.steps = 0
@@ -321,6 +323,7 @@ class ExplicitFem:
             return self._K_linear
         u = np.asarray(x, dtype=float).reshape(-1, 3) - self.x0
         _, Ke = hyperelastic_element_arrays(space, NeoHookean(self.mu, self.lam), u, True)
+        assert Ke is not None  # asked for
         return sp.csr_matrix(pattern.matrix(Ke))
 
     def element_nodes(self) -> np.ndarray:

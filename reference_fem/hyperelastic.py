@@ -22,7 +22,7 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, cast
 
 import numpy as np
 
@@ -80,7 +80,7 @@ class NeoHookean:
             raise InputError(f"formulation {form!r} is not one of {', '.join(FORMULATIONS)}")
         if vol not in VOLUMETRIC:
             raise InputError(f"volumetric {vol!r} is not one of {', '.join(VOLUMETRIC)}")
-        return cls(material.mu, material.lam, form, vol)
+        return cls(material.mu, material.lam, cast(Formulation, form), cast(Volumetric, vol))
 
     @property
     def kappa(self) -> float:

@@ -182,7 +182,9 @@ class ExternalLoads:
         for load in scene.loads:
             if load.type == "gravity":
                 dead += body_force_vector(space, scene.material.density * load.value)
-            elif load.type == "traction":
+                continue
+            assert load.region is not None  # every load but gravity acts on a region
+            if load.type == "traction":
                 fd = FacetData.build(space, load.region.facets, q)
                 dead += traction_vector(space, fd, load.value)
             elif load.type == "force":
@@ -221,6 +223,7 @@ class ExternalLoads:
         K = None
         for fd, p, pat in self.pressures:
             fe, Ke = pressure_arrays(fd, p, U, tangent=True)
+            assert Ke is not None  # asked for
             f = f + scale * assemble_vector(fd.element_nodes, fe, self.space.n_nodes)
             Kp = pat.matrix(scale * Ke)
             K = Kp if K is None else K + Kp

@@ -35,12 +35,13 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
 from springfem.errors import SolverError
 from springfem.mechanics.limits import Deadline, SolveStopped, checkpoint
+from springfem.mechanics.linsolve import LinearSolver
 from springfem.mechanics.newton import (
     LoadStepping,
     NewtonOutcome,
@@ -91,7 +92,7 @@ class NonlinearProblem(Protocol):
 
     def solve_linear(self, K, b: np.ndarray, symmetric: bool, where: str) -> np.ndarray: ...
 
-    linear_solver: object  # a springfem.mechanics.LinearSolver: ``factorize(K, free, ...)``
+    linear_solver: LinearSolver  # ``factorize(K, free, symmetric)``
 
     def state(self, u: np.ndarray) -> np.ndarray: ...
 
@@ -380,7 +381,10 @@ def solve_nonlinear(
         The ``--max-time`` cap passed or Ctrl-C: ``state`` and ``load_factor`` as above.
     """
     report = NewtonReport()
-    state = {"u": np.zeros(problem.n_dofs) if u0 is None else u0.copy(), "prev": None}
+    state: dict[str, Any] = {
+        "u": np.zeros(problem.n_dofs) if u0 is None else u0.copy(),
+        "prev": None,
+    }
     state["load"] = 0.0
     deadline = Deadline()
     times = report.phases
