@@ -38,6 +38,7 @@ from .cache import CaseCache, case_key, source_fingerprint
 from .executor import run_tasks
 from .sweep_case import run_case
 from .sweep_file import SweepSpec
+from .sweep_resolve import difference, duplicates
 from .sweep_table import sweep_figures, sweep_table, write_tables
 
 
@@ -62,6 +63,8 @@ class SweepRun:
         The table and figure files written.
     seconds
         Wall time of the run.
+    notes
+        One line per case solved as another (:mod:`studies.sweep_resolve`).
     """
 
     spec: SweepSpec
@@ -72,11 +75,17 @@ class SweepRun:
     errors: dict[int, str] = field(default_factory=dict)
     files: list[Path] = field(default_factory=list)
     seconds: float = 0.0
+    notes: list[str] = field(default_factory=list)
 
     @property
     def failed(self) -> pd.DataFrame:
-        """Rows whose status is not ``ok``."""
-        return self.table[self.table["status"] != "ok"]
+        """Rows that failed (not ``ok`` and not ``implausible``)."""
+        return self.table[~self.table["status"].isin(("ok", "implausible"))]
+
+    @property
+    def implausible(self) -> pd.DataFrame:
+        """Rows whose solution is implausible (:mod:`springfem.plausibility`)."""
+        return self.table[self.table["status"] == "implausible"]
 
 
 def default_out(spec: SweepSpec) -> Path:
@@ -145,7 +154,9 @@ def _run_in(spec, out, workers, scheduler, progress, figures, work) -> SweepRun:
     cache = CaseCache(out, "cases", fingerprint=code_fingerprint())
     tasks = [spec.task(i) for i in range(len(spec.cases))]
     results: list[dict[str, Any] | None] = [cache.get(t) for t in tasks]
-    todo = [i for i, r in enumerate(results) if r is None]
+    missing = [i for i, r in enumerate(results) if r is None]
+    same = duplicates(tasks) if len(missing) > 0 and len(tasks) > 1 else {}
+    todo = [i for i in missing if i not in same]  # a duplicate takes its first case's result
     errors: dict[int, str] = {}
     bar = None
     if progress:
@@ -179,6 +190,15 @@ def _run_in(spec, out, workers, scheduler, progress, figures, work) -> SweepRun:
     finally:
         if bar is not None:
             bar.close()
+    for i in (i for i in missing if i in same):
+        src = results[same[i]]
+        if src is None:  # its first case failed
+            errors[i] = errors.get(same[i], "its first case was not computed")
+            continue
+        res = {**src, "values": spec.cases[i]}
+        res["rows"] = [{**row, "same_as": same[i]} for row in src["rows"]]
+        cache.put(tasks[i], res)
+        results[i] = res
     for i, msg in errors.items():  # in the table, not in the cache
         results[i] = {
             "values": spec.cases[i],
@@ -188,9 +208,15 @@ def _run_in(spec, out, workers, scheduler, progress, figures, work) -> SweepRun:
     files = list(write_tables(table, out))
     if figures:
         files += sweep_figures(table, spec.keys, spec.reference, out)
-    computed = len(todo) - len(errors)
-    return SweepRun(spec, out, table, computed, len(tasks) - len(todo), errors, files,
-                    time.perf_counter() - t0)  # fmt: skip
+    computed = len(todo) - len([i for i in errors if i in todo])
+    notes = [
+        f"case {i} is the same computation as case {j} "
+        f"({difference(spec.cases[i], spec.cases[j])}): solved once"
+        for i, j in same.items()
+        if i in missing
+    ]
+    return SweepRun(spec, out, table, computed, len(tasks) - len(missing), errors, files,
+                    time.perf_counter() - t0, notes)  # fmt: skip
 
 
 def summary_lines(run: SweepRun) -> list[str]:

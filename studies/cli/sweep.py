@@ -20,6 +20,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     )
     for line in summary_lines(run):
         print(line)
+    for note in run.notes:
+        print(f"note: {note}")
+    for _, row in run.implausible.iterrows():
+        print(f"warning: case {row['case']} {row['model']}: implausible: {row['message']}",
+              file=sys.stderr)  # fmt: skip
     print("wrote " + ", ".join(str(f) for f in run.files) + f" and {run.out / 'cases'}/")
     bad = run.failed
     for _, row in bad.iterrows():

@@ -95,3 +95,13 @@ def test_raw_floating_point_warnings_become_one_summary_line(monkeypatch, capsys
 def test_a_quiet_command_prints_no_warning_summary(flag, tmp_path, capsys):
     assert main([*flag, "solve", "cantilever", "--model", "fem", "--out", str(tmp_path)]) == 0
     assert "floating-point" not in capsys.readouterr().err
+
+
+def test_cli_sweep_warns_on_implausible_rows_and_exits_0(tmp_path, capsys):
+    f = tmp_path / "s.toml"
+    f.write_text('scene = "cantilever"\nmodels = ["P1", "P2"]\n[grid]\n'
+                 '"mesh.divisions" = [[4, 1, 1]]\n"material.E" = [0.01]\n')  # fmt: skip
+    assert main(["sweep", str(f), "--out", str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err
+    assert "solver failure" not in err
+    assert err.count("warning: case 0 ") == 2 and "implausible" in err

@@ -284,3 +284,43 @@ def test_killed_client_loses_no_finished_case(tmp_path):
     assert run.cached == len(done) and run.computed == 6 - len(done)
     after = case_files(out)
     assert len(after) == 6 and all(after[k] == v for k, v in done.items())
+
+
+# ------------------------------------------------------------------ same computations
+
+
+def _calibrations(**extra):
+    grid = {"mesh.divisions": [[4, 1, 1]],
+            "spring.calibration": ["analytic", "exact", "analytic-lsq"], **extra}  # fmt: skip
+    return parse_sweep({"scene": "cantilever", "models": ["spring", "P1"], "grid": grid})
+
+
+def test_cases_that_resolve_to_the_same_element_are_solved_once(tmp_path, monkeypatch):
+    """Independent check: with the grouping switched off, the two cases solved apart give
+    bit-identical rows (the isotropic cantilever's exact and analytic constants agree for
+    the specification's parts); with it on, one of them is solved and the note says why."""
+    import studies.sweep as sweep_module
+
+    monkeypatch.setattr(sweep_module, "duplicates", lambda tasks: {})
+    apart = run_sweep(_calibrations(), tmp_path / "apart", progress=False, figures=False)
+    monkeypatch.undo()
+    cols = ["probe:tip:ux", "probe:tip:uy", "probe:tip:uz", "rel_l2", "volume_change"]
+    t = apart.table
+    by = {c: t[(t["spring.calibration"] == c) & (t["model"] == "spring")][cols] for c in
+          ("analytic", "exact", "analytic-lsq")}  # fmt: skip
+    assert (by["analytic"].to_numpy() == by["exact"].to_numpy()).all()
+    assert not (by["analytic"].to_numpy() == by["analytic-lsq"].to_numpy()).all()
+    run = run_sweep(_calibrations(), tmp_path / "once", progress=False, figures=False)
+    assert (run.computed, run.cached) == (2, 0)
+    assert run.notes == [
+        "case 1 is the same computation as case 0 "
+        "(spring.calibration = exact vs analytic): solved once"
+    ]
+    same = run.table[run.table["spring.calibration"] == "exact"]
+    assert set(same["same_as"]) == {0}
+    pd.testing.assert_frame_equal(
+        same[cols].reset_index(drop=True),
+        apart.table[apart.table["spring.calibration"] == "exact"][cols].reset_index(drop=True),
+    )
+    again = run_sweep(_calibrations(), tmp_path / "once", progress=False, figures=False)
+    assert (again.computed, again.cached) == (0, 3)  # the copy is a case file too
