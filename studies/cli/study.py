@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 
 from springfem.errors import InputError
 from springfem.files import output_folder
@@ -65,11 +66,19 @@ def cmd_study(args: argparse.Namespace) -> int:
     if scene is not None:
         sets_text = "".join(f" --set {a}" for a in sets)
         command = f"springfem study {args.name}{' --quick' * args.quick} --scene {scene}{sets_text}"
+    settings = None
+    tolerance = getattr(args, "tolerance", None)
+    if tolerance is not None:
+        base = spec.settings_for(args.quick)
+        if not hasattr(base, "max_error"):
+            name = spec.name.replace("_", "-")
+            raise InputError(f"study {name} has no tolerance (--tolerance applies to: ablation)")
+        settings = dataclasses.replace(base, max_error=tolerance)
     cap = getattr(args, "max_time", None)
     if cap is None and scene is not None:
         cap = USER_SCENE_MAX_TIME
     with solve_limits(max_time=cap):
-        res = run_study(spec.name, out, args.quick, scenes=scenes,
+        res = run_study(spec.name, out, args.quick, scenes=scenes, settings=settings,
                         workers=getattr(args, "workers", None),
                         scheduler=getattr(args, "scheduler", None), command=command)  # fmt: skip
     if scene is not None:

@@ -101,14 +101,17 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
         res = ctx.cache.run(cases, spring_case, ctx.progress, name)
         rows += result_rows(name, cases, res, fem["u"])
     df = pd.DataFrame(rows)
-    winners, headline = winners_frame(df)
+    winners, headline = winners_frame(df, settings.max_error)
     findings, counts = report_findings(df, winners, fem_times, settings.dr_steps, notes)
     return StudyOutput(
         name=ctx.name,
         title="Ablation: model no more than a scene needs"
         + ("" if not scenes or not scenes[0].user else f" ({scenes[0].label})"),
         findings=findings,
-        tables=[ablation_table(ctx, df, fem_times), winners_table(ctx, winners)],
+        tables=[
+            ablation_table(ctx, df, fem_times),
+            winners_table(ctx, winners, settings.max_error),
+        ],
         figures=[error_cost_figure(ctx, df, winners, fem_times)],
         headline={**headline, **counts},
     )

@@ -87,12 +87,16 @@ class Settings:
         Scene name -> box divisions (``None``: the bundled scene's mesh).
     dr_steps
         Dynamic-relaxation step budget of the LMS variant.
+    max_error
+        The tolerance: the winners table names the cheapest variant whose model error is
+        at most this (``study ablation --tolerance``).
     """
 
     divisions: dict[str, tuple[int, int, int] | None] = field(
         default_factory=lambda: dict.fromkeys(SCENE_NAMES)
     )
     dr_steps: int = 8000
+    max_error: float = MAX_ERROR
     extra: dict[str, tuple[int, int, int]] = field(
         default_factory=lambda: {
             "cantilever-unstructured": (40, 4, 4),

@@ -38,6 +38,21 @@ def report_findings(
             f"only, {w['cheapest adequate (analytic cal.)']} "
             f"({w['its error (analytic cal.)']:.3g}). Model errors: {errs}."
         )
+        tol = next((c for c in w.index if str(c).endswith("(with exact)")
+                    and str(c).startswith("cheapest with error <=")), None)  # fmt: skip
+        if tol is not None and pd.notna(w[tol]):
+            limit = str(tol).split("<= ")[1].split(" ")[0]
+            pick = w[tol]
+            g_all = df[df.scene == w["scene"]].set_index("variant")
+            findings.append(
+                f"{w['scene']}: the cheapest variant with a model error of at most {limit} "
+                + (
+                    f"is {pick} (error {g_all.loc[pick, 'error']:.3g}, solve "
+                    f"{g_all.loc[pick, 'solve_time']:.2g} s)."
+                    if pick in g_all.index
+                    else "is none: no variant qualifies."
+                )
+            )
 
     def step(name: str, a: str, b: str) -> str:
         g = df[df.scene == name].set_index("variant")

@@ -143,10 +143,20 @@ def test_ablation_on_a_gmsh_scene(scene_file, tmp_path):
     docs/theory.rst#the-exact-element-is-the-p1-element) and becomes
     the most accurate variant; the specification-only winner columns are kept beside it."""
     out = tmp_path / "out"
-    args = ["study", "ablation", "--quick", "--scene", str(scene_file), "--out", str(out)]
+    args = ["study", "ablation", "--quick", "--scene", str(scene_file), "--out", str(out),
+            "--tolerance", "0.05"]  # fmt: skip
     assert main(args) == 0
     w = pd.read_csv(out / "ablation" / "winners.csv").set_index("scene")
     assert list(w.index) == ["gbox"]
+    # the tolerance's pick, read back against the per-variant table: the fastest variant
+    # whose model error is at most 0.05 (the exact element qualifies, so not "none")
+    rows = pd.read_csv(out / "ablation" / "ablation.csv")
+    ok = rows[(rows.status == "ok") & (rows.error <= 0.05)]
+    pick = w.at["gbox", "cheapest with error <= 0.05 (with exact)"]
+    assert pick != "none" and pick in set(ok.variant)
+    from studies.study_ablation.cases import TIME_TIE  # ties towards fewer parts
+
+    assert ok.set_index("variant").at[pick, "solve_time"] <= (1 + TIME_TIE) * ok.solve_time.min()
     assert w.at["gbox", "best (with exact)"] in (
         "spring-exact-no-coupling",
         "spring-exact+coupling",
