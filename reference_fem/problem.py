@@ -65,6 +65,7 @@ class FemProblem:
     """
 
     mixed = False  # the u-p formulation is reference_fem.mixed.MixedProblem
+    locking_free = False  # a formulation that takes a penalty for incompressible materials
 
     def __init__(
         self,
@@ -77,8 +78,10 @@ class FemProblem:
         self.order = int(FemOptions.of(scene).order if order is None else order)
         self.kind, self.law = parse_law(scene, law)
         self.nonlinear = self.law is not None
-        if scene.material.incompressible and not self.mixed:
-            raise InputError('incompressible = true needs [fem] formulation = "mixed"')
+        if scene.material.incompressible and not (self.mixed or self.locking_free):
+            raise InputError(
+                'incompressible = true needs [fem] formulation = "mixed" or "nodal-volume"'
+            )
         # per-element frames for anisotropic laws, broadcast over quadrature
         self.frames = scene.frames if getattr(self.law, "anisotropic", False) else None
         self.qframes = None if self.frames is None else self.frames[:, None]

@@ -115,7 +115,8 @@ def make_problem(scene: Scene, order: int | None = None, law: str | None = None)
     Parameters
     ----------
     scene
-        The scene; ``[fem] formulation = "mixed"`` selects the Taylor–Hood problem.
+        The scene; ``[fem] formulation`` ``"mixed"`` selects the Taylor–Hood problem,
+        ``"nodal-volume"`` the nodal-volume P1 problem.
     order, law
         As for :class:`~reference_fem.problem.FemProblem`.
 
@@ -131,10 +132,15 @@ def make_problem(scene: Scene, order: int | None = None, law: str | None = None)
         Unknown law or order, a law the material cannot provide, or an incompressible
         material without the mixed formulation.
     """
-    if FemOptions.of(scene).formulation == "mixed":
+    formulation = FemOptions.of(scene).formulation
+    if formulation == "mixed":
         from .mixed import MixedProblem
 
         return MixedProblem(scene, order, law)
+    if formulation == "nodal-volume":
+        from .nodal_volume import NodalVolumeProblem
+
+        return NodalVolumeProblem(scene, order, law)
     return FemProblem(scene, order, law)
 
 
