@@ -71,6 +71,8 @@ class MixedProblem(FemProblem):
     """
 
     mixed = True
+    #: The displacement order of the pair and its name in ``law_name``.
+    pair_order, pair_label = 2, "mixed-P2P1"
 
     def __init__(
         self,
@@ -80,9 +82,9 @@ class MixedProblem(FemProblem):
         intorder: int | None = None,
     ):
         order = int(FemOptions.of(scene).order if order is None else order)
-        if order != 2:
+        if order != self.pair_order:
             raise InputError(
-                f"formulation mixed is Taylor–Hood P2/P1 and needs order 2, got {order}"
+                f"formulation {self.pair_label} needs order {self.pair_order}, got {order}"
             )
         super().__init__(scene, order, law, intorder)
         if self.law is None:
@@ -94,7 +96,7 @@ class MixedProblem(FemProblem):
         split = volumetric_split(self.law)  # W = W_base + U(J): p carries U
         self.bulk = split.kappa if split.kappa > 0 else np.inf
         self.law = split.base
-        self.law_name = f"{label}/mixed-P2P1"
+        self.law_name = f"{label}/{self.pair_label}"
         self.nu = self.space.n_dofs
         self.n_p = scene.mesh.n_points
         pb = skfem.Basis(self.space.skmesh, skfem.ElementTetP1(), intorder=self.space.intorder)

@@ -86,8 +86,7 @@ class FemProblem:
         self.frames = scene.frames if getattr(self.law, "anisotropic", False) else None
         self.qframes = None if self.frames is None else self.frames[:, None]
         self.law_name = self.law.name if self.law is not None else self.kind
-        q = default_intorder(self.order, self.nonlinear) if intorder is None else intorder
-        self.space = Space(scene.mesh, self.order, q)
+        self.space = self._make_space(scene, intorder)
         self.pattern = BlockPattern(self.space.element_nodes, self.space.n_nodes)
         self.bc = dirichlet(scene, self.space)
         self.loads = ExternalLoads.from_scene(scene, self.space, follower=self.nonlinear)
@@ -100,6 +99,11 @@ class FemProblem:
             self.D_groups, self.group = material_groups(scene.material, scene.frames, self.kind)
         else:
             self.D_groups, self.group = material_groups(scene.material, scene.frames, "linear")
+
+    def _make_space(self, scene: Scene, intorder: int | None) -> Space:
+        """The displacement space (a subclass may enrich it, :mod:`reference_fem.mini`)."""
+        q = default_intorder(self.order, self.nonlinear) if intorder is None else intorder
+        return Space(scene.mesh, self.order, q)
 
     # -- the NonlinearProblem protocol ------------------------------------------------------
     @property

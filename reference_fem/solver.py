@@ -116,7 +116,7 @@ def make_problem(scene: Scene, order: int | None = None, law: str | None = None)
     ----------
     scene
         The scene; ``[fem] formulation`` ``"mixed"`` selects the Taylor–Hood problem,
-        ``"nodal-volume"`` the nodal-volume P1 problem.
+        ``"nodal-volume"`` the nodal-volume P1 problem, ``"mini"`` the MINI pair.
     order, law
         As for :class:`~reference_fem.problem.FemProblem`.
 
@@ -137,6 +137,10 @@ def make_problem(scene: Scene, order: int | None = None, law: str | None = None)
         from .mixed import MixedProblem
 
         return MixedProblem(scene, order, law)
+    if formulation == "mini":
+        from .mini import MiniProblem
+
+        return MiniProblem(scene, order, law)
     if formulation == "nodal-volume":
         from .nodal_volume import NodalVolumeProblem
 
