@@ -183,12 +183,13 @@ class NodalVolumeProblem(FemProblem):
         A = A + (f * ddUe)[:, None, None, None, None] * np.einsum("eij,ekl->eijkl", JFiT, JFiT)
         A9 = A.transpose(0, 2, 4, 1, 3).reshape(-1, 9, 9)  # rows (j, l), columns (i, k)
         Ke = np.matmul(_gradient_products(self.space.grads, self.space.dx), A9)
-        K = self.pattern.matrix(Ke.reshape(-1, 4, 4, 3, 3))
+        K = self.pattern.matrix(Ke.reshape(-1, 4, 4, 3, 3)).tocsr()
         if f < 1.0:
             g = np.einsum("eij,eaj->eai", JFiT, self.G)
             B = self._volume_gradient_matrix(g)
-            K = K + B.T @ sp.diags((1.0 - f) * ddUa / self.node_volume0) @ B
-        return fi, K.tocsr()
+            Bt = B.T.tocsr()
+            K = K + Bt @ (B.multiply(((1.0 - f) * ddUa / self.node_volume0)[:, None]).tocsr())
+        return fi, K
 
     def energy(self, u: np.ndarray, scale: float = 1.0) -> float | None:
         """``Pi(u)``: element energies, nodal volumetric energy, minus the dead loads' work."""
