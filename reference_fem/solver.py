@@ -185,7 +185,9 @@ def solve(
         return _solve(problem, verbose, t0)
     except SolverError as exc:
         raise SolverError(
-            f"{scene.name} (fem P{problem.order}, {problem.law_name}): {exc}", state=exc.state
+            f"{scene.name} (fem P{problem.order}, {problem.law_name}): {exc}",
+            state=exc.state,
+            load_factor=exc.load_factor,
         ) from None
 
 
