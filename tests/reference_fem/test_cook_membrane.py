@@ -74,3 +74,18 @@ def test_nodal_volume_converges_where_p1_locks():
     err = np.abs(1.0 - np.array(nodal) / reference)
     assert err[1] < 0.75 * err[0]  # at least O(h^0.4): a locked method does not converge
     assert max(p1) < 0.3 * reference  # P1 keeps less than a third: locked
+
+
+#: The issue's target: locking-free P1 within 3 % of the converged P2/P1 value.
+TARGET = 0.03
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="measured 2.902 mm against 3.096 (-6.3 %) on 32x32x2: P1's bending error",
+)
+def test_nodal_volume_within_the_target_of_taylor_hood_on_the_fine_mesh():
+    reference = corner_uy((32, 32, 2), {"order": 2, "formulation": "mixed"})
+    nodal = corner_uy((32, 32, 2), {"formulation": "nodal-volume"})
+    assert nodal == pytest.approx(reference, rel=TARGET)
