@@ -6,7 +6,8 @@ hierarchy) and one solve. The formulations take turns within each round on the s
 so that a shared, noisy machine slows them alike; the medians over the rounds and their
 ratios to the first formulation are reported with the load average
 (docs/verification.rst#how-speed-is-measured). Run it as
-``python -m reference_fem.bench_formulations [divisions]`` (Cook's membrane, neo-Hookean).
+``python -m reference_fem.bench_formulations [divisions] [all]`` (Cook's membrane,
+neo-Hookean; ``all`` adds MINI and Taylor–Hood P2/P1).
 
 Examples
 --------
@@ -92,11 +93,13 @@ def iteration_times(scene: Scene, formulations: dict[str, dict], rounds: int = 5
 
 
 def main(argv: list[str] | None = None) -> None:  # pragma: no cover - a command
-    """Print the interleaved timing on Cook's membrane (``divisions``, default 48 48 4)."""
+    """Print the interleaved timing on Cook's membrane (``divisions``, default 48 48 4;
+    ``all``: MINI and Taylor–Hood too)."""
     from springfem.scene import scene_from_dict
 
     argv = sys.argv[1:] if argv is None else argv
-    div = [int(a) for a in argv[:3]] or [48, 48, 4]
+    every = "all" in argv  # also MINI and Taylor-Hood
+    div = [int(a) for a in argv if a.isdigit()][:3] or [48, 48, 4]
     scene = scene_from_dict(
         {
             "mesh": {"generator": "cook", "divisions": div},
@@ -109,6 +112,9 @@ def main(argv: list[str] | None = None) -> None:  # pragma: no cover - a command
         "P1": {"order": 1},
         "nodal-volume": {"order": 1, "formulation": "nodal-volume"},
     }
+    if every:
+        forms.update(mini={"order": 1, "formulation": "mini"})
+        forms.update(mixed={"order": 2, "formulation": "mixed"})
     out = iteration_times(scene, forms, rounds=7)
     print(f"Cook's membrane {div}: {scene.mesh.n_tets} tets, loadavg {out['loadavg']}")
     for k, v in out["median"].items():

@@ -16,9 +16,10 @@ Its gradient is the P1 force with the element pressure replaced by the average n
 pressure (Bonet & Burton's ANP tet), ``p_e = (1 - f) mean_{a ∈ e} U'(J_a) + f U'(J_e)``:
 ``f_e = V_e^0 (P_base + p_e J F^-T) grad N``. The tangent adds to the P1 blocks the nodal
 term ``(1 - f) sum_a U''(J_a) / V_a^0 (dV_a/dx)(dV_a/dx)^T``, which couples the nodes of
-neighbouring patches (a wider stencil than P1). ``f = 1`` is plain P1; ``f = 0`` is pure
-nodal averaging. The linear law is the small-strain limit, the split of the coupled
-neo-Hookean energy: ``D(mu, f lam)`` per element, ``(1 - f) lam`` on the nodal volumes.
+neighbouring patches (a wider stencil than P1); direct solves factorise it in its
+nodal-pressure form (:mod:`reference_fem.nodal_pressure_solve`). ``f = 1`` is plain P1;
+``f = 0`` is pure nodal averaging. The linear law is the small-strain limit, the split of
+the coupled neo-Hookean energy: ``D(mu, f lam)`` per element, ``(1 - f) lam`` on the nodal volumes.
 Manual: docs/fem.rst#nodal-volume-tetrahedra.
 
 Examples
@@ -54,6 +55,7 @@ from springfem.scene import Scene
 from .assembly import _gradient_products, linear_element_blocks
 from .hyperelastic import _det
 from .newton import InvertedElements
+from .nodal_pressure_solve import NodalPressureSolver, with_nodal_parts
 from .options import FemOptions
 from .problem import FemProblem
 from .volumetric_split import volumetric_split
@@ -87,6 +89,7 @@ class NodalVolumeProblem(FemProblem):
         if order != 1:
             raise InputError(f"formulation nodal-volume is for linear tets (order 1), got {order}")
         super().__init__(scene, 1, law, 1)
+        self.linear_solver = NodalPressureSolver(self.linear_solver)
         self.fraction = float(opts.stabilisation if stabilisation is None else stabilisation)
         if not 0.0 <= self.fraction <= 1.0:
             raise InputError(f"stabilisation must lie in [0, 1], got {self.fraction}")
@@ -187,8 +190,10 @@ class NodalVolumeProblem(FemProblem):
         if f < 1.0:
             g = np.einsum("eij,eaj->eai", JFiT, self.G)
             B = self._volume_gradient_matrix(g)
-            Bt = B.T.tocsr()
-            K = K + Bt @ (B.multiply(((1.0 - f) * ddUa / self.node_volume0)[:, None]).tocsr())
+            d = (1.0 - f) * ddUa / self.node_volume0
+            Ke = K
+            K = K + B.T.tocsr() @ (B.multiply(d[:, None]).tocsr())
+            K = with_nodal_parts(K, Ke, B, d)
         return fi, K
 
     def energy(self, u: np.ndarray, scale: float = 1.0) -> float | None:
@@ -214,7 +219,10 @@ class NodalVolumeProblem(FemProblem):
         fi, K = self.internal_force(u, tangent=True)
         fe, Kf = self.loads.vector_and_stiffness(u.reshape(-1, 3), scale)
         if Kf is not None:
+            parts = getattr(K, "nodal_parts", None)
             K = (K - Kf).tocsr()
+            if parts is not None:
+                K = with_nodal_parts(K, (parts[0] - Kf).tocsr(), parts[1], parts[2])
         ref = max(np.linalg.norm(fi), np.linalg.norm(fe))
         return fi - fe, K, Kf is None, ref
 

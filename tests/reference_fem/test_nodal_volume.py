@@ -4,6 +4,7 @@ mesh, the limits ``f = 1`` (plain P1) and small strain (the linear law), and the
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from reference_fem import FemProblem
 from reference_fem.nodal_volume import NodalVolumeProblem
@@ -156,3 +157,18 @@ def test_transverse_linear_is_refused():
     }
     with pytest.raises(InputError, match="transverse-linear"):
         problem(material, 0.0)
+
+
+def test_nodal_pressure_factorisation_gives_the_newton_correction():
+    """The augmented solve (reference_fem.nodal_pressure_solve) equals a solve with K."""
+    from springfem.mechanics import LinearSolver
+
+    p = problem(GUCCIONE, 0.0, **{"boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}]})
+    u = 0.01 * np.random.default_rng(3).standard_normal(p.n_dofs)
+    u[p.fixed_dofs] = 0.0
+    R, K, symmetric, _ = p.residual_tangent(u)
+    assert hasattr(K, "nodal_parts")
+    du = p.linear_solver.factorize(K, p.free, symmetric).solve(-R)
+    ref = LinearSolver("direct").solve(sp.csr_matrix(K), -R, p.free, symmetric)
+    # both direct, condition ~1e4: agreement to round-off
+    np.testing.assert_allclose(du, ref, atol=1e-10 * np.abs(ref).max())
