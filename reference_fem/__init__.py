@@ -16,10 +16,13 @@ Modules, one idea each:
 - ``newton``: the adapter to the core Newton (line search, adaptive load stepping).
 - ``law_names``: law names and :func:`~reference_fem.law_names.parse_law`.
 - ``problem``: :class:`FemProblem` (residual, tangent, energy, post-processing);
-  ``mixed``: the Taylor–Hood u-p problem.
+  ``mixed``: the Taylor–Hood u-p problem; ``mini``: the P1-bubble/P1 u-p problem;
+  ``nodal_volume``: P1 with nodal volumes; ``volumetric_split``: a law as element part
+  plus ``U(J)``.
 - ``solver``: :func:`solve` (scene in, Result out).
 - ``explicit``, ``explicit_kernels``, ``dynamics``: explicit P1 FEM and time integration.
-- ``scenes``: verification scenes built in code; ``bench``: the speed benchmark.
+- ``scenes``: verification scenes built in code; ``bench``: the speed benchmark;
+  ``bench_formulations``: one Newton iteration per formulation, interleaved.
 
 Public API
 ----------

@@ -2,8 +2,12 @@
 = "mixed"``), for incompressible (``incompressible = true``) or nearly incompressible tissue.
 
 The potential is ``Pi(u, p) = int W(F) - p (J - 1) - p^2 / (2 kappa) dX - work of the
-loads``, with ``W`` the law without its volumetric penalty (``kappa = inf`` when
-incompressible: ``J = 1`` weakly). Its stationarity gives the block system
+loads``, with ``W`` the law without its volumetric energy (``kappa = inf`` when
+incompressible: ``J = 1`` weakly): :func:`~reference_fem.volumetric_split.volumetric_split`
+of a tissue law or of neo-Hookean (uncoupled: the isochoric part and its ``kappa``; coupled:
+``mu/2 (I1 - 3) - mu ln J`` and ``kappa = lam``). Eliminating ``p`` leaves the volumetric
+energy ``kappa/2 (J - 1)^2`` whatever the law's ``U``; both agree at small strain. Its
+stationarity gives the block system
 
     [K_uu  K_up] [du]     [R_u]        R_u = int (P_W - p J F^-T) : grad du* dX - f_ext
     [K_pu  K_pp] [dp] = - [R_p],       R_p = -int (J - 1 + p / kappa) p* dX,
@@ -49,6 +53,7 @@ from .hyperelastic import _det
 from .laws import TissueLaw
 from .options import FemOptions
 from .problem import FemProblem
+from .volumetric_split import volumetric_split
 
 #: The pressure unknowns are ``q = p / (P_SCALE mu)`` and the constraint rows are scaled by
 #: the same factor (a symmetric scaling), so both residual blocks are forces of similar size
@@ -66,6 +71,8 @@ class MixedProblem(FemProblem):
     """
 
     mixed = True
+    #: The displacement order of the pair and its name in ``law_name``.
+    pair_order, pair_label = 2, "mixed-P2P1"
 
     def __init__(
         self,
@@ -75,20 +82,21 @@ class MixedProblem(FemProblem):
         intorder: int | None = None,
     ):
         order = int(FemOptions.of(scene).order if order is None else order)
-        if order != 2:
+        if order != self.pair_order:
             raise InputError(
-                f"formulation mixed is Taylor–Hood P2/P1 and needs order 2, got {order}"
+                f"formulation {self.pair_label} needs order {self.pair_order}, got {order}"
             )
         super().__init__(scene, order, law, intorder)
-        if not isinstance(self.law, TissueLaw):
+        if self.law is None:
             raise InputError(
-                f"formulation mixed needs a tissue law (guccione, holzapfel-ogden), got "
-                f"{self.law_name}"
+                "formulation mixed needs a hyperelastic law (neo-hookean, guccione, "
+                f"holzapfel-ogden), got {self.law_name}"
             )
-        kappa = self.law.kappa
-        self.bulk = kappa if kappa > 0 else np.inf
-        self.law = type(self.law)(**{**self.law.__dict__, "kappa": 0.0})
-        self.law_name = f"{self.law.label}/mixed-P2P1"
+        label = self.law.label if isinstance(self.law, TissueLaw) else self.law.name
+        split = volumetric_split(self.law)  # W = W_base + U(J): p carries U
+        self.bulk = split.kappa if split.kappa > 0 else np.inf
+        self.law = split.base
+        self.law_name = f"{label}/{self.pair_label}"
         self.nu = self.space.n_dofs
         self.n_p = scene.mesh.n_points
         pb = skfem.Basis(self.space.skmesh, skfem.ElementTetP1(), intorder=self.space.intorder)

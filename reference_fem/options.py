@@ -22,7 +22,11 @@ from springfem.scene import Scene, TableReader, register_section
 LinearSolver = Literal["auto", "direct", "amg"]
 Solver = Literal["static", "explicit", "implicit"]
 Precision = Literal["float64", "mixed", "float32"]
-Formulation = Literal["displacement", "mixed"]
+Formulation = Literal["displacement", "mixed", "nodal-volume", "mini"]
+
+#: Default ``[fem] stabilisation`` of ``formulation = "nodal-volume"``: the smallest share
+#: that takes Land's ventricle to full load (docs/fem.rst#nodal-volume-tetrahedra).
+STABILISATION = 1e-4
 
 
 @dataclass(frozen=True)
@@ -54,8 +58,14 @@ class FemOptions:
         Explicit force kernel: ``float64``, ``mixed`` (float32 constants, float64
         arithmetic) or ``float32``.
     formulation
-        ``displacement``, or ``mixed``: Taylor–Hood P2 displacement / P1 pressure (needed
-        for ``incompressible = true`` materials).
+        ``displacement``; ``mixed``: Taylor–Hood P2 displacement / P1 pressure (needed
+        for ``incompressible = true`` materials, order 2); ``nodal-volume``: linear tets
+        with the volumetric energy on nodal volumes (order 1,
+        :mod:`reference_fem.nodal_volume`); ``mini``: P1-bubble / P1 pressure (order 1,
+        :mod:`reference_fem.mini`).
+    stabilisation
+        ``nodal-volume`` only: the share of the volumetric energy kept per element, in
+        [0, 1] (0: pure nodal averaging, 1: plain P1).
     """
 
     order: int = 1
@@ -70,6 +80,7 @@ class FemOptions:
     mass_damping: float = 0.0
     precision: Precision = "float64"
     formulation: Formulation = "displacement"
+    stabilisation: float = STABILISATION
 
     @classmethod
     def choices(cls, name: str) -> tuple[str, ...]:
@@ -120,6 +131,15 @@ def parse_fem_options(r: TableReader) -> FemOptions:
     for key in ("max_iter", "load_steps", "steps"):
         if r.has(key):
             kw[key] = r.get(key, "int", positive=True)
+    if r.has("stabilisation"):
+        kw["stabilisation"] = r.get("stabilisation", "float", nonneg=True)
+        if kw["stabilisation"] > 1.0:
+            raise r.fail("stabilisation", f"must lie in [0, 1], got {kw['stabilisation']}")
+        if kw.get("formulation") != "nodal-volume":
+            raise r.fail("stabilisation", 'applies to formulation = "nodal-volume" only')
+    form, order = kw.get("formulation", "displacement"), kw.get("order", 1)
+    if form in ("nodal-volume", "mini") and order != 1:
+        raise r.fail("order", f'formulation = "{form}" is for linear tets: order 1, not {order}')
     if kw.get("solver", "static") != "static" and "t_end" not in kw and "steps" not in kw:
         raise r.fail("solver", f"{kw['solver']!r} needs fem.t_end or fem.steps")
     r.finish()

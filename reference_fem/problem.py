@@ -65,6 +65,7 @@ class FemProblem:
     """
 
     mixed = False  # the u-p formulation is reference_fem.mixed.MixedProblem
+    locking_free = False  # a formulation that takes a penalty for incompressible materials
 
     def __init__(
         self,
@@ -77,14 +78,15 @@ class FemProblem:
         self.order = int(FemOptions.of(scene).order if order is None else order)
         self.kind, self.law = parse_law(scene, law)
         self.nonlinear = self.law is not None
-        if scene.material.incompressible and not self.mixed:
-            raise InputError('incompressible = true needs [fem] formulation = "mixed"')
+        if scene.material.incompressible and not (self.mixed or self.locking_free):
+            raise InputError(
+                'incompressible = true needs [fem] formulation = "mixed" or "nodal-volume"'
+            )
         # per-element frames for anisotropic laws, broadcast over quadrature
         self.frames = scene.frames if getattr(self.law, "anisotropic", False) else None
         self.qframes = None if self.frames is None else self.frames[:, None]
         self.law_name = self.law.name if self.law is not None else self.kind
-        q = default_intorder(self.order, self.nonlinear) if intorder is None else intorder
-        self.space = Space(scene.mesh, self.order, q)
+        self.space = self._make_space(scene, intorder)
         self.pattern = BlockPattern(self.space.element_nodes, self.space.n_nodes)
         self.bc = dirichlet(scene, self.space)
         self.loads = ExternalLoads.from_scene(scene, self.space, follower=self.nonlinear)
@@ -97,6 +99,11 @@ class FemProblem:
             self.D_groups, self.group = material_groups(scene.material, scene.frames, self.kind)
         else:
             self.D_groups, self.group = material_groups(scene.material, scene.frames, "linear")
+
+    def _make_space(self, scene: Scene, intorder: int | None) -> Space:
+        """The displacement space (a subclass may enrich it, :mod:`reference_fem.mini`)."""
+        q = default_intorder(self.order, self.nonlinear) if intorder is None else intorder
+        return Space(scene.mesh, self.order, q)
 
     # -- the NonlinearProblem protocol ------------------------------------------------------
     @property

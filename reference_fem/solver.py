@@ -115,7 +115,8 @@ def make_problem(scene: Scene, order: int | None = None, law: str | None = None)
     Parameters
     ----------
     scene
-        The scene; ``[fem] formulation = "mixed"`` selects the Taylor–Hood problem.
+        The scene; ``[fem] formulation`` ``"mixed"`` selects the Taylor–Hood problem,
+        ``"nodal-volume"`` the nodal-volume P1 problem, ``"mini"`` the MINI pair.
     order, law
         As for :class:`~reference_fem.problem.FemProblem`.
 
@@ -131,10 +132,19 @@ def make_problem(scene: Scene, order: int | None = None, law: str | None = None)
         Unknown law or order, a law the material cannot provide, or an incompressible
         material without the mixed formulation.
     """
-    if FemOptions.of(scene).formulation == "mixed":
+    formulation = FemOptions.of(scene).formulation
+    if formulation == "mixed":
         from .mixed import MixedProblem
 
         return MixedProblem(scene, order, law)
+    if formulation == "mini":
+        from .mini import MiniProblem
+
+        return MiniProblem(scene, order, law)
+    if formulation == "nodal-volume":
+        from .nodal_volume import NodalVolumeProblem
+
+        return NodalVolumeProblem(scene, order, law)
     return FemProblem(scene, order, law)
 
 
@@ -175,7 +185,9 @@ def solve(
         return _solve(problem, verbose, t0)
     except SolverError as exc:
         raise SolverError(
-            f"{scene.name} (fem P{problem.order}, {problem.law_name}): {exc}", state=exc.state
+            f"{scene.name} (fem P{problem.order}, {problem.law_name}): {exc}",
+            state=exc.state,
+            load_factor=exc.load_factor,
         ) from None
 
 

@@ -23,6 +23,7 @@ from ..errors import InputError, SceneError
 from ..materials.tissue import TISSUE_LAWS
 from ..mesh import Split, TetMesh, box_mesh, read_mesh
 from ..regions import Region, locate_points, resolve_region
+from .cook import parse_cook
 from .limits import check_mesh_size
 from .reader import MAX_MAGNITUDE, TableReader, _show, is_number
 from .tissue import TISSUE_KEYS, parse_tissue
@@ -45,6 +46,7 @@ SECTION_KEYS = {
     "mesh": (
         *("file", "scale", "generator", "size", "divisions", "split", "origin", "jitter", "seed"),
         *ELLIPSOID_KEYS,
+        "thickness",
     ),
     "material": (
         *("law", "density", "E", "nu", "mu", "kappa", "formulation", "volumetric"),
@@ -95,9 +97,11 @@ def parse_mesh(r: TableReader, base: Path) -> TetMesh:
         if too_big:
             raise r.fail("file", too_big)
         return mesh
-    gen = r.get("generator", "str", choices=("box", "ellipsoid"))
+    gen = r.get("generator", "str", choices=("box", "ellipsoid", "cook"))
     if gen == "ellipsoid":
         return parse_ellipsoid(r)
+    if gen == "cook":
+        return parse_cook(r)
     size = r.get("size", "vec", length=3, positive=True)
     div = r.get("divisions", "ivec", length=3, positive=True)
     split: Split = r.get("split", "str", default="six", choices=opt_splits())

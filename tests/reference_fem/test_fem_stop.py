@@ -86,3 +86,22 @@ def test_newton_that_gives_up_reports_its_load_factor():
         go()
     assert e.value.load_factor is not None
     check_last_good(e.value, seen)
+
+
+def test_solve_that_gives_up_keeps_the_load_factor():
+    """:func:`reference_fem.solve` adds the scene to the message and keeps both fields."""
+    from reference_fem import solve
+    from springfem.scene import scene_from_dict
+
+    scene = scene_from_dict(
+        {
+            "mesh": {"generator": "cook", "divisions": [4, 4, 1]},
+            "material": {"law": "neo-hookean", "E": 240.565, "nu": 0.4999},
+            "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+            "load": [{"type": "traction", "region": "x_max", "value": [0.0, 20.0, 0.0]}],
+            "fem": {"max_iter": 1, "load_steps": 1},
+        }
+    )
+    with pytest.raises(SolverError) as e:
+        solve(scene)
+    assert e.value.load_factor == 0.0 and e.value.state is not None

@@ -95,9 +95,9 @@ def test_errors():
         solve(_cube(inc, 0.1, {}))
     with pytest.raises(InputError, match="order 2"):
         solve(_cube(inc, 0.1, {"formulation": "mixed", "order": 1}))
-    nh = {"law": "neo-hookean", "E": 1.0, "nu": 0.3}
-    with pytest.raises(InputError, match="tissue law"):
-        solve(_cube(nh, 0.1, MIXED))
+    linear = {"law": "linear", "E": 1.0, "nu": 0.3}
+    with pytest.raises(InputError, match="hyperelastic law"):
+        solve(_cube(linear, 0.1, MIXED))
     with pytest.raises(InputError, match="use law guccione"):
         solve(_cube(inc, 0.1, MIXED), law="neo-hookean")
     with pytest.raises(SceneError, match="material.b_t: missing"):
@@ -130,3 +130,32 @@ def test_doctest():
     import reference_fem.mixed
 
     assert doctest.testmod(reference_fem.mixed).failed == 0
+
+
+NH = {"law": "neo-hookean", "E": 10.0, "nu": 0.49}
+
+
+def test_mixed_uncoupled_neo_hookean_is_the_quadratic_penalty_law():
+    """Eliminating p leaves kappa/2 (J-1)^2: the displacement formulation with it."""
+    law = {**NH, "formulation": "uncoupled", "volumetric": "quadratic"}
+    mixed = _stretches(_cube(law, 2.0, MIXED))
+    displacement = _stretches(_cube(law, 2.0, {"order": 2}))
+    assert mixed == pytest.approx(displacement, rel=1e-8)  # Newton tolerance
+
+
+def test_mixed_coupled_neo_hookean_uniaxial_is_the_closed_form():
+    """``mu/2 (I1 - 3) - mu ln J + lam/2 (J - 1)^2`` under uniaxial traction ``t``."""
+    from scipy.optimize import fsolve
+
+    E, nu, t = NH["E"], NH["nu"], 2.0
+    mu, lam = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
+
+    def stationary(s):
+        l1, l2 = s
+        J = l1 * l2**2
+        dWdJ = -mu / J + lam * (J - 1)
+        return [mu * l1 + dWdJ * l2**2 - t, 2 * mu * l2 + dWdJ * 2 * l1 * l2]
+
+    l1, l2 = fsolve(stationary, [1.1, 0.95], xtol=1e-12)
+    assert _stretches(_cube(NH, t, MIXED)) == pytest.approx([l1, l2, l2], rel=1e-8)
+    assert make_problem(_cube(NH, t, MIXED)).law_name == "neo-hookean/coupled/mixed-P2P1"
