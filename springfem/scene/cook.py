@@ -44,6 +44,7 @@ def parse_cook(r: TableReader) -> TetMesh:
     if too_big:
         raise r.fail("divisions", too_big)
     try:
-        return cook_membrane_mesh(tuple(int(d) for d in div), thickness, jitter, seed)
+        nx, ny, nz = (int(d) for d in div)
+        return cook_membrane_mesh((nx, ny, nz), thickness, jitter, seed)
     except InputError as exc:
         raise r.fail("jitter", str(exc)) from None

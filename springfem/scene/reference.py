@@ -62,6 +62,7 @@ def _corpus() -> Iterator[dict]:
     yield {**base, "mesh": {**_BOX, "split": "delaunay"}}
     yield {**base, "mesh": {"file": "missing.vtu"}}
     yield {**base, "mesh": {"generator": "ellipsoid", "base_z": 1e9}}  # refused before meshing
+    yield {**base, "mesh": {"generator": "cook", "divisions": [1, 1, 1]}}
     for axes in ({"type": "uniform"}, {"type": "helix", "range": [0, 1], "angles": [60, -60]},
                  {"type": "cells"}, {"type": "rule-based"}):  # fmt: skip
         yield {**base, "axes": axes}
