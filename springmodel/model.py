@@ -66,7 +66,8 @@ class SpringModel:
         if scene.material.parameters.get("active_tension"):
             raise InputError(
                 f"{scene.name}: material.active_tension: the spring model carries no active "
-                "tension (docs/tissue.rst#active-tension); solve it with --model fem"
+                "tension (docs/tissue.rst#active-tension-in-the-spring-model); solve it with "
+                "--model fem"
             )
         self.options = options or SpringOptions.of(scene)
         mesh = scene.mesh

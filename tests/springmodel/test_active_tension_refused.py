@@ -1,5 +1,6 @@
-"""The spring model carries no active fibre tension (docs/tissue.rst#active-tension): a
-scene with ``[material] active_tension`` is refused in one line, never solved passive."""
+"""The spring model carries no active fibre tension
+(docs/tissue.rst#active-tension-in-the-spring-model): a scene with ``[material]
+active_tension`` is refused in one line, never solved passive."""
 
 import pytest
 
