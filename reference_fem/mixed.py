@@ -133,7 +133,7 @@ class MixedProblem(FemProblem):
                 raise InvertedElements(ids)
             FiT = np.swapaxes(np.linalg.inv(F), -1, -2)
             pq = np.einsum("qa,ea->eq", Np, p[self.p_nodes[sl]])
-            frames = None if self.frames is None else self.frames[sl, None]
+            frames = None if self.qframes is None else self.qframes[sl]
             if tangent:
                 P, A = law.stress_tangent(F, frames=frames)
             else:

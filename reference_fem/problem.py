@@ -46,6 +46,7 @@ from .loads import ExternalLoads
 from .materials import material_groups
 from .newton import InvertedElements
 from .options import FemOptions
+from .point_fibres import quadrature_frames
 from .space import Space, default_intorder
 
 
@@ -85,6 +86,10 @@ class FemProblem:
         self.law_name = self.law.name if self.law is not None else self.kind
         q = default_intorder(self.order, self.nonlinear) if intorder is None else intorder
         self.space = Space(scene.mesh, self.order, q)
+        if self.frames is not None:  # rule-based fibres: one per quadrature point (P2)
+            point_frames = quadrature_frames(scene, self.space)
+            if point_frames is not None:
+                self.qframes = point_frames
         self.pattern = BlockPattern(self.space.element_nodes, self.space.n_nodes)
         self.bc = dirichlet(scene, self.space)
         self.loads = ExternalLoads.from_scene(scene, self.space, follower=self.nonlinear)
@@ -145,7 +150,7 @@ class FemProblem:
         if not self.nonlinear:
             return self.stiffness @ u, (self.stiffness if tangent else None)
         fe, Ke = hyperelastic_element_arrays(
-            self.space, self.law_at(scale), u.reshape(-1, 3), tangent, self.frames
+            self.space, self.law_at(scale), u.reshape(-1, 3), tangent, self.qframes
         )
         bad = ~np.isfinite(fe).all(axis=(1, 2))
         if bad.any():
