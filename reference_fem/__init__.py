@@ -8,7 +8,9 @@ AMG-preconditioned Krylov solves.
 Modules, one idea each:
 
 - ``materials``: per-element Voigt matrices grouped by frame.
-- ``hyperelastic``: neo-Hookean energy, stress and tangent; ``laws/``: the tissue laws.
+- ``hyperelastic``: neo-Hookean energy, stress and tangent; ``laws/``: the tissue laws
+  (with an optional active fibre tension); ``point_fibres``: rule-based fibres at the P2
+  quadrature points.
 - ``space``: P1/P2 shape-function gradients and quadrature on the scene mesh.
 - ``assembly``: einsum element arrays and 3x3-block sparse assembly.
 - ``loads``: consistent load vectors, follower pressure and its stiffness.

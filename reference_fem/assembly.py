@@ -253,7 +253,8 @@ def hyperelastic_element_arrays(
     tangent
         Also compute the tangent blocks.
     frames
-        Element frames ``(m, 3, 3)`` (anisotropic laws), passed as ``frames=``.
+        Element frames ``(m, 3, 3)`` or frames per quadrature point ``(m, nq, 3, 3)``
+        (anisotropic laws), passed as ``frames=``.
 
     Returns
     -------
@@ -269,7 +270,10 @@ def hyperelastic_element_arrays(
         sl = slice(start, min(m, start + CHUNK))
         G, dx = space.grads[sl], space.dx[sl]
         F = eye + displacement_gradient(space, U, sl)
-        kw = {} if frames is None else {"frames": frames[sl, None]}
+        if frames is None:
+            kw = {}
+        else:  # element frames (m, 3, 3) or frames per quadrature point (m, nq | 1, 3, 3)
+            kw = {"frames": frames[sl] if frames.ndim == 4 else frames[sl, None]}
         if tangent:
             P, A = law.stress_tangent(F, **kw)
         else:

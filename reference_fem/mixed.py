@@ -116,9 +116,11 @@ class MixedProblem(FemProblem):
         """Nodal displacement ``(n_nodes, 3)`` and vertex pressure ``(n_vertices,)``."""
         return np.asarray(x[: self.nu]).reshape(-1, 3), self.p_scale * np.asarray(x[self.nu :])
 
-    def internal_force(self, x: np.ndarray, tangent: bool = False):
-        """``[R_u + f_ext, R_p]`` (the internal part) and the block tangent."""
+    def internal_force(self, x: np.ndarray, tangent: bool = False, scale: float = 1.0):
+        """``[R_u + f_ext, R_p]`` (the internal part) and the block tangent at load factor
+        ``scale`` (which ramps an active tension)."""
         U, p = self.split(x)
+        law = self.law_at(scale)
         space = self.space
         m, nq, nloc, _ = space.grads.shape
         fu = np.empty((m, nloc, 3))
@@ -139,11 +141,11 @@ class MixedProblem(FemProblem):
                 raise InvertedElements(ids)
             FiT = np.swapaxes(np.linalg.inv(F), -1, -2)
             pq = np.einsum("qa,ea->eq", Np, p[self.p_nodes[sl]])
-            frames = None if self.frames is None else self.frames[sl, None]
+            frames = None if self.qframes is None else self.qframes[sl]
             if tangent:
-                P, A = self.law.stress_tangent(F, frames=frames)
+                P, A = law.stress_tangent(F, frames=frames)
             else:
-                P = self.law.stress(F, frames=frames)
+                P = law.stress(F, frames=frames)
             JFiT = J[..., None, None] * FiT
             P = P - pq[..., None, None] * JFiT
             fu[sl] = np.einsum("eq,eqij,eqaj->eai", dx, P, G)
@@ -200,21 +202,21 @@ class MixedProblem(FemProblem):
         return np.concatenate([fe, np.zeros(self.n_p)]), Kf
 
     def residual(self, x: np.ndarray, scale: float = 1.0) -> tuple[np.ndarray, float]:
-        fi, _ = self.internal_force(x)
+        fi, _ = self.internal_force(x, scale=scale)
         fe, _ = self._external(x, scale, False)
-        return fi - fe, max(np.linalg.norm(fi), np.linalg.norm(fe))
+        return fi - fe, self.force_scale(fi, fe, scale)
 
     def energy(self, x: np.ndarray, scale: float = 1.0) -> None:
         """``None``: a saddle point has no energy to decrease (the line search uses |R|)."""
         return None
 
     def residual_tangent(self, x: np.ndarray, scale: float = 1.0):
-        fi, K = self.internal_force(x, tangent=True)
+        fi, K = self.internal_force(x, tangent=True, scale=scale)
         fe, Kf = self._external(x, scale, True)
         if Kf is not None:
             pad = sp.csr_matrix((self.n_p, self.n_p))
             K = K - sp.block_diag([Kf.tocsr(), pad], format="csr")
-        return fi - fe, K, False, max(np.linalg.norm(fi), np.linalg.norm(fe))
+        return fi - fe, K, False, self.force_scale(fi, fe, scale)
 
     def state(self, x: np.ndarray) -> np.ndarray:
         return self.split(x)[0][: self.space.n_vertices].copy()

@@ -155,11 +155,17 @@ class NodalVolumeProblem(FemProblem):
         return (self.pattern.matrix(blocks) + B.T @ sp.diags(w) @ B).tocsr()
 
     # -- the NonlinearProblem protocol ---------------------------------------------------------
-    def internal_force(self, u: np.ndarray, tangent: bool = False):
-        """``f_int(u)`` and (optionally) its tangent matrix."""
+    def _split_at(self, scale: float):
+        """The law's split at load factor ``scale`` (an active tension ramps with it)."""
+        if self.split is None or not getattr(self.law, "active_tension", 0.0):
+            return self.split
+        return volumetric_split(self.law_at(scale), self.scene.material)
+
+    def internal_force(self, u: np.ndarray, tangent: bool = False, scale: float = 1.0):
+        """``f_int(u)`` and (optionally) its tangent matrix at load factor ``scale``."""
         if self.split is None:
             return self.stiffness @ u, (self.stiffness if tangent else None)
-        f, split = self.fraction, self.split
+        f, split = self.fraction, self._split_at(scale)
         F = self._F(u)
         J = _det(F)
         Ja = self._nodal_j(J)
@@ -207,7 +213,7 @@ class NodalVolumeProblem(FemProblem):
         Ja = self._nodal_j(J)
         if not ((J > 0).all() and (Ja > 0).all()):
             return np.nan
-        W = self.split.base.energy(F, frames=self.frames)
+        W = self._split_at(scale).base.energy(F, frames=self.frames)
         Ue = self.split.volumetric(J)[0]
         Ua = self.split.volumetric(Ja)[0]
         f = self.fraction
@@ -216,15 +222,14 @@ class NodalVolumeProblem(FemProblem):
 
     def residual_tangent(self, u: np.ndarray, scale: float = 1.0):
         """Residual, tangent (CSR), whether it is symmetric, and the force scale."""
-        fi, K = self.internal_force(u, tangent=True)
+        fi, K = self.internal_force(u, tangent=True, scale=scale)
         fe, Kf = self.loads.vector_and_stiffness(u.reshape(-1, 3), scale)
         if Kf is not None:
             parts = getattr(K, "nodal_parts", None)
             K = (K - Kf).tocsr()
             if parts is not None:
                 K = with_nodal_parts(K, (parts[0] - Kf).tocsr(), parts[1], parts[2])
-        ref = max(np.linalg.norm(fi), np.linalg.norm(fe))
-        return fi - fe, K, Kf is None, ref
+        return fi - fe, K, Kf is None, self.force_scale(fi, fe, scale)
 
     def cell_data(self, u: np.ndarray) -> dict[str, np.ndarray]:
         """``J``, von Mises stress of the element part and the element's mean nodal ``J``."""

@@ -46,6 +46,7 @@ from .loads import ExternalLoads
 from .materials import material_groups
 from .newton import InvertedElements
 from .options import FemOptions
+from .point_fibres import quadrature_frames
 from .space import Space, default_intorder
 
 
@@ -87,6 +88,10 @@ class FemProblem:
         self.qframes = None if self.frames is None else self.frames[:, None]
         self.law_name = self.law.name if self.law is not None else self.kind
         self.space = self._make_space(scene, intorder)
+        if self.frames is not None:  # rule-based fibres: one per quadrature point (P2)
+            point_frames = quadrature_frames(scene, self.space)
+            if point_frames is not None:
+                self.qframes = point_frames
         self.pattern = BlockPattern(self.space.element_nodes, self.space.n_nodes)
         self.bc = dirichlet(scene, self.space)
         self.loads = ExternalLoads.from_scene(scene, self.space, follower=self.nonlinear)
@@ -128,12 +133,31 @@ class FemProblem:
         blocks = linear_element_blocks(self.space.grads, self.space.dx, self.D_groups, self.group)
         return self.pattern.matrix(blocks)
 
-    def internal_force(self, u: np.ndarray, tangent: bool = False):
-        """``f_int(u)`` and (optionally) its tangent matrix."""
+    def law_at(self, scale: float = 1.0):
+        """The law at load factor ``scale``: an active tension ramps with the loads
+        (docs/fem.rst#active-tension); other laws are load independent."""
+        activated = getattr(self.law, "activated", None)
+        return self.law if activated is None else activated(scale)
+
+    @cached_property
+    def active_force(self) -> float:
+        """``|f_int(0)|`` at full activation: the size of the active tension's nodal forces
+        (0 without one). It joins the force scale of the Newton stop, which ``|f_int|``
+        and ``|f_ext|`` alone would lose where the active and passive stresses cancel."""
+        if not getattr(self.law, "active_tension", 0.0):
+            return 0.0
+        return float(np.linalg.norm(self.internal_force(np.zeros(self.n_dofs))[0]))
+
+    def force_scale(self, fi: np.ndarray, fe: np.ndarray, scale: float) -> float:
+        """``max(|f_int|, |f_ext|, scale |f_active|)``, the reference of the Newton stop."""
+        return max(np.linalg.norm(fi), np.linalg.norm(fe), scale * self.active_force)
+
+    def internal_force(self, u: np.ndarray, tangent: bool = False, scale: float = 1.0):
+        """``f_int(u)`` and (optionally) its tangent matrix at load factor ``scale``."""
         if not self.nonlinear:
             return self.stiffness @ u, (self.stiffness if tangent else None)
         fe, Ke = hyperelastic_element_arrays(
-            self.space, self.law, u.reshape(-1, 3), tangent, self.frames
+            self.space, self.law_at(scale), u.reshape(-1, 3), tangent, self.qframes
         )
         bad = ~np.isfinite(fe).all(axis=(1, 2))
         if bad.any():
@@ -143,10 +167,10 @@ class FemProblem:
         return self.pattern.vector(fe), (self.pattern.matrix(Ke) if tangent else None)
 
     def residual(self, u: np.ndarray, scale: float = 1.0) -> tuple[np.ndarray, float]:
-        """``R = f_int - f_ext`` and the force scale ``max(|f_int|, |f_ext|)``."""
-        fi, _ = self.internal_force(u)
+        """``R = f_int - f_ext`` and the force scale (:meth:`force_scale`)."""
+        fi, _ = self.internal_force(u, scale=scale)
         fe = self.loads.vector(u.reshape(-1, 3), scale)
-        return fi - fe, max(np.linalg.norm(fi), np.linalg.norm(fe))
+        return fi - fe, self.force_scale(fi, fe, scale)
 
     def energy(self, u: np.ndarray, scale: float = 1.0) -> float | None:
         """Potential energy ``int psi dV - f_dead . u``; ``None`` with follower loads."""
@@ -155,17 +179,16 @@ class FemProblem:
         if not self.nonlinear:
             return 0.5 * float(u @ (self.stiffness @ u)) - scale * float(self.loads.dead @ u)
         F = np.eye(3) + displacement_gradient(self.space, np.asarray(u).reshape(-1, 3))
-        psi = self.law.energy(F, frames=self.qframes)
+        psi = self.law_at(scale).energy(F, frames=self.qframes)
         return float((self.space.dx * psi).sum()) - scale * float(self.loads.dead @ u)
 
     def residual_tangent(self, u: np.ndarray, scale: float = 1.0):
         """Residual, tangent ``dR/du``, whether it is symmetric, and the force scale."""
-        fi, K = self.internal_force(u, tangent=True)
+        fi, K = self.internal_force(u, tangent=True, scale=scale)
         fe, Kf = self.loads.vector_and_stiffness(u.reshape(-1, 3), scale)
         if Kf is not None:
             K = (K - Kf).tobsr(blocksize=(3, 3))
-        ref = max(np.linalg.norm(fi), np.linalg.norm(fe))
-        return fi - fe, K, Kf is None, ref
+        return fi - fe, K, Kf is None, self.force_scale(fi, fe, scale)
 
     def solve_linear(self, K, b: np.ndarray, symmetric: bool = True, where: str = ""):
         return self.linear_solver.solve(K, b, self.free, symmetric, where)

@@ -112,9 +112,59 @@ def rule_based_frames(
     """
     sk, x = _laplace(mesh, endo, epi)
     centre = skfem.Basis(sk, skfem.ElementTetP2(), intorder=1)  # one point: the barycentre
-    field = centre.interpolate(x)
-    g = np.asarray(field.grad)[:, :, 0].T
-    depth = np.asarray(field)[:, 0]
+    frames, depth = _frames_at(centre, x, endo_angle, epi_angle, axis)
+    return frames[:, 0], depth[:, 0]
+
+
+def rule_based_point_frames(
+    mesh: TetMesh,
+    intorder: int,
+    endo_angle: float = 60.0,
+    epi_angle: float = -60.0,
+    axis=(0.0, 0.0, 1.0),
+    endo: str = "endo",
+    epi: str = "epi",
+) -> np.ndarray:
+    """The frames of :func:`rule_based_frames` at each element's quadrature points.
+
+    A fibre per quadrature point follows the helix through a wall that is only one or two
+    elements thick, which one fibre per element cannot
+    (docs/verification.rst#land-problem-3-fibres).
+
+    Parameters
+    ----------
+    mesh
+        A ventricle mesh with facet sets ``endo`` and ``epi``.
+    intorder
+        Order of the scikit-fem tetrahedron quadrature (the FEM space's ``intorder``).
+    endo_angle, epi_angle, axis, endo, epi
+        As for :func:`rule_based_frames`.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(m, nq, 3, 3)`` frames (rows: fiber, sheet, normal) at the quadrature points.
+
+    Examples
+    --------
+    >>> from springfem.ellipsoid import ellipsoid_mesh
+    >>> m = ellipsoid_mesh(size=6.0)
+    >>> q = rule_based_point_frames(m, intorder=2, endo_angle=-90.0, epi_angle=90.0)
+    >>> q.shape == (m.n_tets, 4, 3, 3)
+    True
+    """
+    sk, x = _laplace(mesh, endo, epi)
+    basis = skfem.Basis(sk, skfem.ElementTetP2(), intorder=intorder)
+    return _frames_at(basis, x, endo_angle, epi_angle, axis)[0]
+
+
+def _frames_at(basis, x: np.ndarray, endo_angle: float, epi_angle: float, axis):
+    """Frames ``(m, nq, 3, 3)`` and depth ``(m, nq)`` at the quadrature points of ``basis``."""
+    field = basis.interpolate(x)
+    grad = np.asarray(field.grad)  # (3, m, nq)
+    m, nq = grad.shape[1:]
+    g = grad.transpose(1, 2, 0).reshape(-1, 3)
+    depth = np.asarray(field).reshape(-1)
     norm = np.linalg.norm(g, axis=1)
     if not (norm > 0).all():
         raise InputError("rule-based fibres: the transmural depth is flat in some elements")
@@ -131,4 +181,4 @@ def rule_based_frames(
     ell = np.cross(t, c)
     a = np.radians(endo_angle + (epi_angle - endo_angle) * depth)[:, None]
     f = np.cos(a) * c + np.sin(a) * ell
-    return orthonormal_frame(f, t), depth
+    return orthonormal_frame(f, t).reshape(m, nq, 3, 3), depth.reshape(m, nq)

@@ -27,7 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from springfem.cardiac import cavity_summary, is_ventricle
-from springfem.errors import SolverError
+from springfem.errors import InputError, SolverError
 from springfem.loads import external_forces, has_follower_loads, lumped_masses, reactions
 from springfem.mechanics.limits import SolveStopped
 from springfem.result import Result, frame_cell_data, volume_summary
@@ -63,6 +63,12 @@ class SpringModel:
         self, scene: Scene, options: SpringOptions | None = None, parallel: bool | None = None
     ):
         self.scene = scene
+        if scene.material.parameters.get("active_tension"):
+            raise InputError(
+                f"{scene.name}: material.active_tension: the spring model carries no active "
+                "tension (docs/tissue.rst#active-tension-in-the-spring-model); solve it with "
+                "--model fem"
+            )
         self.options = options or SpringOptions.of(scene)
         mesh = scene.mesh
         self.elements: SpringElements = build_spring_elements(

@@ -34,8 +34,9 @@ def tissue_law(material, kappa: float | None = None) -> TissueLaw:
     Parameters
     ----------
     material
-        A :class:`~springfem.scene.Material` (its ``parameters`` hold the law's keys and
-        ``kappa``; ``incompressible`` materials get ``kappa = 0``).
+        A :class:`~springfem.scene.Material` (its ``parameters`` hold the law's keys,
+        ``kappa`` (``incompressible`` materials get ``kappa = 0``) and, if active,
+        ``active_tension``).
     kappa
         Override of the penalty bulk modulus (0: none, for the mixed formulation).
 
@@ -48,7 +49,10 @@ def tissue_law(material, kappa: float | None = None) -> TissueLaw:
     params = dict(material.parameters)
     values = {k: float(params[k]) for k in TISSUE_LAWS[material.law]}
     k = float(params.get("kappa", 0.0)) if kappa is None else float(kappa)
-    return _CLASSES[material.law](kappa=k, volumetric=material.volumetric, **values)
+    active = float(params.get("active_tension", 0.0))
+    return _CLASSES[material.law](
+        kappa=k, volumetric=material.volumetric, active_tension=active, **values
+    )
 
 
 __all__ = ["TISSUE_LAWS", "Guccione", "HolzapfelOgden", "TissueLaw", "tissue_law"]

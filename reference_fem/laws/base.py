@@ -11,6 +11,12 @@ The fibre invariants are those of the full ``C``, never split isochorically (Nol
 2014); incompressibility comes from ``U(J)`` or from the mixed formulation
 (``kappa = 0``, :mod:`reference_fem.mixed`).
 
+An active fibre tension ``T_a`` (``active_tension``, docs/fem.rst#active-tension) adds
+``T_a f0 (x) f0`` to the second Piola stress: in the element frame (``f0 = e_0``) the
+energy-like term ``T_a/2 (I4f - 1)`` with ``I4f = C'_00``, so ``P' += T_a F' e_0 (x) e_0``
+and ``A'_iJkL += T_a delta_ik delta_J0 delta_L0``; :meth:`TissueLaw.activated` scales it
+with the load factor.
+
 Examples
 --------
 A law with no energy of its own (``W = 0``) is the volumetric penalty alone:
@@ -27,11 +33,17 @@ A law with no energy of its own (``W = 0``) is the volumetric penalty alone:
 ('penalty/quadratic', 0.0)
 >>> bool(np.isnan(law.energy(-np.eye(3))))  # inverted (J <= 0): NaN
 True
+
+An active tension ``T_a`` is a fibre stress ``S_ff = T_a`` at rest; half of it at load 0.5:
+
+>>> active = Penalty(kappa=1.0, active_tension=60.0)
+>>> float(active.stress(np.eye(3))[0, 0]), float(active.activated(0.5).stress(np.eye(3))[0, 0])
+(60.0, 30.0)
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -49,10 +61,14 @@ class TissueLaw:
         Bulk modulus of the volumetric penalty ``U(J)``; 0 for none (mixed formulation).
     volumetric
         ``log``, ``quadratic`` or ``simo-taylor`` (as for neo-Hookean).
+    active_tension
+        Active fibre tension ``T_a`` (a stress; 0: passive), added as ``T_a f0 (x) f0``
+        to the second Piola stress.
     """
 
     kappa: float = 0.0
     volumetric: str = "log"
+    active_tension: float = 0.0
 
     #: Assembly passes each element's frame to laws with this flag.
     anisotropic = True
@@ -66,12 +82,31 @@ class TissueLaw:
         """``(W, P, A)`` of ``F`` in the element frame (``A`` None without ``tangent``)."""
         raise NotImplementedError
 
+    def activated(self, level: float) -> TissueLaw:
+        """The law with its active tension scaled by ``level`` (the load factor).
+
+        Parameters
+        ----------
+        level
+            Activation level, 1 for the full ``active_tension``.
+
+        Returns
+        -------
+        TissueLaw
+            ``self`` when there is no active tension or ``level == 1``.
+        """
+        if self.active_tension == 0.0 or level == 1.0:
+            return self
+        return replace(self, active_tension=level * self.active_tension)
+
     def _evaluate(self, F: np.ndarray, frames, tangent: bool):
         F = np.asarray(F, dtype=float)
         bad = ~(_det(F) > 0)
         Fl = to_frame(F, frames)
         with np.errstate(invalid="ignore", over="ignore"):
             W, P, A = self.local(Fl, tangent)
+            if self.active_tension != 0.0:
+                W, P, A = _add_active(Fl, self.active_tension, W, P, A)
             if self.kappa > 0:
                 U, Pv, Av = volumetric_terms(Fl, self.kappa, self.volumetric)
                 W, P = W + U, P + Pv
@@ -99,3 +134,15 @@ class TissueLaw:
         """Cauchy stress ``sigma = P F^T / J`` (without the mixed pressure)."""
         P = self.stress(F, frames)
         return np.einsum("...ij,...kj->...ik", P, F) / _det(F)[..., None, None]
+
+
+def _add_active(Fl: np.ndarray, T: float, W, P, A):
+    """``W + T/2 (I4f - 1)``, ``P + T F' e0 (x) e0``, ``A + T delta_ik e0_J e0_L`` (frame)."""
+    f = Fl[..., :, 0]  # F' e_0: the deformed fibre
+    W = W + 0.5 * T * (np.einsum("...i,...i->...", f, f) - 1.0)
+    P = P.copy()
+    P[..., :, 0] += T * f
+    if A is not None:
+        A = A.copy()
+        A[..., :, 0, :, 0] += T * np.eye(3)
+    return W, P, A

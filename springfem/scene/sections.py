@@ -158,6 +158,11 @@ def parse_material(r: TableReader) -> Material:
     Material
     """
     law = r.get("law", "str", choices=LAWS)
+    if law not in TISSUE_LAWS and r.has("active_tension"):
+        raise r.fail(
+            "active_tension",
+            f"needs a law with fibres ({', '.join(TISSUE_LAWS)}), not law = {law!r}",
+        )
     density = r.get("density", "float", default=1000.0, positive=True)
     kw: dict[str, Any] = {"law": law, "density": density}
     if law == "transverse-linear":

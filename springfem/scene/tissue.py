@@ -20,11 +20,16 @@ from .reader import TableReader
 from .types import VOLUMETRIC
 
 #: Keys a tissue material may have besides its law's constants.
-TISSUE_KEYS = ("kappa", "incompressible", "volumetric")
+TISSUE_KEYS = ("kappa", "incompressible", "volumetric", "active_tension")
 
 
 def parse_tissue(r: TableReader, law: str) -> dict[str, Any]:
-    """A tissue law's constants, ``kappa`` or ``incompressible``, and ``volumetric``.
+    """A tissue law's constants, ``kappa`` or ``incompressible``, ``volumetric`` and
+    ``active_tension``.
+
+    ``active_tension`` is the active fibre stress ``T_a`` (in the scene's stress unit,
+    finite and not negative: a contraction; docs/fem.rst#active-tension), kept in
+    ``parameters`` only when given.
 
     Parameters
     ----------
@@ -36,10 +41,11 @@ def parse_tissue(r: TableReader, law: str) -> dict[str, Any]:
     Returns
     -------
     dict
-        ``Material`` keywords: ``parameters`` (the constants and ``kappa``, 0 when
-        incompressible), ``incompressible``, ``volumetric``, and ``E``/``nu``: an isotropic
-        equivalent for estimates only (the mean Voigt shear modulus of the small-strain
-        tangent, and ``kappa`` or ``1000 mu`` when incompressible).
+        ``Material`` keywords: ``parameters`` (the constants, ``kappa``, 0 when
+        incompressible, and ``active_tension`` if given), ``incompressible``,
+        ``volumetric``, and ``E``/``nu``: an isotropic equivalent for estimates only (the
+        mean Voigt shear modulus of the small-strain tangent, and ``kappa`` or
+        ``1000 mu`` when incompressible).
     """
     params = {}
     for k in TISSUE_LAWS[law]:
@@ -55,6 +61,8 @@ def parse_tissue(r: TableReader, law: str) -> dict[str, Any]:
         kappa = r.get("kappa", "float", positive=True)
     volumetric = r.get("volumetric", "str", default="log", choices=VOLUMETRIC)
     params["kappa"] = kappa
+    if r.has("active_tension"):
+        params["active_tension"] = r.get("active_tension", "float", nonneg=True)
     mu = float(np.mean(np.diag(tissue_tangent(law, params))[3:]))
     k_eq = kappa if kappa > 0 else 1000.0 * mu
     return {

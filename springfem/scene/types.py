@@ -64,8 +64,9 @@ class Material:
         of the tissue laws).
     parameters
         A tissue law's constants (``guccione``: ``C, b_f, b_t, b_fs``; ``holzapfel-ogden``:
-        ``a, b, a_f, b_f, a_s, b_s, a_fs, b_fs``) and its bulk modulus ``kappa`` (0 when
-        incompressible); ``E`` and ``nu`` then hold an isotropic equivalent for estimates.
+        ``a, b, a_f, b_f, a_s, b_s, a_fs, b_fs``), its bulk modulus ``kappa`` (0 when
+        incompressible) and, when given, its active fibre tension ``active_tension``;
+        ``E`` and ``nu`` then hold an isotropic equivalent for estimates.
     incompressible
         An incompressible tissue material (solved with ``[fem] formulation = "mixed"``).
     """

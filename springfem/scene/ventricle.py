@@ -33,6 +33,37 @@ from .reader import TableReader
 #: ``[mesh]`` keys of the ellipsoid generator, ``[axes]`` keys of the rule-based frames.
 ELLIPSOID_KEYS = ("endo", "epi", "base_z")
 RULE_BASED_KEYS = ("endo_angle", "epi_angle", "endo", "epi")
+#: Defaults of the rule-based ``[axes]`` keys.
+RULE_BASED_DEFAULTS = {"endo_angle": 60.0, "epi_angle": -60.0, "axis": "z", "endo": "endo",
+                       "epi": "epi"}  # fmt: skip
+
+
+def rule_based_settings(table) -> dict | None:
+    """The keywords of :func:`springfem.fibres.rule_based_frames` of a validated ``[axes]``
+    table (``axis`` as a vector), or ``None`` when its frames are not rule-based.
+
+    Parameters
+    ----------
+    table
+        The scene's ``[axes]`` table as given (already checked by :func:`parse_rule_based`).
+
+    Returns
+    -------
+    dict or None
+
+    Examples
+    --------
+    >>> rule_based_settings({"type": "rule-based", "endo_angle": -90.0})["epi_angle"]
+    -60.0
+    >>> rule_based_settings({"fiber": [1, 0, 0]}) is None
+    True
+    """
+    if not isinstance(table, dict) or table.get("type") != "rule-based":
+        return None
+    kw = {k: table.get(k, v) for k, v in RULE_BASED_DEFAULTS.items()}
+    kw["axis"] = np.eye(3)["xyz".index(kw["axis"])]
+    return kw
+
 
 #: Volume of an average gmsh tet of target size ``h``, over ``h^3`` (a regular tet has
 #: 1/(6 sqrt 2) = 0.118; gmsh's are a little smaller): for the size check before meshing.
@@ -94,11 +125,12 @@ def parse_rule_based(r: TableReader, mesh: TetMesh) -> np.ndarray:
         ``(m, 3, 3)`` frames (rows: fiber, sheet, normal).
     """
     r.get("type", "str", choices=("rule-based",))
-    endo_angle = r.get("endo_angle", "float", default=60.0)
-    epi_angle = r.get("epi_angle", "float", default=-60.0)
-    axis = r.get("axis", "str", default="z", choices=("x", "y", "z"))
-    endo = r.get("endo", "str", default="endo")
-    epi = r.get("epi", "str", default="epi")
+    d = RULE_BASED_DEFAULTS
+    endo_angle = r.get("endo_angle", "float", default=d["endo_angle"])
+    epi_angle = r.get("epi_angle", "float", default=d["epi_angle"])
+    axis = r.get("axis", "str", default=d["axis"], choices=("x", "y", "z"))
+    endo = r.get("endo", "str", default=d["endo"])
+    epi = r.get("epi", "str", default=d["epi"])
     r.finish()
     for key, angle in (("endo_angle", endo_angle), ("epi_angle", epi_angle)):
         if not (math.isfinite(angle) and abs(angle) <= 360.0):
