@@ -108,7 +108,7 @@ def main(argv: list[str] | None = None) -> None:  # pragma: no cover - a command
             "load": [{"type": "traction", "region": "x_max", "value": [0.0, 2.0, 0.0]}],
         }
     )
-    forms = {
+    forms: dict[str, dict] = {
         "P1": {"order": 1},
         "nodal-volume": {"order": 1, "formulation": "nodal-volume"},
     }

@@ -125,8 +125,9 @@ class MixedProblem(FemProblem):
         m, nq, nloc, _ = space.grads.shape
         fu = np.empty((m, nloc, 3))
         fp = np.empty((m, 4))
-        Kuu = np.empty((m, nloc * nloc, 9)) if tangent else None
-        Kup = np.empty((m, nloc, 4, 3)) if tangent else None
+        mt = m if tangent else 0  # the tangent's blocks are filled only when asked for
+        Kuu = np.empty((mt, nloc * nloc, 9))
+        Kup = np.empty((mt, nloc, 4, 3))
         eye = np.eye(3)
         Np = self.p_values
         for start in range(0, m, CHUNK):

@@ -79,10 +79,17 @@ class NonlinearProblem(Protocol):
         load factor 1.
     """
 
-    n_dofs: int
-    free: np.ndarray
-    fixed_dofs: np.ndarray
-    fixed_values: np.ndarray
+    @property
+    def n_dofs(self) -> int: ...
+
+    @property
+    def free(self) -> np.ndarray: ...
+
+    @property
+    def fixed_dofs(self) -> np.ndarray: ...
+
+    @property
+    def fixed_values(self) -> np.ndarray: ...
 
     def residual(self, u: np.ndarray, scale: float) -> tuple[np.ndarray, float]: ...
 

@@ -89,7 +89,8 @@ class NodalVolumeProblem(FemProblem):
         if order != 1:
             raise InputError(f"formulation nodal-volume is for linear tets (order 1), got {order}")
         super().__init__(scene, 1, law, 1)
-        self.linear_solver = NodalPressureSolver(self.linear_solver)
+        # a LinearSolver by duck type: the augmented direct solve, else the wrapped solver
+        self.linear_solver = NodalPressureSolver(self.linear_solver)  # type: ignore[assignment]
         self.fraction = float(opts.stabilisation if stabilisation is None else stabilisation)
         if not 0.0 <= self.fraction <= 1.0:
             raise InputError(f"stabilisation must lie in [0, 1], got {self.fraction}")
@@ -239,6 +240,7 @@ class NodalVolumeProblem(FemProblem):
 
     def _cell_data(self, u: np.ndarray) -> dict[str, np.ndarray]:
         F = self._F(u)
+        assert self.split is not None  # a hyperelastic law
         sigma = self.split.base.cauchy(F, frames=self.frames)
         s = sigma - np.trace(sigma, axis1=-2, axis2=-1)[..., None, None] * _I / 3.0
         return {"J": _det(F), "von_mises": np.sqrt(1.5 * np.einsum("eij,eij->e", s, s))}

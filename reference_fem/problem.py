@@ -150,7 +150,7 @@ class FemProblem:
 
     def force_scale(self, fi: np.ndarray, fe: np.ndarray, scale: float) -> float:
         """``max(|f_int|, |f_ext|, scale |f_active|)``, the reference of the Newton stop."""
-        return max(np.linalg.norm(fi), np.linalg.norm(fe), scale * self.active_force)
+        return max(float(np.linalg.norm(fi)), float(np.linalg.norm(fe)), scale * self.active_force)
 
     def internal_force(self, u: np.ndarray, tangent: bool = False, scale: float = 1.0):
         """``f_int(u)`` and (optionally) its tangent matrix at load factor ``scale``."""
@@ -164,7 +164,10 @@ class FemProblem:
             ids = np.flatnonzero(bad)
             at = self.scene.mesh.points[self.scene.mesh.tets[ids[0]]].mean(axis=0)
             raise InvertedElements(ids, f"(first at x = {np.round(at, 6).tolist()})")
-        return self.pattern.vector(fe), (self.pattern.matrix(Ke) if tangent else None)
+        if not tangent:
+            return self.pattern.vector(fe), None
+        assert Ke is not None  # asked for
+        return self.pattern.vector(fe), self.pattern.matrix(Ke)
 
     def residual(self, u: np.ndarray, scale: float = 1.0) -> tuple[np.ndarray, float]:
         """``R = f_int - f_ext`` and the force scale (:meth:`force_scale`)."""
@@ -214,7 +217,7 @@ class FemProblem:
         H = displacement_gradient(self.space, np.asarray(u).reshape(-1, 3))
         F = np.eye(3) + H
         w = self.space.dx / self.space.dx.sum(axis=1, keepdims=True)
-        if self.nonlinear:
+        if self.law is not None:
             sigma = self.law.cauchy(F, frames=self.qframes)
         else:
             C = voigt_to_tensor(self.D_groups)[self.group]  # (m, 3, 3, 3, 3)

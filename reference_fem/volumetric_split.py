@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -56,7 +57,7 @@ class VolumetricSplit:
         (docs/volumetric.rst#volumetric-energies).
     """
 
-    base: object
+    base: Any
     kappa: float
     kind: str
 

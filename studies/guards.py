@@ -19,7 +19,7 @@ True
 
 from __future__ import annotations
 
-from springfem.scene import UNIT_SYSTEMS, Material
+from springfem.scene import UNIT_SYSTEMS, Material, Scene
 
 E_RANGE = (10.0, 1.0e9)  # Pa
 
@@ -51,3 +51,51 @@ def modulus_warning(material: Material, units: str = "SI") -> str | None:
                 "tissue: check the units" + ("" if scale == 1.0 else f" (the scene's: {units})")
             )
     return None
+
+
+def locking_warnings(scene: Scene, models: tuple[str, ...] = ("spring", "fem")) -> list[str]:
+    """Lines for the formulations that lock on a nearly incompressible scene.
+
+    A material with Poisson's ratio of at least 0.45, an incompressible flag or a bulk
+    modulus above ten shear moduli (:func:`springfem.plausibility.nearly_incompressible`)
+    locks linear tets with one volume constraint per element: the FEM's displacement
+    formulation and the spring element's per-element volume (docs/volumetric.rst). Each
+    line names the option that fixes it.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    models
+        Which models' options to check: ``spring`` and/or ``fem``.
+
+    Returns
+    -------
+    list of str
+
+    Examples
+    --------
+    >>> from springfem.scene import load_scene
+    >>> locking_warnings(load_scene("cantilever"))  # nu = 0.3
+    []
+    """
+    from reference_fem.options import FemOptions
+    from springfem.plausibility import nearly_incompressible
+    from springmodel.options import SpringOptions
+
+    if not nearly_incompressible(scene):
+        return []
+    nu = getattr(scene.material, "nu", None)
+    what = f"nu = {nu:g}" if nu is not None and nu >= 0.45 else "a nearly incompressible law"
+    out = []
+    if "fem" in models and FemOptions.of(scene).formulation == "displacement":
+        out.append(
+            f"{what}: the FEM's displacement formulation locks on tets; set [fem] "
+            'formulation = "nodal-volume" (P1) or "mixed" (order 2)'
+        )
+    if "spring" in models and not SpringOptions.of(scene).nodal_volume:
+        out.append(
+            f"{what}: the spring element's per-element volume locks like P1; set [spring] "
+            'volume = "axes" with volume_average = "nodal"'
+        )
+    return out

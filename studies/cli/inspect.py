@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from .. import guards
 from ..scenes import scene_path
 from .common import print_json
 
@@ -29,6 +30,8 @@ def cmd_inspect(args: argparse.Namespace) -> int:
     report = inspect_scene(scene)
     for note in scene.mesh.notes:
         print(f"note: {note}", file=sys.stderr)
+    for line in guards.locking_warnings(scene):
+        print(f"warning: {line}", file=sys.stderr)
     if args.json:
         print_json(report)
     else:

@@ -196,3 +196,29 @@ def test_max_time_stops_the_fem_newton_with_exit_3(tmp_path, capsys):
     assert "last converged load factor 0;" in err and "last state written to" in err
     state = json.loads((tmp_path / "last_good_state.json").read_text())
     assert state["status"].startswith("stopped after")
+
+
+def test_a_locking_formulation_warns_once_and_names_the_fix(tmp_path, capsys):
+    """nu = 0.499 (the issue's cantilever case) with the default options: both models'
+    formulations lock; the nodal-volume and mixed options silence the FEM's line."""
+    argv = ["solve", "cantilever", "--model", "fem", "--out", str(tmp_path / "a"),
+            "--set", "material.nu=0.499"]  # fmt: skip
+    assert main(argv) == 0
+    (line,) = [w for w in _warnings(capsys.readouterr().err) if "locks" in w]
+    assert "nu = 0.499" in line and 'formulation = "nodal-volume"' in line
+    argv += ["--set", 'fem.formulation="nodal-volume"', "--out", str(tmp_path / "b")]
+    assert main(argv) == 0
+    assert not [w for w in _warnings(capsys.readouterr().err) if "locks" in w]
+
+
+def test_locking_lines_name_each_models_fix():
+    from studies.guards import locking_warnings
+    from studies.overrides import load_scene_with
+    from studies.scenes import scene_path
+
+    soft = load_scene_with(scene_path("cantilever"), ["material.nu=0.499"])
+    fem, spring = locking_warnings(soft)
+    assert "[fem]" in fem and "[spring]" in spring and 'volume_average = "nodal"' in spring
+    nodal = load_scene_with(scene_path("cantilever"), ["material.nu=0.499", 'spring.volume="axes"',
+                                           'spring.volume_average="nodal"'])  # fmt: skip
+    assert locking_warnings(nodal, ("spring",)) == []
