@@ -249,7 +249,11 @@ def variant_label(options: SpringOptions) -> str:
     if options.axis_volume:
         f = options.nodal_fraction
         nodal = ("/nodal" + (f"{f:g}" if f < 1 else "")) * options.nodal_volume
+        beta = options.volume_stabilisation_share
+        nodal += f"+{beta:g}" if options.nodal_volume and beta else ""
         parts.append(f"volume=axes/{options.volumetric}{nodal}")
+        if options.strain_average == "nodal":
+            parts.append(f"strain=nodal/{options.strain_stabilisation:g}")
     else:
         parts.append(f"volume={options.volume_form}" if options.volume else "volume=off")
     if options.coupling:

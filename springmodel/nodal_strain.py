@@ -213,7 +213,7 @@ class NodalStrainPart:
         self.Gb = nodal_gradients(self.X, self.tets)
         self.node = self.tets.ravel()  # the vertex a of virtual element 4 e + p
         self.Xv = np.repeat(self.X[self.tets], 4, axis=0)  # (4m, 4, 3): X_i of its element
-        opts = replace(options, volume_average="element", lms=None)
+        opts = replace(options, volume_average="element", volume_stabilisation=None)
         self.elements = virtual_elements(elements)
         self.kernel = SpringKernel(self.elements, opts, parallel=None)
         self.hessian = SpringHessian(self.elements, opts)

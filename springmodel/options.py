@@ -46,7 +46,10 @@ GREEN_AXIAL_COEFFICIENTS = (1.5, 0.5)
 StrainAverage = Literal["element", "nodal"]
 #: Default share ``alpha`` of the element's own springs with ``strain_average = "nodal"``
 #: (chosen by measurement, docs/volumetric.rst#stabilised-nodal-strain).
-STRAIN_STABILISATION = 0.2
+STRAIN_STABILISATION = 0.3
+#: Default ``volume_stabilisation`` with ``strain_average = "nodal"`` (0 without it, as before;
+#: chosen by measurement, docs/volumetric.rst#stabilised-nodal-strain).
+VOLUME_STABILISATION = 3e-4
 #: ``off``: the spec's quadratic springs; ``exponential``: :mod:`springmodel.stiffening`.
 Stiffening = Literal["off", "exponential"]
 
@@ -114,6 +117,12 @@ class SpringOptions:
         With ``volume_average = "nodal"``: the share ``f`` of each element's ``kappa`` put
         on the nodal volumes; ``1 - f`` stays on the tet (``f < 1`` stiffens the element
         volume modes that nodal volumes leave free, at the price of some locking).
+    volume_stabilisation
+        With ``volume_average = "nodal"``: ``beta``, each tet keeps ``beta kappa V0 U(J_e)`` of
+        its own volume besides the nodal term (nodal volumes leave the element volume modes
+        free, and a spring element does not see its own inversion; Puso & Solberg 2006).
+        Default (``None``): :data:`VOLUME_STABILISATION` with ``strain_average = "nodal"``,
+        else 0 (:attr:`volume_stabilisation_share`).
     strain_average
         ``element`` (default): each tet's springs measure its own deformation gradient;
         ``nodal``: the share ``1 - strain_stabilisation`` of the springs measures the
@@ -181,6 +190,7 @@ class SpringOptions:
     volume: VolumeKind = True
     volume_average: VolumeAverage = "element"
     nodal_fraction: float = 1.0
+    volume_stabilisation: float | None = None
     strain_average: StrainAverage = "element"
     strain_stabilisation: float = STRAIN_STABILISATION
     stiffening: Stiffening = "off"
@@ -215,6 +225,8 @@ class SpringOptions:
             raise ValueError('volume_average = "nodal" needs volume = "axes"')
         if not 0.0 <= self.nodal_fraction <= 1.0:
             raise ValueError(f"nodal_fraction {self.nodal_fraction} is not in [0, 1]")
+        if self.volume_stabilisation is not None and not 0.0 <= self.volume_stabilisation <= 1.0:
+            raise ValueError(f"volume_stabilisation {self.volume_stabilisation} is not in [0, 1]")
         if self.strain_average not in get_args(StrainAverage):
             raise ValueError(f"strain_average {self.strain_average!r} is not element or nodal")
         if not 0.0 <= self.strain_stabilisation <= 1.0:
@@ -259,6 +271,13 @@ class SpringOptions:
     def axis_volume(self) -> bool:
         """The axis-volume spring is on (``volume = "axes"``)."""
         return self.volume == "axes"
+
+    @property
+    def volume_stabilisation_share(self) -> float:
+        """``beta`` in use: ``volume_stabilisation``, or its default (see the attribute)."""
+        if self.volume_stabilisation is not None:
+            return float(self.volume_stabilisation)
+        return VOLUME_STABILISATION if self.strain_average == "nodal" else 0.0
 
     @property
     def nodal_volume(self) -> bool:
@@ -325,6 +344,12 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
         kw["nodal_fraction"] = f = r.get("nodal_fraction", "float", nonneg=True)
         if f > 1.0:
             raise r.fail("nodal_fraction", f"{f} is larger than 1")
+    if r.has("volume_stabilisation"):
+        kw["volume_stabilisation"] = b = r.get("volume_stabilisation", "float", nonneg=True)
+        if b > 1.0:
+            raise r.fail("volume_stabilisation", f"{b} is larger than 1")
+        if b and kw.get("volume_average") != "nodal":
+            raise r.fail("volume_stabilisation", 'needs volume_average = "nodal"')
     if r.has("strain_average"):
         kw["strain_average"] = r.get("strain_average", "str", choices=S.choices("strain_average"))
     if r.has("strain_stabilisation"):
@@ -376,10 +401,14 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
     try:
         return SpringOptions(**kw)
     except ValueError as exc:  # a combination of keys, e.g. stiffening of the cosine torsion
-        key = next((k for k in ("stiffening", "volume_average") if k in str(exc)), None)
+        key = next((k for k in KEY_ORDER if k in str(exc)), None)
         if key is None:
             raise SceneError(f"{r.file}: spring: {exc}") from None
         raise r.fail(key, str(exc)) from None
+
+
+#: Keys a combination error names, first match first (the scene error points at it).
+KEY_ORDER = ("volume_stabilisation", "strain_average", "stiffening", "volume_average")
 
 
 def _volume_kind(r: TableReader) -> VolumeKind:
