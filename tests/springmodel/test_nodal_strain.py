@@ -180,5 +180,36 @@ def test_land_beam_is_free_of_locking():
     K = model.stiffness(model.x0 + solution.u, scale=1.0).toarray()
     free = np.setdiff1d(np.arange(K.shape[0]), model.fixed_dofs)
     Kf = K[np.ix_(free, free)]
-    modes = zero_modes(0.5 * (Kf + Kf.T))
+    # the lowest physical mode of a 10:1 beam at kappa = 1000 mu lies ~2e-8 below the
+    # largest eigenvalue (the plain element's too); a spurious mode sits at round-off
+    modes = zero_modes(0.5 * (Kf + Kf.T), rtol=1e-10)
     assert modes.count == 0 and modes.negative == 0
+
+
+#: P2/P1 Taylor-Hood apex displacements u_z (mm) of the bundled ventricles (size 4 mm),
+#: from ``reference_fem.solve`` on the scene files as bundled (``[fem] order = 2,
+#: formulation = "mixed"``); Land et al. 2015 report about -9.5 / -8.2 mm on fine meshes.
+P2_MIXED_APEX = {
+    "land-ventricle": {"endo_apex": -9.120, "epi_apex": -7.874},
+    "land-ventricle-fibres": {"endo_apex": -7.904, "epi_apex": -6.592},
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["land-ventricle", "land-ventricle-fibres"])
+def test_land_ventricles_reach_full_load(name):
+    """The stiffened element with nodal volume and nodal strain carries the full pressure
+    (nodal volume alone stops at load 0.76 on ``land-ventricle``); the plain element keeps
+    a third of the apex motion. Measured: endo / epi apex +1.7 % / +9.2 %
+    (``land-ventricle``), -15.9 % / +0.7 % (``land-ventricle-fibres``) against P2 mixed."""
+    d = tomllib.loads((SCENES / f"{name}.toml").read_text())
+    d["spring"] = {**d["spring"], **LOCKING_FREE}
+    solution = solve_spring(scene_from_dict(d))
+    assert solution.result.converged
+    uz = {k: v[2] for k, v in solution.result.probes.items()}
+    ref = P2_MIXED_APEX[name]
+    # at least 80 % of the reference on both apices (the plain element: 34 %, 32-43 %)
+    for probe in ("endo_apex", "epi_apex"):
+        assert uz[probe] / ref[probe] > 0.8
+    if name == "land-ventricle":  # within 5 % where it is (the epicardium is not: +9 %)
+        assert uz["endo_apex"] == pytest.approx(ref["endo_apex"], rel=0.05)
