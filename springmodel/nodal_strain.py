@@ -212,6 +212,8 @@ class NodalStrainPart:
         self.n = self.X.shape[0]
         self.Gb = nodal_gradients(self.X, self.tets)
         self.node = self.tets.ravel()  # the vertex a of virtual element 4 e + p
+        k = self.node.size  # the sum over the copies of each vertex, (n, 4 m)
+        self._to_nodes = sp.csr_matrix((np.ones(k), (self.node, np.arange(k))), (self.n, k))
         self.Xv = np.repeat(self.X[self.tets], 4, axis=0)  # (4m, 4, 3): X_i of its element
         opts = replace(options, volume_average="element", volume_stabilisation=None)
         self.elements = virtual_elements(elements)
@@ -280,8 +282,7 @@ class NodalStrainPart:
         if self.stiffening is not None:
             fy = fy + self.stiffening.forces(y)
         T = np.einsum("kia,kib->kab", fy.reshape(-1, 4, 3), self.Xv)  # -dW/dFbar per copy
-        Ta = np.zeros((self.n, 3, 3))
-        np.add.at(Ta, self.node, T)
+        Ta = self._to_nodes @ T.reshape(-1, 9)
         return (self.B.T @ Ta.reshape(-1)).reshape(-1, 3)
 
     def moduli(self, x: np.ndarray) -> np.ndarray:
@@ -294,9 +295,7 @@ class NodalStrainPart:
         Xv = self.Xv[:, None, None]
         A = Xv.transpose(0, 1, 2, 4, 3) @ K @ Xv  # [k, alpha, gamma, beta, delta]
         A = A.transpose(0, 1, 3, 2, 4).reshape(-1, 9, 9)
-        Aa = np.zeros((self.n, 9, 9))
-        np.add.at(Aa, self.node, A)
-        return Aa
+        return (self._to_nodes @ A.reshape(-1, 81)).reshape(-1, 9, 9)
 
     def tangent(self, x: np.ndarray) -> sp.csr_matrix:
         """Tangent ``B^T diag(A_a) B`` ``(3n, 3n)`` (CSR, symmetric)."""
