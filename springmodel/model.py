@@ -35,6 +35,7 @@ from springfem.scene import Scene, model_precision
 
 from .advice import scene_warnings
 from .elements import SpringElements, build_spring_elements
+from .nodal_strain import NodalStrainPart
 from .nodal_volume import NodalPart
 from .options import GREEN_AXIAL_COEFFICIENTS, SpringOptions
 from .run_series import dynamic_series, end_of_run
@@ -76,10 +77,16 @@ class SpringModel:
         )
         # volume_average = "nodal": (part of) the volume term on nodal volumes, else None
         self.nodal, kernel_elements = NodalPart.split(mesh, self.elements, self.options)
-        # stiffening = "exponential": the part added to the quadratic kernel, else None
-        self.stiffening = None
+        modulus = None
         if self.options.stiffening != "off":
             modulus = stiffening_modulus(self.options, scene.material)
+        # strain_average = "nodal": the springs' share measured by nodal F, else None
+        self.nodal_strain, kernel_elements = NodalStrainPart.split(
+            mesh, kernel_elements, self.options, modulus
+        )
+        # stiffening = "exponential": the part added to the quadratic kernel, else None
+        self.stiffening = None
+        if modulus is not None and (self.nodal_strain is None or self.options.strain_stabilisation):
             self.stiffening = StiffeningPart(kernel_elements, self.options, modulus)
         self.kernel = SpringKernel(
             kernel_elements,
@@ -118,6 +125,8 @@ class SpringModel:
         """Spring forces ``(n, 3)`` (fused kernel, plus the stiffening and nodal volume terms
         when on)."""
         f = self._element_forces(x, v)
+        if self.nodal_strain is not None:
+            f = f + self.nodal_strain.forces(x)
         return f if self.nodal is None else f + self.nodal.term.forces(x)
 
     def _element_forces(self, x: np.ndarray, v: np.ndarray | None) -> np.ndarray:
@@ -134,7 +143,8 @@ class SpringModel:
         work = float(np.sum(self._f_dead * (x - self.x0))) * scale
         nodal = 0.0 if self.nodal is None else self.nodal.term.energy(x)
         stiff = 0.0 if self.stiffening is None else self.stiffening.energy(x)
-        return self.kernel.energy(x) + nodal + stiff - work
+        strain = 0.0 if self.nodal_strain is None else self.nodal_strain.energy(x)
+        return self.kernel.energy(x) + nodal + stiff + strain - work
 
     def stiffness(self, x: np.ndarray, scale: float = 1.0) -> sp.csr_matrix | None:
         """The springs' analytic tangent (with the stiffening and nodal terms), plus the
@@ -152,6 +162,8 @@ class SpringModel:
             K = self._hessian.matrix(x)
         if self.stiffening is not None:
             K = K + self.stiffening.stiffness(x)
+        if self.nodal_strain is not None:
+            K = K + self.nodal_strain.tangent(x)
         # a pressure's nodes share a facet, hence a tet: the colouring holds; at load factor 0
         # (the linear solve's tangent of the internal forces) the load has no stiffness
         if self._follower and scale != 0.0:
@@ -253,6 +265,11 @@ def variant_label(options: SpringOptions) -> str:
             parts.append("volume_average=nodal")
             if options.nodal_fraction < 1:
                 parts.append(f"nodal_fraction={options.nodal_fraction:g}")
+            if options.volume_stabilisation_share:
+                parts.append(f"volume_stabilisation={options.volume_stabilisation_share:g}")
+        if options.strain_average == "nodal":
+            parts.append("strain_average=nodal")
+            parts.append(f"strain_stabilisation={options.strain_stabilisation:g}")
     elif options.volume:
         parts.append("volume=true")
         if options.volume_form != SpringOptions().volume_form:

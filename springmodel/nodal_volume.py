@@ -221,10 +221,17 @@ class NodalPart:
     fraction
         Share of ``kappa`` on the nodal volumes (the options' ``nodal_fraction``); the rest
         stays on the tets in the spring kernel.
+    stabilisation
+        The options' ``volume_stabilisation`` ``beta``: each tet keeps ``beta kappa V0 U(J)``
+        besides (its own volume, which the nodal volumes do not see,
+        docs/volumetric.rst#stabilised-nodal-strain).
     """
 
-    def __init__(self, X: np.ndarray, tets: np.ndarray, elements, kind: str, fraction=1.0):
+    def __init__(
+        self, X: np.ndarray, tets: np.ndarray, elements, kind: str, fraction=1.0, stabilisation=0.0
+    ):
         self.fraction = float(fraction)
+        self.stabilisation = float(stabilisation)
         self.term = NodalVolume(X, tets, self.fraction * elements.k_axis_volume, kind)
         self._coloured = None
 
@@ -249,14 +256,19 @@ class NodalPart:
         """
         if not options.nodal_volume:
             return None, elements
-        part = cls(mesh.points, mesh.tets, elements, options.volumetric, options.nodal_fraction)
+        part = cls(
+            mesh.points, mesh.tets, elements, options.volumetric, options.nodal_fraction,
+            options.volume_stabilisation_share,
+        )  # fmt: skip
         return part, part.kernel_elements(elements)
 
     def kernel_elements(self, elements):
-        """A copy of ``elements`` with the per-tet share ``1 - fraction`` of ``kappa``."""
+        """A copy of ``elements`` with the per-tet share ``1 - fraction + stabilisation`` of
+        ``kappa``."""
         from dataclasses import replace
 
-        return replace(elements, k_axis_volume=(1.0 - self.fraction) * elements.k_axis_volume)
+        share = 1.0 - self.fraction + self.stabilisation
+        return replace(elements, k_axis_volume=share * elements.k_axis_volume)
 
     def stiffness(self, x: np.ndarray, hessian, rest_fn) -> sp.csr_matrix:
         """Tangent of the whole model: the springs' part plus :meth:`NodalVolume.tangent`.

@@ -41,6 +41,15 @@ VolumeAverage = Literal["element", "nodal"]
 #: ``axial = "green"`` in a scene: the cubic law with these ``(b2, b3)``, whose energy is
 #: ``k l0^2 E^2 / 2`` in the spring's Green strain ``E = (lambda^2 - 1) / 2`` (eq. 2.36).
 GREEN_AXIAL_COEFFICIENTS = (1.5, 0.5)
+#: ``element``: each tet's springs measure its own ``F``; ``nodal``: blended with the
+#: nodal-averaged ``F`` of its vertices (:mod:`springmodel.nodal_strain`).
+StrainAverage = Literal["element", "nodal"]
+#: Default share ``alpha`` of the element's own springs with ``strain_average = "nodal"``
+#: (chosen by measurement, docs/volumetric.rst#stabilised-nodal-strain).
+STRAIN_STABILISATION = 0.3
+#: Default ``volume_stabilisation`` with ``strain_average = "nodal"`` (0 without it, as before;
+#: chosen by measurement, docs/volumetric.rst#stabilised-nodal-strain).
+VOLUME_STABILISATION = 3e-4
 #: ``off``: the spec's quadratic springs; ``exponential``: :mod:`springmodel.stiffening`.
 Stiffening = Literal["off", "exponential"]
 
@@ -108,6 +117,23 @@ class SpringOptions:
         With ``volume_average = "nodal"``: the share ``f`` of each element's ``kappa`` put
         on the nodal volumes; ``1 - f`` stays on the tet (``f < 1`` stiffens the element
         volume modes that nodal volumes leave free, at the price of some locking).
+    volume_stabilisation
+        With ``volume_average = "nodal"``: ``beta``, each tet keeps ``beta kappa V0 U(J_e)`` of
+        its own volume besides the nodal term (nodal volumes leave the element volume modes
+        free, and a spring element does not see its own inversion; Puso & Solberg 2006).
+        Default (``None``): :data:`VOLUME_STABILISATION` with ``strain_average = "nodal"``,
+        else 0 (:attr:`volume_stabilisation_share`).
+    strain_average
+        ``element`` (default): each tet's springs measure its own deformation gradient;
+        ``nodal``: the share ``1 - strain_stabilisation`` of the springs measures the
+        nodal-averaged ``F`` of each vertex (linear tets are too stiff in bending, nodal
+        measures too soft; :mod:`springmodel.nodal_strain`). Needs the energy forms. With
+        ``volume_average = "nodal"`` it is the locking-free tet of
+        docs/volumetric.rst#stabilised-nodal-strain.
+    strain_stabilisation
+        ``alpha`` in ``[0, 1]``: the share of the springs measuring the element's own
+        ``F`` (stabilises the modes nodal measures leave free); default
+        :data:`STRAIN_STABILISATION`.
     stiffening
         ``off`` (the spec's springs) or ``exponential``: the element's axial, torsion and
         coupling energy ``W_q`` becomes ``V C/2 (exp(2 W_q / (C V)) - 1)``, the shape of the
@@ -164,6 +190,9 @@ class SpringOptions:
     volume: VolumeKind = True
     volume_average: VolumeAverage = "element"
     nodal_fraction: float = 1.0
+    volume_stabilisation: float | None = None
+    strain_average: StrainAverage = "element"
+    strain_stabilisation: float = STRAIN_STABILISATION
     stiffening: Stiffening = "off"
     stiffening_modulus: float | None = None
     volumetric: Volumetric = "quadratic"
@@ -196,6 +225,23 @@ class SpringOptions:
             raise ValueError('volume_average = "nodal" needs volume = "axes"')
         if not 0.0 <= self.nodal_fraction <= 1.0:
             raise ValueError(f"nodal_fraction {self.nodal_fraction} is not in [0, 1]")
+        if self.volume_stabilisation is not None and not 0.0 <= self.volume_stabilisation <= 1.0:
+            raise ValueError(f"volume_stabilisation {self.volume_stabilisation} is not in [0, 1]")
+        if self.strain_average not in get_args(StrainAverage):
+            raise ValueError(f"strain_average {self.strain_average!r} is not element or nodal")
+        if not 0.0 <= self.strain_stabilisation <= 1.0:
+            raise ValueError(f"strain_stabilisation {self.strain_stabilisation} is not in [0, 1]")
+        if self.strain_average == "nodal" and (
+            self.axial == "stress-scaled" or self.torsion not in ("off", *ENERGY_TORSION)
+            or self.volume is True or self.lms is not None
+            or self.volume_damping or self.axial_damping
+        ):  # fmt: skip
+            raise ValueError(
+                'strain_average = "nodal" needs the energy forms (axial linear, quadratic or '
+                'cubic, torsion "energy", "shear" or "off", volume "axes" or off, no damping '
+                f"or LMS; got axial {self.axial!r}, torsion {self.torsion!r}, volume "
+                f"{self.volume!r})"
+            )
         if self.stiffening not in get_args(Stiffening):
             raise ValueError(f"stiffening {self.stiffening!r} is not off or exponential")
         if self.stiffening != "off" and (
@@ -227,6 +273,13 @@ class SpringOptions:
         return self.volume == "axes"
 
     @property
+    def volume_stabilisation_share(self) -> float:
+        """``beta`` in use: ``volume_stabilisation``, or its default (see the attribute)."""
+        if self.volume_stabilisation is not None:
+            return float(self.volume_stabilisation)
+        return VOLUME_STABILISATION if self.strain_average == "nodal" else 0.0
+
+    @property
     def nodal_volume(self) -> bool:
         """The axis-volume energy is on nodal volumes (``volume_average = "nodal"``)."""
         return self.volume_average == "nodal"
@@ -245,6 +298,7 @@ class SpringOptions:
             "volumetric": Volumetric,
             "volume_average": VolumeAverage,
             "stiffening": Stiffening,
+            "strain_average": StrainAverage,
         }
         return get_args(hints[name]) if name in hints else ()
 
@@ -290,6 +344,18 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
         kw["nodal_fraction"] = f = r.get("nodal_fraction", "float", nonneg=True)
         if f > 1.0:
             raise r.fail("nodal_fraction", f"{f} is larger than 1")
+    if r.has("volume_stabilisation"):
+        kw["volume_stabilisation"] = b = r.get("volume_stabilisation", "float", nonneg=True)
+        if b > 1.0:
+            raise r.fail("volume_stabilisation", f"{b} is larger than 1")
+        if b and kw.get("volume_average") != "nodal":
+            raise r.fail("volume_stabilisation", 'needs volume_average = "nodal"')
+    if r.has("strain_average"):
+        kw["strain_average"] = r.get("strain_average", "str", choices=S.choices("strain_average"))
+    if r.has("strain_stabilisation"):
+        kw["strain_stabilisation"] = a = r.get("strain_stabilisation", "float", nonneg=True)
+        if a > 1.0:
+            raise r.fail("strain_stabilisation", f"{a} is larger than 1")
     if r.has("stiffening"):
         kw["stiffening"] = r.get("stiffening", "str", choices=S.choices("stiffening"))
     if r.has("stiffening_modulus"):
@@ -335,10 +401,14 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
     try:
         return SpringOptions(**kw)
     except ValueError as exc:  # a combination of keys, e.g. stiffening of the cosine torsion
-        key = next((k for k in ("stiffening", "volume_average") if k in str(exc)), None)
+        key = next((k for k in KEY_ORDER if k in str(exc)), None)
         if key is None:
             raise SceneError(f"{r.file}: spring: {exc}") from None
         raise r.fail(key, str(exc)) from None
+
+
+#: Keys a combination error names, first match first (the scene error points at it).
+KEY_ORDER = ("volume_stabilisation", "strain_average", "stiffening", "volume_average")
 
 
 def _volume_kind(r: TableReader) -> VolumeKind:

@@ -96,6 +96,7 @@ def locking_warnings(scene: Scene, models: tuple[str, ...] = ("spring", "fem")) 
     if "spring" in models and not SpringOptions.of(scene).nodal_volume:
         out.append(
             f"{what}: the spring element's per-element volume locks like P1; set [spring] "
-            'volume = "axes" with volume_average = "nodal"'
+            'volume = "axes" with volume_average = "nodal" (and strain_average = "nodal", '
+            "docs/volumetric.rst#stabilised-nodal-strain)"
         )
     return out

@@ -1,0 +1,304 @@
+"""Spring elements measured by the nodal-averaged deformation gradient (an alpha-FEM blend).
+
+A spring element's energy is a function of its deformation gradient alone,
+``W_e(F)`` (docs/theory.rst#the-axis-volume-ratio-is-j), so it can be evaluated on any
+``F``. ``[spring] strain_average = "nodal"`` measures each element's springs with the
+deformation gradient averaged over the patch of each of its vertices,
+
+    Fbar_a = sum_{e ni a} V_e F_e / sum_{e ni a} V_e,
+
+and blends that with the element's own ``F_e`` (the alpha finite element method of Liu,
+Nguyen-Thoi & Lam 2008, the Puso & Solberg 2006 stabilisation of nodal integration)::
+
+    W = sum_e [ alpha W_e(F_e) + (1 - alpha) / 4 sum_{a in e} W_e(Fbar_a) ]
+
+with ``alpha = [spring] strain_stabilisation``. Linear tetrahedra are too stiff in bending
+(``alpha = 1``, the plain element) and the nodal measure alone is too soft and has
+spurious modes (``alpha = 0``, node-based smoothing): the element fraction ``alpha``
+stabilises them (docs/volumetric.rst#stabilised-nodal-strain). The springs here are the
+deviatoric ones: the volume stays on the nodal volumes of :mod:`springmodel.nodal_volume`.
+
+Each term ``W_e(Fbar_a) / 4`` is computed by the ordinary spring kernel on a *virtual*
+element: element ``e``'s rest vertices mapped by ``Fbar_a``, ``y_i = Fbar_a X_i`` (four per
+element, ``4 m`` virtual elements). The virtual forces ``f_y`` give the nodal stress
+``T_a = sum sum_i f_{y,i} X_i^T`` (``-dW/dFbar_a``), the virtual element matrices the
+``9 x 9`` nodal moduli ``A_a``; with the sparse nodal gradient ``B`` (``Fbar = B x``) the
+forces are ``B^T T`` and the tangent ``B^T diag(A_a) B``, which couples the nodes of two
+rings.
+
+Examples
+--------
+>>> import numpy as np
+>>> from springfem.mesh import box_mesh
+>>> mesh = box_mesh((2.0, 1.0, 1.0), (2, 1, 1))
+>>> Gb = nodal_gradients(mesh.points, mesh.tets)
+>>> F = np.array([[1.1, 0.2, 0.0], [0.0, 0.9, 0.0], [0.1, 0.0, 1.0]])
+>>> Fbar = nodal_deformation_gradients(Gb, mesh.points @ F.T)  # exact for affine maps
+>>> bool(np.allclose(Fbar, F))
+True
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields, replace
+
+import numpy as np
+import scipy.sparse as sp
+
+from springfem.mesh import tet_volumes
+
+__all__ = [
+    "NodalStrainPart",
+    "nodal_deformation_gradients",
+    "nodal_gradients",
+    "scaled_deviatoric",
+    "virtual_elements",
+]
+
+
+def shape_gradients(X: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """``grad N_i`` of the four vertices of every tet at rest, ``(m, 4, 3)``.
+
+    Parameters
+    ----------
+    X
+        Rest positions ``(n, 3)``.
+    tets
+        Connectivity ``(m, 4)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(m, 4, 3)``; they sum to zero over the vertices.
+    """
+    p = X[tets]
+    D = (p[:, 1:] - p[:, :1]).transpose(0, 2, 1)  # columns: edges
+    g = np.empty(p.shape)
+    g[:, 1:] = np.linalg.inv(D)  # rows of D^-1 are grad N_1..3
+    g[:, 0] = -g[:, 1:].sum(axis=1)
+    return g
+
+
+def nodal_gradients(X: np.ndarray, tets: np.ndarray) -> tuple[sp.csr_matrix, ...]:
+    """The nodal gradient operator: ``Fbar_a[:, beta] = (Gb[beta] @ x)[a]``.
+
+    ``Gb[beta][a, j] = sum_{e ni a, j} V_e dN_j^e/dX_beta / sum_{e ni a} V_e`` (the
+    volume-weighted average of the element gradients over the patch of node ``a``).
+
+    Parameters
+    ----------
+    X
+        Rest positions ``(n, 3)``.
+    tets
+        Connectivity ``(m, 4)``.
+
+    Returns
+    -------
+    tuple of scipy.sparse.csr_matrix
+        Three ``(n, n)`` matrices, one per rest direction ``beta``.
+    """
+    X = np.asarray(X, float)
+    tets = np.asarray(tets, np.int64)
+    n, m = X.shape[0], tets.shape[0]
+    V = np.abs(tet_volumes(X, tets))
+    Va = np.bincount(tets.ravel(), np.repeat(V, 4), minlength=n)
+    g = shape_gradients(X, tets)
+    rows = np.repeat(tets, 4, axis=1).ravel()  # a = tets[e, p] for every j
+    cols = np.tile(tets, (1, 4)).ravel()  # j = tets[e, q]
+    w = V[:, None, None] / np.where(Va > 0, Va, 1.0)[tets][:, :, None]  # (m, 4 a, 1)
+    out = []
+    for beta in range(3):
+        vals = (w * g[:, None, :, beta]).reshape(m, 16)  # [e, p*4 + q]
+        out.append(sp.csr_matrix((vals.ravel(), (rows, cols)), shape=(n, n)))
+    return tuple(out)
+
+
+def nodal_deformation_gradients(Gb, x: np.ndarray) -> np.ndarray:
+    """``Fbar_a`` of every node, ``(n, 3, 3)``.
+
+    Parameters
+    ----------
+    Gb
+        :func:`nodal_gradients`.
+    x
+        Positions ``(n, 3)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, 3, 3)`` with ``Fbar[a, alpha, beta] = d x_alpha / d X_beta`` averaged at ``a``.
+    """
+    return np.stack([G @ x for G in Gb], axis=2)
+
+
+def scaled_deviatoric(elements, weight: float):
+    """Elements whose axial, torsion and coupling energy is ``weight`` times the input's.
+
+    The constants are scaled by ``weight``; so is ``V0`` (the stiffening's ``C V``, so that
+    the exponential wrapper scales too: ``w V C/2 (exp(2 w W_q / (C w V)) - 1)``), with the
+    axis-volume stiffness divided by it (its energy ``V0 kappa U(J)`` is unchanged).
+
+    Parameters
+    ----------
+    elements
+        :class:`~springmodel.elements.SpringElements`.
+    weight
+        ``w > 0``.
+
+    Returns
+    -------
+    SpringElements
+    """
+    w = float(weight)
+    return replace(
+        elements,
+        k_axial=w * elements.k_axial,
+        k_torsion=w * elements.k_torsion,
+        k_coupling=w * elements.k_coupling,
+        V0=w * elements.V0,
+        k_axis_volume=elements.k_axis_volume / w,
+    )
+
+
+def virtual_elements(elements):
+    """Four disconnected copies of every element (virtual nodes ``16 e + 4 p + i``).
+
+    Parameters
+    ----------
+    elements
+        :class:`~springmodel.elements.SpringElements` (rest data per element).
+
+    Returns
+    -------
+    SpringElements
+        ``4 m`` elements on ``16 m`` nodes; copy ``4 e + p`` of element ``e`` is the one its
+        vertex ``p`` measures.
+    """
+    m = elements.n_elements
+    idx = np.repeat(np.arange(m), 4)
+    changes = {}
+    for f in fields(elements):
+        v = getattr(elements, f.name)
+        if isinstance(v, np.ndarray) and v.ndim >= 1 and v.shape[0] == m and f.name != "tets":
+            changes[f.name] = np.ascontiguousarray(v[idx])
+    tets = np.arange(16 * m, dtype=np.int64).reshape(4 * m, 4)
+    return replace(elements, tets=tets, n_points=16 * m, **changes)
+
+
+class NodalStrainPart:
+    """The nodal-strain springs of a :class:`~springmodel.model.SpringModel` (module text).
+
+    Parameters
+    ----------
+    X, tets
+        Rest positions ``(n, 3)`` and connectivity ``(m, 4)``.
+    elements
+        The deviatoric spring elements of the nodal measure, with the weight
+        ``(1 - alpha) / 4`` already in their constants (:func:`scaled_deviatoric`) and no
+        volume stiffness.
+    options
+        Spring options (conservative laws).
+    modulus
+        Stiffening modulus ``C`` (Pa) when ``stiffening = "exponential"``, else None.
+    """
+
+    def __init__(self, X, tets, elements, options, modulus: float | None = None):
+        from .hessian import SpringHessian
+        from .spring_kernel import SpringKernel
+        from .stiffening import StiffeningPart
+
+        self.X = np.asarray(X, float)
+        self.tets = np.asarray(tets, np.int64)
+        self.n = self.X.shape[0]
+        self.Gb = nodal_gradients(self.X, self.tets)
+        self.node = self.tets.ravel()  # the vertex a of virtual element 4 e + p
+        k = self.node.size  # the sum over the copies of each vertex, (n, 4 m)
+        self._to_nodes = sp.csr_matrix((np.ones(k), (self.node, np.arange(k))), (self.n, k))
+        self.Xv = np.repeat(self.X[self.tets], 4, axis=0)  # (4m, 4, 3): X_i of its element
+        opts = replace(options, volume_average="element", volume_stabilisation=None)
+        self.elements = virtual_elements(elements)
+        self.kernel = SpringKernel(self.elements, opts, parallel=None)
+        self.hessian = SpringHessian(self.elements, opts)
+        self.stiffening = None
+        if modulus is not None and options.stiffening != "off":
+            self.stiffening = StiffeningPart(self.elements, opts, modulus)
+        B = []  # rows 9 a + 3 alpha + beta, columns 3 j + alpha
+        for beta in range(3):
+            coo = self.Gb[beta].tocoo()
+            for alpha in range(3):
+                B.append((9 * coo.row + 3 * alpha + beta, 3 * coo.col + alpha, coo.data))
+        r, c, v = (np.concatenate(t) for t in zip(*B, strict=True))
+        self.B = sp.csr_matrix((v, (r, c)), shape=(9 * self.n, 3 * self.n))
+
+    @classmethod
+    def split(cls, mesh, elements, options, modulus: float | None = None):
+        """The nodal-strain part of a model (None when off) and the elements for its kernel.
+
+        Parameters
+        ----------
+        mesh
+            The scene's mesh (``points``, ``tets``).
+        elements
+            The kernel's spring elements (after :meth:`NodalPart.split
+            <springmodel.nodal_volume.NodalPart.split>`).
+        options
+            :class:`~springmodel.options.SpringOptions` (``strain_average``,
+            ``strain_stabilisation``).
+        modulus
+            Stiffening modulus or None.
+
+        Returns
+        -------
+        tuple
+            ``(NodalStrainPart or None, elements for the spring kernel and Hessian)``: the
+            kernel keeps the share ``alpha`` of the springs and all of its volume stiffness.
+        """
+        if options.strain_average != "nodal":
+            return None, elements
+        alpha = float(options.strain_stabilisation)
+        deviatoric = replace(elements, k_axis_volume=np.zeros(elements.n_elements))
+        part = cls(mesh.points, mesh.tets, scaled_deviatoric(deviatoric, (1 - alpha) / 4),
+                   options, modulus)  # fmt: skip
+        if alpha > 0.0:
+            return part, scaled_deviatoric(elements, alpha)
+        zero = np.zeros_like(elements.k_axial)
+        return part, replace(elements, k_axial=zero, k_torsion=zero, k_coupling=zero)
+
+    def virtual_positions(self, x: np.ndarray) -> np.ndarray:
+        """``y = Fbar_a X_i`` of every virtual element's vertices, ``(16 m, 3)``."""
+        F = nodal_deformation_gradients(self.Gb, np.asarray(x, float).reshape(-1, 3))
+        return np.einsum("kab,kib->kia", F[self.node], self.Xv).reshape(-1, 3)
+
+    def energy(self, x: np.ndarray) -> float:
+        """``sum_e (1 - alpha)/4 sum_a W_e(Fbar_a)`` (J)."""
+        y = self.virtual_positions(x)
+        W = self.kernel.energy(y)
+        return W if self.stiffening is None else W + self.stiffening.energy(y)
+
+    def forces(self, x: np.ndarray) -> np.ndarray:
+        """Nodal forces ``-dW/dx`` ``(n, 3)`` (N): ``B^T T``."""
+        y = self.virtual_positions(x)
+        fy = self.kernel.forces(y)
+        if self.stiffening is not None:
+            fy = fy + self.stiffening.forces(y)
+        T = np.einsum("kia,kib->kab", fy.reshape(-1, 4, 3), self.Xv)  # -dW/dFbar per copy
+        Ta = self._to_nodes @ T.reshape(-1, 9)
+        return (self.B.T @ Ta.reshape(-1)).reshape(-1, 3)
+
+    def moduli(self, x: np.ndarray) -> np.ndarray:
+        """``A_a = d^2 W / dFbar_a^2`` of every node, ``(n, 9, 9)`` (rows ``3 alpha + beta``)."""
+        y = self.virtual_positions(x)
+        K = self.hessian.element_matrices(y)
+        if self.stiffening is not None:
+            K = K + self.stiffening.element_matrices(y)
+        K = K.reshape(-1, 4, 3, 4, 3).transpose(0, 2, 4, 1, 3)  # [k, alpha, gamma, i, j]
+        Xv = self.Xv[:, None, None]
+        A = Xv.transpose(0, 1, 2, 4, 3) @ K @ Xv  # [k, alpha, gamma, beta, delta]
+        A = A.transpose(0, 1, 3, 2, 4).reshape(-1, 9, 9)
+        return (self._to_nodes @ A.reshape(-1, 81)).reshape(-1, 9, 9)
+
+    def tangent(self, x: np.ndarray) -> sp.csr_matrix:
+        """Tangent ``B^T diag(A_a) B`` ``(3n, 3n)`` (CSR, symmetric)."""
+        Aa = self.moduli(x)
+        A = sp.bsr_matrix((Aa, np.arange(self.n), np.arange(self.n + 1)), shape=(9 * self.n,) * 2)
+        return (self.B.T @ A.tocsr() @ self.B).tocsr()
