@@ -83,6 +83,7 @@ ELEMENT_KEYS = (
     *("axial", "axial_coefficients", "torsion", "torsion_cubic", "volume", "volume_average"),
     *("nodal_fraction", "stiffening", "stiffening_modulus", "volumetric", "coupling"),
     *("volume_form", "lms", "calibration", "k_axial", "k_torsion", "k_volume"),
+    *("volume_stabilisation", "strain_average", "strain_stabilisation"),
 )
 #: Laws with an anisotropic small-strain tangent (the exact element adds coupling springs).
 ANISOTROPIC_LAWS = ("transverse-linear", *TISSUE_LAWS)
