@@ -165,6 +165,7 @@ def test_mp4_without_a_video_backend_warns_and_keeps_the_series(tmp_path, capsys
     out = tmp_path / "sag"
     assert main(_mp4_argv(out)) == 0
     err = [x for x in capsys.readouterr().err.splitlines() if x.startswith("warning:")]
+    err = [x for x in err if "locks" not in x]  # the sag's nu = 0.45 warns of locking too
     assert len(err) == 1 and "mp4 needs the imageio-ffmpeg or av package" in err[0]
     assert (out / "series" / "frame.pvd").is_file() and (out / "result.json").is_file()
     assert not (out / "series" / "animation.mp4").exists()
