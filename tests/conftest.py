@@ -21,3 +21,19 @@ try:  # pragma: no cover - pyvista is optional for most tests
     pyvista.OFF_SCREEN = True
 except ImportError:  # pragma: no cover
     pass
+
+
+import signal  # noqa: E402
+
+import pytest  # noqa: E402
+
+
+@pytest.fixture
+def python_sigint():
+    """Python's own SIGINT handler for the test (``_thread.interrupt_main`` does nothing
+    when an earlier test in the worker left SIGINT ignored or at the OS default)."""
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)

@@ -65,7 +65,7 @@ def test_time_cap_stops_a_mixed_tissue_solve_within_seconds():
     threading.current_thread() is not threading.main_thread(),
     reason="signals reach the main thread only (a test runner may use another)",
 )
-def test_ctrl_c_stops_with_the_last_converged_state():
+def test_ctrl_c_stops_with_the_last_converged_state(python_sigint):
     """Ctrl-C (SIGINT's effect, raised in the main thread) once two load steps converged,
     from a timer thread started at the second step: the stop does not depend on how fast
     the machine is."""

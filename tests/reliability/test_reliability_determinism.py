@@ -133,6 +133,7 @@ def solved_twice(tmp_path_factory):
 
 
 @pytest.mark.parametrize("model", MODELS)
+@pytest.mark.slow
 def test_cli_solve_twice_is_bit_identical(solved_twice, model):
     a, b = (run / model for run in solved_twice)
     ja = json.loads((a / "result.json").read_text())

@@ -101,6 +101,7 @@ def script(tmp_path_factory) -> Path:
 @pytest.mark.parametrize(
     "moments", [pytest.param(3, id="3-moments"), pytest.param(20, id="20", marks=pytest.mark.slow)]
 )
+@pytest.mark.slow
 def test_sweep_killed_at_random_moments_loses_no_finished_case(script, tmp_path, moments):
     out, log = tmp_path / "out", tmp_path / "sweep.log"
     rng = np.random.default_rng(20261202)
@@ -161,6 +162,7 @@ def test_damaged_case_files_are_recomputed_with_a_note(tmp_path, capsys):
     pd.testing.assert_frame_equal(again.table[cols], first.table[cols])
 
 
+@pytest.mark.slow
 def test_a_second_sweep_into_a_busy_folder_is_refused(script, tmp_path):
     out, log = tmp_path / "out", tmp_path / "sweep.log"
     proc = start(script, out, log, hold=True)  # holds the folder inside its first case

@@ -43,6 +43,7 @@ def test_implicit_is_stable_beyond_the_critical_step():
         explicit(sys, dt=10 * dt_crit, steps=100, x_init=x)
 
 
+@pytest.mark.slow
 def test_implicit_converges_to_explicit_trajectory_at_first_order():
     """Lowest mode of a linear system: x(t) = x0 + A phi cos(omega_1 t) exactly."""
     sys = beam(divisions=(4, 2, 2), linear=True)

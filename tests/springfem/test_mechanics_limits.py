@@ -67,7 +67,7 @@ def test_interruptible_returns_the_value_and_raises_the_error():
     threading.current_thread() is not threading.main_thread(),
     reason="signals reach the main thread only (a test runner may use another)",
 )
-def test_ctrl_c_reaches_the_caller_during_a_long_call():
+def test_ctrl_c_reaches_the_caller_during_a_long_call(python_sigint):
     """A ``KeyboardInterrupt`` (Ctrl-C, simulated from another thread) arrives while the
     caller waits for the worker, not after the 30 s call."""
     threading.Timer(0.3, _thread.interrupt_main).start()
@@ -81,7 +81,7 @@ def test_ctrl_c_reaches_the_caller_during_a_long_call():
     threading.current_thread() is not threading.main_thread(),
     reason="signals reach the main thread only (a test runner may use another)",
 )
-def test_watchdog_interrupts_a_loop_that_never_checks():
+def test_watchdog_interrupts_a_loop_that_never_checks(python_sigint):
     """A busy Python loop without checkpoints: the watchdog interrupts the main thread
     WATCHDOG_GRACE after the cap; the solve turns it into SolveStopped by the cap."""
     d = capped(0.2)

@@ -123,6 +123,7 @@ def test_named_block_loops_keep_their_own_code_in_the_parallel_driver(monkeypatc
     assert not np.array_equal(res[1.0]["serial"], res[2.0]["serial"])
 
 
+@pytest.mark.slow
 def test_unnamed_block_loops_with_one_counter_run_each_others_code(monkeypatch):
     # the control: the same closures under their shared qualified name; the parallel driver
     # of the first runs the second's code (the definition loaded last). If this stops

@@ -282,6 +282,7 @@ def test_scene_errors_name_the_key():
 @pytest.mark.parametrize(
     "name", [pytest.param("land-ventricle", marks=pytest.mark.slow), "land-ventricle-fibres"]
 )
+@pytest.mark.slow
 def test_bundled_ventricles_run_to_full_load_where_quadratic_springs_stop(name):
     # Land problems 2 and 3 on a coarse gmsh mesh: the scenes' stiffened element carries the
     # 10 kPa (a converged static solve at load factor 1, the cavity inflated), the same

@@ -255,6 +255,7 @@ def test_doctests(name):
     assert doctest.testmod(module).failed == 0
 
 
+@pytest.mark.slow
 def test_neo_hookean_jittered_box_against_the_neo_hookean_fem(tmp_path):
     """On a neo-Hookean scene the FEM models are P1-NH and P2-NH (the scene's law); a
     jittered Delaunay box is refined uniformly (powers of two). The exact element's

@@ -137,6 +137,7 @@ def test_a_study_that_cannot_run_on_a_scene_says_why(scene_file, tmp_path, capsy
     assert err.count("\n") == 1  # one line, no traceback
 
 
+@pytest.mark.slow
 def test_ablation_on_a_gmsh_scene(scene_file, tmp_path):
     """Every variant on the user's mesh against its own P1: the exact element is within
     O(tip rotation ~ 0.03) of P1 (its small-strain element is P1's,

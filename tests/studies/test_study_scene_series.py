@@ -101,6 +101,7 @@ def run(study: str, scene: str, out) -> None:
     assert main(["study", study, "--quick", "--scene", scene, "--out", str(out)]) == 0
 
 
+@pytest.mark.slow
 def test_stability_on_a_prism(mesh_dir, tmp_path):
     """Linear stability theory and linearity, on the user's mesh: symplectic Euler is stable
     iff omega_max dt < 2, so the measured step of every gradient-consistent method is
@@ -139,6 +140,7 @@ def run_direct(study: str, scene: str, out, settings=None):
     return spec.run(ctx, [StudyScene.from_file(scene)], settings)
 
 
+@pytest.mark.slow
 def test_volume_drift_on_a_prism_in_uniaxial_stress(mesh_dir, tmp_path):
     """Uniaxial stress sigma along the prism (BCs remove only rigid motion): P1 holds the
     homogeneous field exactly (patch test), so its volume change is the analytic
@@ -169,6 +171,7 @@ def test_volume_drift_on_a_prism_in_uniaxial_stress(mesh_dir, tmp_path):
     )
 
 
+@pytest.mark.slow
 def test_speed_accuracy_on_a_refined_prism(mesh_dir, tmp_path):
     """Level 2 is the mesh file refined uniformly (8x the tets); the reference point (P2 on
     the finest level) has error 0; P1's error falls under refinement and P2 beats P1 on the

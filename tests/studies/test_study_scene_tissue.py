@@ -10,6 +10,7 @@ pressure ``q``; ``q = 1`` makes the whole-body volume change zero up to the Newt
 from __future__ import annotations
 
 import pandas as pd
+import pytest
 
 from studies.cache import CaseCache
 from studies.registry import StudyContext
@@ -17,6 +18,7 @@ from studies.scenes import StudyScene
 from studies.study_volume_drift import Settings, run
 
 
+@pytest.mark.slow
 def test_volume_drift_on_the_land_beam(tmp_path):
     scene = StudyScene.from_file("studies/scenes/land-beam.toml", {"mesh.divisions": [6, 1, 1]})
     ctx = StudyContext("volume_drift", tmp_path, True, CaseCache(tmp_path, "vd"), False)

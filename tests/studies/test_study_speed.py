@@ -21,6 +21,9 @@ from studies.registry import StudyContext
 from studies.scenes import StudyScene
 from studies.study_speed_accuracy.cases import point_case
 
+# the study's quick run takes tens of seconds: -m slow
+pytestmark = pytest.mark.slow
+
 BAR = sa.bundled_scenes(sa.Settings.quick())[0]
 
 

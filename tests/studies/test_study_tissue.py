@@ -13,6 +13,9 @@ from studies.cache import CaseCache
 from studies.registry import StudyContext
 from studies.study_tissue.cases import GUCCIONE, HOLZAPFEL_OGDEN, VERSION, cube, stretch_case
 
+# the study's quick run takes tens of seconds: -m slow
+pytestmark = pytest.mark.slow
+
 
 def small_strain_tangent(law):
     if law == "guccione":

@@ -200,6 +200,7 @@ def _kill_victim(marker: Path, stop: threading.Event) -> None:
         time.sleep(0.05)
 
 
+@pytest.mark.slow
 def test_local_cluster_survives_a_killed_worker_and_resumes(tmp_path):
     import cloudpickle
 
