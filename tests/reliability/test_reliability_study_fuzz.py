@@ -16,6 +16,7 @@ import itertools
 from pathlib import Path
 
 import pytest
+from support.meshes import gmsh_box
 from support.toml import to_toml
 
 from studies.cli import main
@@ -40,28 +41,11 @@ def _user_studies() -> list[str]:
     return [n.replace("_", "-") for n, spec in REGISTRY.items() if spec.user_scenes is None]
 
 
-def _gmsh_box(path: Path) -> None:
-    gmsh = pytest.importorskip("gmsh")
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("box")
-        gmsh.model.occ.addBox(0, 0, 0, 0.1, 0.02, 0.02)
-        gmsh.model.occ.synchronize()
-        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.02)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.02)
-        gmsh.model.addPhysicalGroup(3, [1], name="body")
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-
-
 def _scene_table(scene: str, folder: Path) -> dict:
     import tomllib
 
     if scene == "gmsh":
-        _gmsh_box(folder / "box.msh")
+        gmsh_box(folder / "box.msh", 0.02)
         return {
             "name": "gbox",
             "mesh": {"file": str(folder / "box.msh")},

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from support.meshes import gmsh_box
 
 from studies.cli import main
 
@@ -34,24 +35,6 @@ value = [0.0, 0.0, -0.1]
 name = "tip"
 point = [0.1, 0.01, 0.01]
 """
-
-
-def gmsh_box(path, size: float) -> None:
-    """A 0.1 x 0.02 x 0.02 box meshed by gmsh with element size ``size``."""
-    gmsh = pytest.importorskip("gmsh")
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("box")
-        gmsh.model.occ.addBox(0, 0, 0, 0.1, 0.02, 0.02)
-        gmsh.model.occ.synchronize()
-        gmsh.option.setNumber("Mesh.MeshSizeMin", size)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
-        gmsh.model.addPhysicalGroup(3, [1], name="body")
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
 
 
 @pytest.fixture(scope="module")

@@ -122,21 +122,10 @@ def neo_hookean(tmp_path_factory):
     """The quick study on a neo-Hookean gmsh bar (0.1 x 0.02 x 0.02, ~100 tets, no probe):
     the unconverted study stopped here with ``StopIteration`` (its P2-NH reference was
     computed on the costly levels only and looked up on the finest)."""
-    gmsh = pytest.importorskip("gmsh")
+    from support.meshes import gmsh_box
+
     d = tmp_path_factory.mktemp("nh")
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("bar")
-        gmsh.model.occ.addBox(0, 0, 0, 0.1, 0.02, 0.02)
-        gmsh.model.occ.synchronize()
-        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.02)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.02)
-        gmsh.model.addPhysicalGroup(3, [1], name="body")
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(d / "bar.msh"))
-    finally:
-        gmsh.finalize()
+    gmsh_box(d / "bar.msh", 0.02)
     (d / "nh.toml").write_text(NEO_HOOKEAN)
     ctx = StudyContext("speed_accuracy", d / "out", True, CaseCache(d, "s"), False)
     out = sa.run(ctx, [StudyScene.from_file(d / "nh.toml")], sa.Settings.quick())
