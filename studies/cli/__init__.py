@@ -118,6 +118,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("inspect", help="mesh, axes and intersection statistics of a scene")
     p.add_argument("scene", help="scene TOML file or bundled scene name")
     p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument("--modes", action="store_true",
+                   help="count the near-zero eigenvalues of each model's tangent at rest "
+                   "(spurious modes beyond the free rigid motions are named)")  # fmt: skip
     p.set_defaults(func=_subcommand("studies.cli.inspect", "cmd_inspect"))
 
     p = sub.add_parser("solve", help="solve a scene with one model")

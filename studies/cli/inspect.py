@@ -16,7 +16,8 @@ def cmd_inspect(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args
-        Parsed options ``scene``, ``json``.
+        Parsed options ``scene``, ``json``, ``modes`` (the zero-energy modes of each
+        model's tangent at rest, :mod:`studies.modes_report`).
 
     Returns
     -------
@@ -32,10 +33,22 @@ def cmd_inspect(args: argparse.Namespace) -> int:
         print(f"note: {note}", file=sys.stderr)
     for line in guards.locking_warnings(scene):
         print(f"warning: {line}", file=sys.stderr)
+    counts = []
+    if getattr(args, "modes", False):
+        from ..modes_report import scene_modes
+
+        counts = scene_modes(scene)
+        report["modes"] = {
+            c.model: {"near_zero": c.count, "expected": c.expected, "spurious": c.spurious}
+            for c in counts
+        }
     if args.json:
         print_json(report)
     else:
-        width = max(len(k) for k in report)
+        width = max(len(k) for k in report if k != "modes")
         for key, value in report.items():
-            print(f"{key:<{width}}  {value}")
+            if key != "modes":
+                print(f"{key:<{width}}  {value}")
+        for c in counts:
+            print(c.line)
     return 0
