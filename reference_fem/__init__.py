@@ -19,7 +19,8 @@ Modules, one idea each:
 - ``law_names``: law names and :func:`~reference_fem.law_names.parse_law`.
 - ``problem``: :class:`FemProblem` (residual, tangent, energy, post-processing);
   ``mixed``: the Taylor–Hood u-p problem; ``mini``: the P1-bubble/P1 u-p problem;
-  ``nodal_volume``: P1 with nodal volumes; ``volumetric_split``: a law as element part
+  ``nodal_volume``: P1 with nodal volumes; ``nodal_strain``: nodal volumes and nodal-averaged
+  strain; ``volumetric_split``: a law as element part
   plus ``U(J)``.
 - ``solver``: :func:`solve` (scene in, Result out).
 - ``explicit``, ``explicit_kernels``, ``dynamics``: explicit P1 FEM and time integration.

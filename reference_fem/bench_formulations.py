@@ -111,6 +111,7 @@ def main(argv: list[str] | None = None) -> None:  # pragma: no cover - a command
     forms: dict[str, dict] = {
         "P1": {"order": 1},
         "nodal-volume": {"order": 1, "formulation": "nodal-volume"},
+        "nodal-strain": {"order": 1, "formulation": "nodal-strain"},
     }
     if every:
         forms.update(mini={"order": 1, "formulation": "mini"})

@@ -72,10 +72,13 @@ class NodalVolumeProblem(FemProblem):
         As for :class:`~reference_fem.problem.FemProblem`; ``order`` must be 1.
     stabilisation
         The share ``f`` of the volumetric energy kept per element (default
-        ``FemOptions.of(scene).stabilisation``).
+        ``FemOptions.of(scene).volumetric_share``).
     """
 
     locking_free = True
+    #: The share of the law's element part measured on the element's own ``F`` (1 here;
+    #: :mod:`reference_fem.nodal_strain` measures the rest on nodal-averaged strain).
+    element_share = 1.0
 
     def __init__(
         self,
@@ -91,7 +94,7 @@ class NodalVolumeProblem(FemProblem):
         super().__init__(scene, 1, law, 1)
         # a LinearSolver by duck type: the augmented direct solve, else the wrapped solver
         self.linear_solver = NodalPressureSolver(self.linear_solver)  # type: ignore[assignment]
-        self.fraction = float(opts.stabilisation if stabilisation is None else stabilisation)
+        self.fraction = float(opts.volumetric_share if stabilisation is None else stabilisation)
         if not 0.0 <= self.fraction <= 1.0:
             raise InputError(f"stabilisation must lie in [0, 1], got {self.fraction}")
         if self.kind == "transverse-linear":
@@ -149,7 +152,7 @@ class NodalVolumeProblem(FemProblem):
         mat, f = self.scene.material, self.fraction
         if self.split is not None:  # a hyperelastic law: its tangent at rest
             return self.internal_force(np.zeros(self.n_dofs), tangent=True)[1]
-        D = lame_matrix(f * mat.lam, mat.mu)[None]
+        D = lame_matrix(f * mat.lam, self.element_share * mat.mu)[None]
         blocks = linear_element_blocks(self.space.grads, self.space.dx, D, np.zeros(len(D), int))
         B = self._volume_gradient_matrix(self.G)
         w = (1.0 - f) * mat.lam / self.node_volume0
@@ -177,8 +180,10 @@ class NodalVolumeProblem(FemProblem):
         frames = None if self.frames is None else self.frames
         if tangent:
             P, A = split.base.stress_tangent(F, frames=frames)
+            A = self.element_share * A
         else:
             P, A = split.base.stress(F, frames=frames), None
+        P = self.element_share * P
         FiT = np.swapaxes(np.linalg.inv(F), -1, -2)
         JFiT = J[:, None, None] * FiT
         P = P + p[:, None, None] * JFiT
@@ -218,7 +223,7 @@ class NodalVolumeProblem(FemProblem):
         Ue = self.split.volumetric(J)[0]
         Ua = self.split.volumetric(Ja)[0]
         f = self.fraction
-        total = self.V0 @ (W + f * Ue) + (1.0 - f) * (self.node_volume0 @ Ua)
+        total = self.V0 @ (self.element_share * W + f * Ue) + (1.0 - f) * (self.node_volume0 @ Ua)
         return float(total) - scale * float(self.loads.dead @ u)
 
     def residual_tangent(self, u: np.ndarray, scale: float = 1.0):

@@ -22,11 +22,16 @@ from springfem.scene import Scene, TableReader, register_section
 LinearSolver = Literal["auto", "direct", "amg"]
 Solver = Literal["static", "explicit", "implicit"]
 Precision = Literal["float64", "mixed", "float32"]
-Formulation = Literal["displacement", "mixed", "nodal-volume", "mini"]
+Formulation = Literal["displacement", "mixed", "nodal-volume", "nodal-strain", "mini"]
+#: The formulations on nodal volumes (``[fem] stabilisation`` applies to them).
+NODAL_FORMULATIONS = ("nodal-volume", "nodal-strain")
 
 #: Default ``[fem] stabilisation`` of ``formulation = "nodal-volume"``: the smallest share
 #: that takes Land's ventricle to full load (docs/fem.rst#nodal-volume-tetrahedra).
 STABILISATION = 1e-4
+#: Default ``[fem] strain_stabilisation`` of ``formulation = "nodal-strain"``; its volumetric
+#: share defaults to ``strain_stabilisation * mu / kappa`` (docs/fem.rst#nodal-strain-tetrahedra).
+STRAIN_STABILISATION = 0.3
 
 
 @dataclass(frozen=True)
@@ -61,11 +66,18 @@ class FemOptions:
         ``displacement``; ``mixed``: Taylor–Hood P2 displacement / P1 pressure (needed
         for ``incompressible = true`` materials, order 2); ``nodal-volume``: linear tets
         with the volumetric energy on nodal volumes (order 1,
-        :mod:`reference_fem.nodal_volume`); ``mini``: P1-bubble / P1 pressure (order 1,
+        :mod:`reference_fem.nodal_volume`); ``nodal-strain``: nodal volumes and the law's
+        element part blended with its value on nodal-averaged strain (order 1,
+        :mod:`reference_fem.nodal_strain`); ``mini``: P1-bubble / P1 pressure (order 1,
         :mod:`reference_fem.mini`).
     stabilisation
-        ``nodal-volume`` only: the share of the volumetric energy kept per element, in
-        [0, 1] (0: pure nodal averaging, 1: plain P1).
+        ``nodal-volume`` and ``nodal-strain``: the share of the volumetric energy kept per
+        element, in [0, 1] (0: pure nodal averaging, 1: plain P1); ``None`` is the
+        formulation's default: 1e-4 for nodal-volume, ``strain_stabilisation * mu / kappa``
+        (an element volumetric stiffness of that share of the shear modulus) for nodal-strain.
+    strain_stabilisation
+        ``nodal-strain`` only: the share of the law's element part measured on the
+        element's own strain, in [0, 1] (1: the nodal-volume formulation).
     """
 
     order: int = 1
@@ -80,7 +92,13 @@ class FemOptions:
     mass_damping: float = 0.0
     precision: Precision = "float64"
     formulation: Formulation = "displacement"
-    stabilisation: float = STABILISATION
+    stabilisation: float | None = None
+    strain_stabilisation: float = STRAIN_STABILISATION
+
+    @property
+    def volumetric_share(self) -> float:
+        """``stabilisation``, else nodal-volume's default :data:`STABILISATION`."""
+        return STABILISATION if self.stabilisation is None else self.stabilisation
 
     @classmethod
     def choices(cls, name: str) -> tuple[str, ...]:
@@ -131,14 +149,19 @@ def parse_fem_options(r: TableReader) -> FemOptions:
     for key in ("max_iter", "load_steps", "steps"):
         if r.has(key):
             kw[key] = r.get(key, "int", positive=True)
-    if r.has("stabilisation"):
-        kw["stabilisation"] = r.get("stabilisation", "float", nonneg=True)
-        if kw["stabilisation"] > 1.0:
-            raise r.fail("stabilisation", f"must lie in [0, 1], got {kw['stabilisation']}")
-        if kw.get("formulation") != "nodal-volume":
-            raise r.fail("stabilisation", 'applies to formulation = "nodal-volume" only')
+    for key, forms in (
+        ("stabilisation", NODAL_FORMULATIONS),
+        ("strain_stabilisation", ("nodal-strain",)),
+    ):
+        if r.has(key):
+            kw[key] = r.get(key, "float", nonneg=True)
+            if kw[key] > 1.0:
+                raise r.fail(key, f"must lie in [0, 1], got {kw[key]}")
+            if kw.get("formulation") not in forms:
+                names = " or ".join(f'"{f}"' for f in forms)
+                raise r.fail(key, f"applies to formulation = {names}")
     form, order = kw.get("formulation", "displacement"), kw.get("order", 1)
-    if form in ("nodal-volume", "mini") and order != 1:
+    if form in NODAL_FORMULATIONS + ("mini",) and order != 1:
         raise r.fail("order", f'formulation = "{form}" is for linear tets: order 1, not {order}')
     if kw.get("solver", "static") != "static" and "t_end" not in kw and "steps" not in kw:
         raise r.fail("solver", f"{kw['solver']!r} needs fem.t_end or fem.steps")

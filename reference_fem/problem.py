@@ -81,7 +81,8 @@ class FemProblem:
         self.nonlinear = self.law is not None
         if scene.material.incompressible and not (self.mixed or self.locking_free):
             raise InputError(
-                'incompressible = true needs [fem] formulation = "mixed" or "nodal-volume"'
+                'incompressible = true needs [fem] formulation = "mixed", "nodal-volume", '
+                '"nodal-strain" or "mini"'
             )
         # per-element frames for anisotropic laws, broadcast over quadrature
         self.frames = scene.frames if getattr(self.law, "anisotropic", False) else None

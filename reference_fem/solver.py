@@ -116,7 +116,8 @@ def make_problem(scene: Scene, order: int | None = None, law: str | None = None)
     ----------
     scene
         The scene; ``[fem] formulation`` ``"mixed"`` selects the Taylor–Hood problem,
-        ``"nodal-volume"`` the nodal-volume P1 problem, ``"mini"`` the MINI pair.
+        ``"nodal-volume"`` the nodal-volume P1 problem, ``"nodal-strain"`` the nodal-strain
+        P1 problem, ``"mini"`` the MINI pair.
     order, law
         As for :class:`~reference_fem.problem.FemProblem`.
 
@@ -145,6 +146,10 @@ def make_problem(scene: Scene, order: int | None = None, law: str | None = None)
         from .nodal_volume import NodalVolumeProblem
 
         return NodalVolumeProblem(scene, order, law)
+    if formulation == "nodal-strain":
+        from .nodal_strain import NodalStrainProblem
+
+        return NodalStrainProblem(scene, order, law)
     return FemProblem(scene, order, law)
 
 

@@ -91,7 +91,8 @@ def locking_warnings(scene: Scene, models: tuple[str, ...] = ("spring", "fem")) 
     if "fem" in models and FemOptions.of(scene).formulation == "displacement":
         out.append(
             f"{what}: the FEM's displacement formulation locks on tets; set [fem] "
-            'formulation = "nodal-volume" (P1) or "mixed" (order 2)'
+            'formulation = "nodal-strain" (P1, also free of bending stiffness) or "mixed" '
+            "(order 2)"
         )
     if "spring" in models and not SpringOptions.of(scene).nodal_volume:
         out.append(

@@ -3,7 +3,8 @@
 
 A free body has exactly the six rigid-body modes, a clamped one none
 (docs/volumetric.rst#counting-spurious-modes); checked at rest for plain P1, nodal-volume P1
-(pure nodal averaging and the default share), Taylor–Hood P2/P1 and MINI, and at the final
+(pure nodal averaging and the default share), nodal-strain P1 (pure node-based smoothing of
+the strain and the default blend), Taylor–Hood P2/P1 and MINI, and at the final
 load of a solved membrane.
 """
 
@@ -22,6 +23,8 @@ FORMULATIONS = {
     "P1": {"order": 1},
     "nodal-volume-f0": {"order": 1, "formulation": "nodal-volume", "stabilisation": 0.0},
     "nodal-volume": {"order": 1, "formulation": "nodal-volume"},
+    "nodal-strain-a0": {"order": 1, "formulation": "nodal-strain", "strain_stabilisation": 0.0},
+    "nodal-strain": {"order": 1, "formulation": "nodal-strain"},
     "mixed": {"order": 2, "formulation": "mixed"},
     "mini": {"order": 1, "formulation": "mini"},
 }
@@ -62,7 +65,7 @@ def test_clamped_body_has_no_zero_mode(formulation, material):
         assert modes.negative == 0
 
 
-@pytest.mark.parametrize("formulation", ["nodal-volume", "mixed", "mini"])
+@pytest.mark.parametrize("formulation", ["nodal-volume", "nodal-strain", "mixed", "mini"])
 def test_no_zero_mode_at_the_final_load(formulation):
     scene = scene_from_dict(
         {

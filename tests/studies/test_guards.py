@@ -200,12 +200,12 @@ def test_max_time_stops_the_fem_newton_with_exit_3(tmp_path, capsys):
 
 def test_a_locking_formulation_warns_once_and_names_the_fix(tmp_path, capsys):
     """nu = 0.499 (the issue's cantilever case) with the default options: both models'
-    formulations lock; the nodal-volume and mixed options silence the FEM's line."""
+    formulations lock; the locking-free options silence the FEM's line."""
     argv = ["solve", "cantilever", "--model", "fem", "--out", str(tmp_path / "a"),
             "--set", "material.nu=0.499"]  # fmt: skip
     assert main(argv) == 0
     (line,) = [w for w in _warnings(capsys.readouterr().err) if "locks" in w]
-    assert "nu = 0.499" in line and 'formulation = "nodal-volume"' in line
+    assert "nu = 0.499" in line and 'formulation = "nodal-strain"' in line
     argv += ["--set", 'fem.formulation="nodal-volume"', "--out", str(tmp_path / "b")]
     assert main(argv) == 0
     assert not [w for w in _warnings(capsys.readouterr().err) if "locks" in w]
