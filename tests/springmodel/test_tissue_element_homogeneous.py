@@ -26,7 +26,6 @@ from springmodel.options import SpringOptions
 from springmodel.springs import internal_forces, spring_energy
 from springmodel.springs.points import scatter
 from springmodel.tissue_element import TissuePart, law_parameters, tissue_energy
-from springmodel.tissue_kernel import tissue_pass
 
 LAWS = {
     "guccione": {"law": "guccione", "C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0},
