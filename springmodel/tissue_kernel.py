@@ -42,15 +42,15 @@ def _exp_group(a, b, x, max_q):  # pragma: no cover - compiled
 
 @njit(cache=True, fastmath=False)
 def _measure_energy(
-    mm, dW, k, l0, ka, kt, c0, kc, V, b2, b3, mode, modulus, law, max_q, tension
+    mm, dW, sl, lam, k, l0, ka, kt, c0, kc, V, b2, b3, mode, modulus, law, max_q, tension
 ):  # fmt: skip  # pragma: no cover - compiled
-    """``W(m)`` of element ``k`` and ``dW/dm`` into ``dW`` (6,); returns ``(W, s)``."""
+    """``W(m)`` of element ``k`` and ``dW/dm`` into ``dW`` (6,); returns ``(W, s)``.
+
+    ``sl``, ``lam`` (3,) are scratch for the axial strains and stretches."""
     for a in range(6):
         dW[a] = 0.0
     if mode <= 1:
         W = 0.0
-        sl = np.empty(3)
-        lam = np.empty(3)
         for l in range(3):
             lam[l] = math.sqrt(mm[l])
             s = lam[l] - 1.0
@@ -171,6 +171,8 @@ def tissue_pass(
     gZ = np.empty((3, 3))
     mm = np.empty(6)
     dW = np.empty(6)
+    sl = np.empty(3)
+    lam = np.empty(3)
     for k in range(m):
         for l in range(3):
             for c in range(3):
@@ -183,8 +185,9 @@ def tissue_pass(
             l, q = TORSION_PAIRS[p]
             mm[3 + p] = Z[l, 0] * Z[q, 0] + Z[l, 1] * Z[q, 1] + Z[l, 2] * Z[q, 2]
         W, s = _measure_energy(
-            mm, dW, k, l0, ka, kt, c0, kc, V0[k], b2, b3, mode, modulus, law, max_q, tension
-        )
+            mm, dW, sl, lam, k, l0, ka, kt, c0, kc, V0[k], b2, b3, mode, modulus, law, max_q,
+            tension,
+        )  # fmt: skip
         W_out[k] = W
         s_out[k] = s
         if not forces:
