@@ -76,6 +76,8 @@ class SpringModel:
         self.elements: SpringElements = build_spring_elements(
             mesh.points, mesh.tets, scene.frames, self.options, scene.material
         )
+        if self.options.stiffening == "law":  # the law's own P1 element: no constants to miss
+            self.elements = replace(self.elements, mismatch=np.zeros(self.elements.n_elements))
         # volume_average = "nodal": (part of) the volume term on nodal volumes, else None
         self.nodal, kernel_elements = NodalPart.split(mesh, self.elements, self.options)
         modulus = None
