@@ -54,7 +54,7 @@ def fixes(options: SpringOptions, transverse: bool) -> list[str]:
     out = []
     if not options.axis_volume:
         out.append('volume = "axes"')
-    if not options.energy_torsion:
+    if not (options.energy_torsion or options.green_torsion):
         out.append('torsion = "energy"')
     if options.calibration != "exact":
         out.append('calibration = "exact"')
@@ -92,7 +92,7 @@ def model_warnings(
     cause = []
     if options.barycentric_volume:
         cause.append("barycentric volume springs depend on the tet shapes")
-    if not (options.energy_torsion or options.torsion == "off"):
+    if not (options.energy_torsion or options.green_torsion or options.torsion == "off"):
         cause.append(f"{options.torsion} torsion is no energy")
     if transverse and not options.coupling:
         cause.append("anisotropy needs coupling springs")

@@ -24,10 +24,14 @@ from springfem.scene import Scene, TableReader, register_section
 from springfem.volumetric import VOLUMETRIC_ENERGIES, Volumetric
 
 AxialLaw = Literal["linear", "quadratic", "cubic", "stress-scaled"]
-TorsionLaw = Literal["off", "angle", "cosine", "cubic", "energy", "shear"]
+TorsionLaw = Literal["off", "angle", "cosine", "cubic", "energy", "shear", "green"]
 #: Torsion laws that are energies of the axis cosine, ``U = k phi(c)`` (conservative, with an
 #: analytic Hessian; the same small-strain tangent).
 ENERGY_TORSION = ("energy", "shear")
+#: The torsion law on the Green shear ``gamma_lm = zeta_l . zeta_m / (l_l^0 l_m^0)`` (``2 E_lm``
+#: in the frame), ``U = k/2 (gamma - gamma0)^2``: conservative, the small-strain tangent of
+#: ``energy``; computed by the tissue element's pass (:mod:`springmodel.tissue_element`).
+GREEN_TORSION = "green"
 LMSRule = Literal["spec", "abs"]
 Calibration = Literal["analytic", "analytic-lsq", "nnls", "exact"]
 SolverKind = Literal["static", "linear", "explicit", "implicit"]
@@ -50,8 +54,10 @@ STRAIN_STABILISATION = 0.3
 #: Default ``volume_stabilisation`` with ``strain_average = "nodal"`` (0 without it, as before;
 #: chosen by measurement, docs/volumetric.rst#stabilised-nodal-strain).
 VOLUME_STABILISATION = 3e-4
-#: ``off``: the spec's quadratic springs; ``exponential``: :mod:`springmodel.stiffening`.
-Stiffening = Literal["off", "exponential"]
+#: ``off``: the spec's quadratic springs; ``exponential``: :mod:`springmodel.stiffening` (with
+#: ``torsion = "green"``: :mod:`springmodel.tissue_element`); ``law``: each spring group
+#: stiffens as the tissue law's terms do (:mod:`springmodel.tissue_element`).
+Stiffening = Literal["off", "exponential", "law"]
 
 
 @dataclass(frozen=True)
@@ -98,7 +104,12 @@ class SpringOptions:
         spec's default), ``cubic`` (2.47–2.50), ``energy`` (exact gradient of
         ``U = k/2 (c - c0)^2``) or ``shear`` (``U = k/2 (s0^3 (cot theta - cot theta0))^2``,
         the same small-strain tangent as ``energy`` and convex past 45 deg of shear, where
-        ``energy`` loses its shear stiffness; :mod:`springmodel.springs.shear`).
+        ``energy`` loses its shear stiffness; :mod:`springmodel.springs.shear`) or ``green``
+        (``U = k/2 (gamma - gamma0)^2`` on the Green shear
+        ``gamma_lm = zeta_l . zeta_m / (l_l^0 l_m^0)``, which is ``2 E_lm`` in the frame under
+        any deformation; with Green axial springs the element measures all six components of
+        ``E``, docs/tissue.rst#the-tissue-element-on-the-green-strain; needs volume
+        ``"axes"`` or off and ``strain_average = "element"``).
     torsion_cubic
         Dimensionless cubic coefficient of the ``cubic`` torsion law.
     volume
@@ -135,10 +146,14 @@ class SpringOptions:
         ``F`` (stabilises the modes nodal measures leave free); default
         :data:`STRAIN_STABILISATION`.
     stiffening
-        ``off`` (the spec's springs) or ``exponential``: the element's axial, torsion and
+        ``off`` (the spec's springs), ``exponential``: the element's axial, torsion and
         coupling energy ``W_q`` becomes ``V C/2 (exp(2 W_q / (C V)) - 1)``, the shape of the
         Guccione law, with the same small-strain tangent (:mod:`springmodel.stiffening`;
-        needs the energy forms: axial linear/quadratic/cubic, torsion energy/shear/off).
+        needs the energy forms: axial linear/quadratic/cubic, torsion energy/shear/green/off),
+        or ``law``: each spring group stiffens as the scene's tissue law's terms do, so the
+        element's energy is the law's ``W(E)`` of the six measured frame strains
+        (``guccione`` or ``holzapfel-ogden``; needs ``axial = "green"``,
+        ``torsion = "green"``, ``volume = "axes"``; :mod:`springmodel.tissue_element`).
     stiffening_modulus
         ``C`` (Pa) of the stiffening; default: the ``guccione`` law's ``C``, the
         ``holzapfel-ogden`` law's ``a_f / b_f`` (required for other laws).
@@ -243,14 +258,34 @@ class SpringOptions:
                 f"{self.volume!r})"
             )
         if self.stiffening not in get_args(Stiffening):
-            raise ValueError(f"stiffening {self.stiffening!r} is not off or exponential")
+            raise ValueError(f"stiffening {self.stiffening!r} is not off, exponential or law")
         if self.stiffening != "off" and (
-            self.axial == "stress-scaled" or self.torsion not in ("off", *ENERGY_TORSION)
+            self.axial == "stress-scaled"
+            or self.torsion not in ("off", *ENERGY_TORSION, GREEN_TORSION)
         ):
             raise ValueError(
                 'stiffening = "exponential" needs an energy to exponentiate: axial linear, '
-                'quadratic or cubic and torsion "energy", "shear" or "off" (got axial '
+                'quadratic or cubic and torsion "energy", "shear", "green" or "off" (got axial '
                 f"{self.axial!r}, torsion {self.torsion!r})"
+            )
+        if self.torsion == GREEN_TORSION and (
+            self.axial == "stress-scaled" or self.volume is True
+            or self.strain_average != "element" or self.axial_damping or self.volume_damping
+        ):  # fmt: skip
+            raise ValueError(
+                'torsion = "green" needs axial linear, quadratic or cubic, volume "axes" or '
+                "off, each tet's own strain (element strain average) and no damping (got "
+                f"axial {self.axial!r}, volume {self.volume!r}, strain average "
+                f"{self.strain_average!r})"
+            )
+        if self.stiffening == "law" and (
+            self.torsion != GREEN_TORSION or self.volume != "axes"
+            or self.axial != "cubic" or tuple(self.axial_coefficients) != GREEN_AXIAL_COEFFICIENTS
+        ):  # fmt: skip
+            raise ValueError(
+                'stiffening = "law" needs the Green measures: axial = "green", torsion = '
+                f'"green" and volume = "axes" (got axial {self.axial!r}, torsion '
+                f"{self.torsion!r}, volume {self.volume!r})"
             )
         if self.volumetric not in VOLUMETRIC_ENERGIES:
             raise ValueError(
@@ -266,6 +301,12 @@ class SpringOptions:
     def energy_torsion(self) -> bool:
         """The torsion law is an energy of the axis cosine (:data:`ENERGY_TORSION`)."""
         return self.torsion in ENERGY_TORSION
+
+    @property
+    def green_torsion(self) -> bool:
+        """The torsion law is on the Green shear (:data:`GREEN_TORSION`): the element's
+        deviatoric springs are the tissue element's pass (:mod:`springmodel.tissue_element`)."""
+        return self.torsion == GREEN_TORSION
 
     @property
     def axis_volume(self) -> bool:
@@ -408,7 +449,7 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
 
 
 #: Keys a combination error names, first match first (the scene error points at it).
-KEY_ORDER = ("volume_stabilisation", "strain_average", "stiffening", "volume_average")
+KEY_ORDER = ("volume_stabilisation", "strain_average", "stiffening", "volume_average", "torsion")
 
 
 def _volume_kind(r: TableReader) -> VolumeKind:

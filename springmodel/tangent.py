@@ -41,7 +41,7 @@ import numpy as np
 
 from springfem.materials import voigt_to_tensor
 
-from .options import ENERGY_TORSION
+from .options import ENERGY_TORSION, GREEN_TORSION
 from .rest_geometry import TORSION_PAIRS, radial_tensor, spring_strain_tensors
 
 #: Elements per block when tangents are formed (bounds memory to ~100 MB).
@@ -107,7 +107,7 @@ def tangent_basis(geometry: Any, torsion: str, volume: Any, coupling: bool) -> n
         u = zeta0 / l0[..., None]
         for p, (l, n) in enumerate(TORSION_PAIRS):
             S = a[:, 3 + p]
-            if torsion in ENERGY_TORSION:  # the same small-strain tangent
+            if torsion in (*ENERGY_TORSION, GREEN_TORSION):  # the same small-strain tangent
                 out.append(_dyad(S, S) * iv)
                 continue
             ul, un = u[:, l], u[:, n]

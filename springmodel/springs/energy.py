@@ -32,8 +32,8 @@ def spring_energy(
 ) -> tuple[np.ndarray, float]:
     """Spring energy per element and in total.
 
-    Exact potential of the energy forms (axial linear/polynomial, torsion ``energy`` and
-    ``shear``, volume
+    Exact potential of the energy forms (axial linear/polynomial, torsion ``energy``,
+    ``shear`` and ``green``, volume
     ``gradient``). For the non-gradient laws it reports the nominal energy each law is
     derived from (``stress-scaled``: ``k d^2/2``; ``cosine``: ``k/2 dc^2``; ``cubic``:
     ``k (dc^2/2 + b dc^4/4)``; ``angle``: ``k/2 (alpha - alpha0)^2``, all with the energy
@@ -55,7 +55,7 @@ def spring_energy(
     """
     X = x[elements.tets]
     q = intersection_points(x, elements)
-    _, L, u = axis_vectors(q)
+    zeta, L, u = axis_vectors(q)
     k, l0 = elements.k_axial, elements.l0
     d = L - l0
     if options.axial in ("quadratic", "cubic"):
@@ -74,6 +74,10 @@ def spring_energy(
                 W += 0.5 * kt * da**2
             elif options.torsion == "shear":
                 W += kt * shear_energy(c, elements.c0[:, p])
+            elif options.torsion == "green":  # the Green shear gamma = 2 E_lm
+                g = np.einsum("kc,kc->k", zeta[:, l], zeta[:, m])
+                g = g / (elements.l0[:, l] * elements.l0[:, m])
+                W += 0.5 * kt * (g - elements.c0[:, p]) ** 2
             elif options.torsion == "cubic":
                 W += kt * (dc**2 / 2 + options.torsion_cubic * dc**4 / 4)
             else:

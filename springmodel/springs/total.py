@@ -72,13 +72,14 @@ def is_conservative(options: SpringOptions, volume_form: VolumeForm | None = Non
     Returns
     -------
     bool
-        True for axial ``linear``/``quadratic``/``cubic``, torsion ``off``/``energy``/``shear``,
+        True for axial ``linear``/``quadratic``/``cubic``, torsion ``off``/``energy``/``shear``/
+        ``green`` (its energy is :mod:`springmodel.tissue_element`'s),
         barycentric volume (if on) in ``gradient`` form, no damping and no LMS on the
         barycentric volume springs.
     """
     return (
         options.axial in ("linear", "quadratic", "cubic")
-        and (options.torsion == "off" or options.energy_torsion)
+        and (options.torsion == "off" or options.energy_torsion or options.green_torsion)
         and (
             not options.barycentric_volume
             or resolve_volume_form(options, volume_form) == "gradient"

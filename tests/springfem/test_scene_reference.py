@@ -44,6 +44,6 @@ def test_known_keys_of_each_section(keys):
     assert {"type", "fiber", "sheet", "range", "angles", "fiber_data"} <= set(keys["axes"])
     assert set(keys["load"]) == {"type", "region", "value"}
     assert keys["spring"]["torsion"]["choices"] == (
-        "off", "angle", "cosine", "cubic", "energy", "shear"
+        "off", "angle", "cosine", "cubic", "energy", "shear", "green"
     )  # fmt: skip
     assert keys["fem"]["order"]["kind"] == "int"
