@@ -77,6 +77,10 @@ STIFFENED = {
     "stiffening": "exponential",
     "volumetric": "log",
 }
+#: The tissue element: the stiffened element's Green measures with the Green torsion (all six
+#: frame components of E) and each spring group stiffened as the law's own terms, so that
+#: it equals its law under any homogeneous deformation (docs/tissue.rst).
+TISSUE = {**STIFFENED, "torsion": "green", "stiffening": "law"}
 #: The ``[spring]`` options that choose the element (the rest choose the solver): a model
 #: that *defines* an element resets them to the defaults before its changes.
 ELEMENT_KEYS = (
@@ -567,6 +571,13 @@ spring_variant("spring-spec", "the specification's spring element", element=True
 spring_variant("spring-exact", "exact spring element", coupling=True, element=True, **EXACT)
 spring_variant(
     "spring-stiffened", "stiffened exact spring element", coupling=True, element=True, **STIFFENED
+)
+spring_variant(
+    "spring-tissue",
+    "tissue spring element (Green torsion, the law's stiffening)",
+    coupling=True,
+    element=True,
+    **TISSUE,
 )
 spring_variant("spring-energy", "spring model, energy torsion", torsion="energy")
 spring_variant("spring-cosine", "spring model, cosine torsion", torsion="cosine")

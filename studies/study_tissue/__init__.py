@@ -8,6 +8,9 @@ same mesh (the beam and the ventricle: the P2 reference and the same-mesh P1):
   (C = 2 kPa, b_f = 8, b_t = 2, b_fs = 4, penalty kappa = 100 kPa) and of Holzapfel &
   Ogden's 2009 myocardium fit (penalty 1000 kPa), pulled to 30 % with the lateral faces
   free; the nominal stress is the x reaction on the unit face;
+- homogeneous deformations (stretch, simple shear in each frame plane, both) imposed on every
+  node of a jittered cube: the nodal forces of the tissue and stiffened elements against
+  their law's P1 (:mod:`.homogeneous`);
 - the Land beam (problem 1): the deformed z of (10, 0.5, 1) mm (published 4.14-4.20 mm);
 - the Land ventricle (problem 2; the quick preset: problem 3's passive inflation, which
   converges on a coarser mesh): the apex positions and the cavity's pressure-volume curve;
@@ -44,6 +47,13 @@ from .convergence import (
     convergence_findings,
     convergence_frame,
     richardson_frame,
+)
+from .homogeneous import (
+    homogeneous_case,
+    homogeneous_cases,
+    homogeneous_findings,
+    homogeneous_frame,
+    homogeneous_table,
 )
 from .report import beam_frame, findings, pv_figure, stretch_frame, tables, ventricle_frame
 
@@ -96,6 +106,10 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
     bdf = beam_frame(beam, beam_res)
     vdf = ventricle_frame(lv, lv_res)
     text, headline = findings(sdf, bdf, vdf)
+    hom = homogeneous_cases(VERSION)
+    hdf = homogeneous_frame(hom, ctx.cache.run(hom, homogeneous_case, ctx.progress, "homogeneous"))
+    more, numbers = homogeneous_findings(hdf)
+    text, headline = text + more, {**headline, **numbers}
     conv = cases("apex", ("fem",))
     cdf = convergence_frame(conv, ctx.cache.run(conv, ventricle_case, ctx.progress, "apex"))
     rich = richardson_frame(cdf)
@@ -115,7 +129,7 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
         name=ctx.name,
         title="Tissue: finite-strain anisotropy, spring model vs Guccione FEM",
         findings=text,
-        tables=tables(ctx, sdf, bdf, vdf, settings) + apex,
+        tables=[*tables(ctx, sdf, bdf, vdf, settings), *apex, homogeneous_table(ctx, hdf)],
         figures=[pv_figure(ctx, sdf, lv, lv_res, settings), convergence_figure(ctx, cdf, rich)],
         headline=headline,
     )

@@ -28,15 +28,16 @@ HOLZAPFEL_OGDEN = {"law": "holzapfel-ogden", "a": 0.059, "b": 8.023, "a_f": 18.4
 #: The stress-stretch cube's laws by name.
 STRETCH_LAWS = {"guccione": GUCCIONE, "holzapfel-ogden": HOLZAPFEL_OGDEN}
 
-#: The spring variants compared: the exact element with the tissue's stiffening (Green-strain
-#: axial springs, shear torsion, exponential element energy, the FEM's penalty U(J): what the
-#: bundled ventricle scenes use), the exact element with the specification's quadratic
-#: springs, and the specification's element.
-VARIANTS = ("spring-stiffened", "spring-exact", "spring-spec")
+#: The spring variants compared: the tissue element (Green axial and torsion springs, each
+#: group stiffened as the law's terms: the law itself under any homogeneous deformation),
+#: the exact element with the tissue's stiffening (shear torsion, one exponential element
+#: energy, the FEM's penalty U(J): what the bundled ventricle scenes use), the exact element
+#: with the specification's quadratic springs, and the specification's element.
+VARIANTS = ("spring-tissue", "spring-stiffened", "spring-exact", "spring-spec")
 #: The FEM models: the scene's own (the P2 reference) and P1 on the spring's mesh and element
 #: order (the displacement formulation with the spring's penalty, :mod:`studies.models`).
 FEM_MODELS = ("fem", "P1")
-VERSION = 2
+VERSION = 3
 
 
 @dataclass(frozen=True)
