@@ -114,7 +114,8 @@ class Settings:
     methods
         Names of :data:`METHODS` to run.
     max_time
-        Cap of one solve (s): a method that needs longer is recorded as stopped.
+        Cap of one solve (s): a method that needs longer is recorded as stopped (the
+        reference, :data:`REFERENCE`, is not capped).
     timed
         Time fairly (an untimed warm-up solve per method, the median of three under
         :data:`REPEAT_BELOW` s); ``False``: one solve each (tests).
@@ -247,8 +248,9 @@ def cases(sc: StudyScene, s: Settings) -> list[dict[str, Any]]:
         for nu in s.nus:
             at = with_nu(sc, nu)
             for m in s.methods:
+                cap = None if m == REFERENCE else s.max_time  # the reference is never capped
                 out.append(at.case(STUDY, VERSION, method=m, nu=nu, factor=factor, probe=probe,
-                                   max_time=s.max_time, timed=s.timed))  # fmt: skip
+                                   max_time=cap, timed=s.timed))  # fmt: skip
     return out
 
 

@@ -21,6 +21,12 @@ def _style(plt) -> tuple[dict[str, str], dict[str, str]]:
     return colors, markers
 
 
+def _ordered(handles: dict[str, object]) -> list[str]:
+    """Legend keys in the order of :data:`METHODS`, other entries last."""
+    rank = {m: i for i, m in enumerate(METHODS)}
+    return sorted(handles, key=lambda k: rank.get(k, len(rank)))
+
+
 def deflection_figure(ctx: StudyContext, df: pd.DataFrame) -> Figure:
     """The deflection as a share of the reference against ``0.5 - nu`` (log), finest level
     of every method, one panel per scene."""
@@ -54,7 +60,8 @@ def deflection_figure(ctx: StudyContext, df: pd.DataFrame) -> Figure:
         ax.set_ylim(0.0, max(1.3, float(np.nanmax((g.deflection / g.ref_value).clip(0, 2)))))
         ax.grid(alpha=0.3)
     axes[0][0].set_ylabel(f"deflection / reference ({REFERENCE}, finest level)")
-    fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncol=4,
+    keys = _ordered(handles)
+    fig.legend([handles[k] for k in keys], keys, loc="outside lower center", ncol=4,
                fontsize=8)  # fmt: skip
     return ctx.figure(
         fig,
@@ -82,6 +89,9 @@ def error_cost_figure(ctx: StudyContext, df: pd.DataFrame) -> Figure:
         for j, nu in enumerate(nus):
             ax = axes[i][j]
             g = df[(df.scene == scene) & (df.nu == nu) & (df.status == "ok") & ~df.reference]
+            if not g.error.notna().any():
+                ax.text(0.5, 0.5, f"no reference\n({REFERENCE} did not solve)",
+                        ha="center", va="center", transform=ax.transAxes, fontsize=8)  # fmt: skip
             for m in METHODS:
                 r = g[g.method == m].sort_values("factor")
                 if r.empty:
@@ -99,7 +109,8 @@ def error_cost_figure(ctx: StudyContext, df: pd.DataFrame) -> Figure:
             if i == len(scenes) - 1:
                 ax.set_xlabel("solve wall time (s)")
         axes[i][0].set_ylabel("|deflection error|")
-    fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncol=5,
+    keys = _ordered(handles)
+    fig.legend([handles[k] for k in keys], keys, loc="outside lower center", ncol=5,
                fontsize=8)  # fmt: skip
     return ctx.figure(
         fig,
