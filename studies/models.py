@@ -120,6 +120,9 @@ class Model:
     law
         FEM models: ``small-strain``, ``neo-hookean`` or ``scene`` (the scene's own law and
         formulation).
+    fem
+        FEM models: ``[fem]`` options (fields of :class:`reference_fem.options.FemOptions`,
+        such as ``formulation``) that replace the scene's before the solve.
     """
 
     name: str
@@ -130,6 +133,7 @@ class Model:
     element: bool = False
     order: int | None = None
     law: Literal["small-strain", "neo-hookean", "scene"] = "small-strain"
+    fem: Mapping[str, Any] = field(default_factory=dict)
 
     # -- what the model solves ---------------------------------------------------------------
     def applies(self, scene: Scene) -> str | None:
@@ -197,6 +201,8 @@ class Model:
         -------
         tuple
         """
+        if self.fem:
+            scene = scene.with_options(fem=replace(FemOptions.of(scene), **self.fem))
         if self.law == "scene":
             return scene, self.order, None
         if self.law == "neo-hookean":

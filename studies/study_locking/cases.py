@@ -1,0 +1,307 @@
+"""Cases of the locking study: the methods, settings, the scenes at each Poisson ratio, and
+one timed solve per case.
+
+Every case is a :meth:`~studies.scenes.StudyScene.case` of a scene at one Poisson ratio
+(:func:`with_nu`: its table carries the material at that ratio) with ``method`` (a model of
+:data:`METHODS`), ``nu`` and ``factor`` (its refinement level,
+:mod:`studies.study_convergence.levels`).
+
+Examples
+--------
+>>> beam = with_nu(StudyScene.bundled("land-beam"), 0.49)  # Guccione: mu = 10/3 kPa
+>>> round(beam.table["material"]["kappa"], 2), "incompressible" in beam.table["material"]
+(165.56, False)
+>>> list(METHODS)[:3]
+['P1', 'P1-nodal-volume', 'MINI']
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from reference_fem.options import FemOptions
+from springfem.errors import InputError
+from springfem.materials.tissue import TISSUE_LAWS
+from springfem.mechanics.limits import solve_limits
+
+from .. import models
+from ..scenes import StudyScene
+from ..study_convergence.levels import case_level
+
+STUDY, VERSION = "locking", 1
+
+#: The Poisson ratios of the study.
+NUS = (0.3, 0.45, 0.49, 0.499, 0.4999)
+#: A method is adequate within this relative error of the reference deflection.
+TOLERANCE = 0.05
+#: The reference method (its value on the finest level is the reference).
+REFERENCE = "P2-mixed"
+
+
+def _fem(name: str, label: str, order: int, formulation: str, **fem: Any) -> models.Model:
+    """Register an FEM model of the scene's own law with ``[fem] formulation``."""
+    options = {"order": order, "formulation": formulation, **fem}
+    return models.register(models.Model(name, label, "fem", order=order, law="scene", fem=options))
+
+
+def _spring(name: str, label: str, **changes: Any) -> models.Model:
+    """Register a spring element: the exact element with ``changes``."""
+    return models.spring_variant(
+        name, label, coupling=True, element=True, **{**models.EXACT, **changes}
+    )
+
+
+#: FEM methods: (name, label, order, formulation); one line adds a formulation. A
+#: formulation the FEM does not offer (``FemOptions.choices``) is left out.
+FEM_METHODS = (
+    ("P1", "FEM P1 (displacement)", 1, "displacement"),
+    ("P1-nodal-volume", "FEM P1, nodal-averaged volume", 1, "nodal-volume"),
+    ("P1-nodal-strain", "FEM P1, nodal-averaged strain", 1, "nodal-strain"),
+    ("MINI", "FEM MINI (P1-bubble / P1)", 1, "mini"),
+    ("P2", "FEM P2 (displacement)", 2, "displacement"),
+    ("P2-mixed", "FEM P2/P1 Taylor–Hood", 2, "mixed"),
+)
+#: The study's spelling of the spring elements: the specification's (seed) element, the
+#: exact element, + nodal volume, + nodal strain and nodal volume ("stabilised", with the
+#: default stabilisations of :mod:`springmodel.options`).
+SPRING_METHODS = {
+    "spring-spec": models.get("spring-spec"),
+    "spring-exact": models.get("spring-exact"),
+    "spring-nodal-volume": _spring(
+        "spring-nodal-volume", "exact spring element, nodal volume", volume_average="nodal"
+    ),
+    "spring-stabilised": _spring(
+        "spring-stabilised",
+        "exact spring element, stabilised nodal strain + nodal volume",
+        volume_average="nodal",
+        strain_average="nodal",
+    ),
+}
+#: Every method of the study, by name (the FEM ones whose formulation exists).
+METHODS: dict[str, models.Model] = {
+    **{
+        name: _fem(f"fem-{name}", label, order, form)
+        for name, label, order, form in FEM_METHODS
+        if form in FemOptions.choices("formulation")
+    },
+    **SPRING_METHODS,
+}
+#: Methods on the mesh's own vertices (linear tets: P1-type FEM and the spring elements).
+LINEAR_TETS = tuple(n for n, m in METHODS.items() if m.kind == "spring" or m.order == 1)
+#: Solves under this many seconds are timed as the median of three.
+REPEAT_BELOW = 0.5
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Poisson ratios, meshes and the solve cap of the locking study.
+
+    Parameters
+    ----------
+    nus
+        The Poisson ratios.
+    cook, beam
+        The level-1 divisions of Cook's membrane and Land's beam (``None``: left out).
+    factors
+        Refinement factors of the three levels (the Cook mesh is not a box grid: powers of
+        two; :func:`~studies.study_convergence.levels.refined_scene`).
+    beam_factors
+        The beam's factors (a box grid takes any integer: 1, 2, 3 reach Land's 30x3x3).
+    methods
+        Names of :data:`METHODS` to run.
+    max_time
+        Cap of one solve (s): a method that needs longer is recorded as stopped (the
+        reference, :data:`REFERENCE`, is not capped).
+    timed
+        Time fairly (an untimed warm-up solve per method, the median of three under
+        :data:`REPEAT_BELOW` s); ``False``: one solve each (tests).
+    """
+
+    nus: tuple[float, ...] = NUS
+    cook: tuple[int, int, int] | None = (4, 4, 1)
+    beam: tuple[int, int, int] | None = (10, 1, 1)
+    factors: tuple[int, ...] = (1, 2, 4)
+    beam_factors: tuple[int, ...] = (1, 2, 3)
+    methods: tuple[str, ...] = field(default_factory=lambda: tuple(METHODS))
+    max_time: float = 120.0
+    timed: bool = True
+
+    @classmethod
+    def full(cls) -> Settings:
+        """Cook 4x4x1 refined x2, x4 (96 to 6,144 tets); the beam 10x1x1 to Land's 30x3x3."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> Settings:
+        """Three Poisson ratios; Cook 2x2x1 refined x2, x4 (24 to 1,536 tets); the beam
+        3x1x1 to 9x3x3; a 10 s cap."""
+        return cls(nus=(0.3, 0.49, 0.4999), cook=(2, 2, 1), beam=(3, 1, 1), max_time=10.0)
+
+
+def bundled_scenes(s: Settings) -> list[StudyScene]:
+    """Cook's membrane (its shear modulus: Cook's 80.19 kPa) and Land's beam.
+
+    Examples
+    --------
+    >>> [(x.label, x.params["probe"]) for x in bundled_scenes(Settings.quick())]
+    [('cook-membrane', 'corner'), ('land-beam', 'tip')]
+    """
+    out = []
+    if s.cook:
+        # the file's E at nu = 0.4999 is Cook's mu = 80.19 kPa, the shear modulus held
+        cook = StudyScene.bundled(
+            "cook-membrane", {"mesh.divisions": list(s.cook), "material.nu": 0.4999}
+        )
+        out.append(_with_params(cook, probe="corner", component=1, factors=s.factors))
+    if s.beam:
+        beam = StudyScene.bundled("land-beam", {"mesh.divisions": list(s.beam)})
+        out.append(_with_params(beam, probe="tip", component=2, factors=s.beam_factors))
+    return out
+
+
+def _with_params(sc: StudyScene, **params: Any) -> StudyScene:
+    from dataclasses import replace
+
+    return replace(sc, params={**sc.params, **params})
+
+
+# ---------------------------------------------------------------------- the Poisson ratio
+
+
+def shear_modulus(sc: StudyScene) -> float:
+    """The scene's shear modulus, held while the study varies the bulk modulus (a tissue
+    law: the mean shear modulus of its small-strain tangent)."""
+    return float(sc.build().material.mu)
+
+
+def with_nu(sc: StudyScene, nu: float) -> StudyScene:
+    """The scene at Poisson ratio ``nu`` with its shear modulus ``mu`` held.
+
+    An isotropic law (``linear``, ``neo-hookean``) gets ``E = 2 mu (1 + nu)`` and ``nu``. A
+    tissue law (Guccione, Holzapfel–Ogden) has its own shear response and a volumetric
+    penalty ``kappa``: ``nu`` sets the penalty ``kappa = 2 mu (1 + nu) / (3 (1 - 2 nu))`` of
+    the isotropic equivalent (``mu`` the mean shear modulus of the law's small-strain
+    tangent, as :func:`studies.models.p1_penalty` measures it), and an incompressible
+    material becomes this nearly incompressible one, which every method solves.
+
+    Parameters
+    ----------
+    sc
+        The scene.
+    nu
+        The Poisson ratio, in ``(-1, 0.5)``.
+
+    Returns
+    -------
+    StudyScene
+        A copy whose table has the material at ``nu``.
+
+    Raises
+    ------
+    InputError
+        For an anisotropic linear law, which has no single Poisson ratio.
+    """
+    from dataclasses import replace
+
+    mat = sc.table.get("material", {})
+    law = mat.get("law", "linear")
+    if law not in (*TISSUE_LAWS, "linear", "neo-hookean"):
+        raise InputError(
+            f"study locking: the {law} law has no single Poisson ratio to vary; use an "
+            "isotropic law (linear, neo-hookean) or a tissue law with a penalty"
+        )
+    mu = shear_modulus(sc)
+    new = dict(mat)
+    if law in TISSUE_LAWS:
+        new.pop("incompressible", None)
+        new["kappa"] = 2.0 * mu * (1.0 + nu) / (3.0 * (1.0 - 2.0 * nu))
+    else:
+        new["E"], new["nu"] = 2.0 * mu * (1.0 + nu), nu
+    return replace(sc, table={**sc.table, "material": new})
+
+
+def deflection_probe(sc: StudyScene) -> str:
+    """The probe whose displacement the study compares (a bundled scene's, else the
+    scene's first; a user's scene without a probe is refused in one line)."""
+    probe = sc.params.get("probe")
+    if probe:
+        return str(probe)
+    names = [p.get("name") for p in sc.table.get("probe", []) if isinstance(p, dict)]
+    if not names:
+        raise InputError(
+            f"study locking: scene {sc.label} has no [[probe]]; add one at the point whose "
+            "deflection to compare (e.g. the tip)"
+        )
+    return str(names[0])
+
+
+def cases(sc: StudyScene, s: Settings) -> list[dict[str, Any]]:
+    """The scene's cases: every level, Poisson ratio and method (coarse levels first)."""
+    probe = deflection_probe(sc)
+    factors = tuple(sc.params.get("factors", s.factors))
+    out = []
+    for factor in factors:
+        for nu in s.nus:
+            at = with_nu(sc, nu)
+            for m in s.methods:
+                cap = None if m == REFERENCE else s.max_time  # the reference is never capped
+                out.append(at.case(STUDY, VERSION, method=m, nu=nu, factor=factor, probe=probe,
+                                   max_time=cap, timed=s.timed))  # fmt: skip
+    return out
+
+
+# ------------------------------------------------------------------------------ a solve
+
+#: Methods warmed up in this process (their first solve compiles kernels: not timed).
+_WARM: set[tuple[str, str]] = set()
+
+
+def _timed_run(model: models.Model, scene) -> models.Outcome:
+    """The outcome of ``model`` on ``scene`` with a fair wall time: a method's first solve
+    in the process is a warm-up (untimed), and solves under :data:`REPEAT_BELOW` s are the
+    median of three."""
+    key = (model.name, scene.material.law)
+    warm = key in _WARM
+    out = models.run(scene, model)
+    _WARM.add(key)
+    if not out.solved:
+        return out
+    times = [out.seconds] if warm else []
+    while not times or (len(times) < 3 and max(times) < REPEAT_BELOW):
+        again = models.run(scene, model)
+        if not again.solved:
+            return again
+        out = again
+        times.append(again.seconds)
+    out.seconds = float(np.median(times))
+    return out
+
+
+def locking_case(case: dict[str, Any]) -> dict[str, Any]:
+    """Solve one case: status, the probe's displacement, the wall time, the mesh size.
+
+    A solve that reaches the cap ``max_time`` or fails is recorded with its status
+    (``partial``: the load factor it reached) and message.
+    """
+    scene = case_level(case)
+    model = METHODS[case["method"]]
+    t0 = time.perf_counter()
+    with solve_limits(max_time=case["max_time"]):
+        got = _timed_run(model, scene) if case.get("timed", True) else models.run(scene, model)
+    out: dict[str, Any] = {
+        "status": got.status,
+        "message": got.message[:240],
+        "tets": scene.mesh.n_tets,
+        "seconds": got.seconds,
+        "elapsed": time.perf_counter() - t0,
+        "load": got.load_factor,
+    }
+    if got.solved:
+        r = got.solution.result
+        out.update(u=list(map(float, r.probes[case["probe"]])), law=r.law,
+                   dofs=int(r.counts.get("dofs", 3 * scene.mesh.n_points)))  # fmt: skip
+    return out
