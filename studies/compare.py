@@ -24,8 +24,8 @@ from springfem.mesh import displacement_gradients
 from springfem.scene import Scene
 
 from . import metrics
+from .fem_laws import is_tissue, tissue_note
 from .models import get as get_model
-from .models import is_tissue, tissue_note
 from .models import run as run_model
 from .partial import partial_row
 from .solve import Solution

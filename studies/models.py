@@ -25,7 +25,7 @@ Models
     ``transverse-linear``; ``linear`` with ``E, nu`` for a neo-Hookean scene), or for a
     finite-strain tissue law the scene's own law: ``P2`` with the scene's formulation,
     ``P1`` in the displacement formulation with the scene's ``kappa`` or, for an
-    incompressible material, the spring model's penalty (:func:`p1_penalty`);
+    incompressible material, the spring model's penalty (:func:`studies.fem_laws.p1_penalty`);
 ``P1-NH``, ``P2-NH``
     neo-Hookean FEM (the scene's formulation); not for anisotropic laws.
 
@@ -61,6 +61,7 @@ from springfem.plausibility import check_solution
 from springfem.scene import Scene
 from springfem.scene.reader import suggestion
 
+from .fem_laws import linear_law, tissue_scene
 from .partial import partial_solution
 from .solve import Solution
 
@@ -460,114 +461,6 @@ def run(
         if findings:
             return Outcome(m, "implausible", sol, "; ".join(f.line for f in findings), seconds)
     return Outcome(m, "ok", sol, "", seconds)
-
-
-# -- the FEM models' laws ------------------------------------------------------------------
-
-
-def is_tissue(scene: Scene) -> bool:
-    """True when the scene's law is a finite-strain tissue law (Guccione, Holzapfel–Ogden).
-
-    Parameters
-    ----------
-    scene
-        The scene.
-
-    Returns
-    -------
-    bool
-    """
-    return scene.material.law in TISSUE_LAWS
-
-
-def linear_law(scene: Scene) -> str:
-    """The small-strain law of the scene's material (``linear`` or ``transverse-linear``).
-
-    Parameters
-    ----------
-    scene
-        The scene.
-
-    Returns
-    -------
-    str
-    """
-    return "transverse-linear" if scene.material.law == "transverse-linear" else "linear"
-
-
-def p1_penalty(scene: Scene) -> float:
-    """Bulk modulus of the volumetric penalty of a tissue scene's P1 model.
-
-    The scene's ``kappa`` if it has one; for an incompressible material the bulk modulus
-    of its isotropic equivalent (``Material.kappa``: 1000 × the mean shear modulus of the
-    law's small-strain tangent), which is the penalty the spring model's calibration uses.
-    Same-mesh P1 and the spring model then stand in for the incompressible law with the
-    same volumetric stiffness, so P1 stays the spring model's like-for-like reference.
-
-    Parameters
-    ----------
-    scene
-        A tissue scene.
-
-    Returns
-    -------
-    float
-    """
-    kappa = float(scene.material.parameters.get("kappa", 0.0) or 0.0)
-    return kappa if kappa > 0.0 else float(scene.material.kappa)
-
-
-def tissue_scene(scene: Scene, order: int | None) -> Scene:
-    """The scene a tissue FEM model of ``order`` solves.
-
-    P2 keeps the scene's ``[fem]`` options (its formulation); P1, which cannot be
-    Taylor–Hood, is the displacement formulation with the penalty :func:`p1_penalty`.
-
-    Parameters
-    ----------
-    scene
-        A tissue scene.
-    order
-        1 or 2.
-
-    Returns
-    -------
-    Scene
-        A shallow copy with the model's material and ``[fem]`` options.
-    """
-    fem = FemOptions.of(scene)
-    if order == 2:
-        return scene.with_options(fem=replace(fem, order=2))
-    mat = scene.material
-    params = {**mat.parameters, "kappa": p1_penalty(scene)}
-    p1 = replace(scene, material=replace(mat, parameters=params, incompressible=False))
-    return p1.with_options(fem=replace(fem, order=1, formulation="displacement"))
-
-
-def tissue_note(scene: Scene) -> str:
-    """The note of a tissue comparison: which law and formulation each FEM model solves.
-
-    Parameters
-    ----------
-    scene
-        A tissue scene.
-
-    Returns
-    -------
-    str
-    """
-    law = scene.material.law
-    p2 = FemOptions.of(tissue_scene(scene, 2)).formulation
-    p2_form = "mixed Taylor–Hood u–p" if p2 == "mixed" else "displacement formulation"
-    if scene.material.incompressible:
-        why = "1000 μ, the spring model's incompressible penalty"
-    else:
-        why = "the scene's kappa"
-    return (
-        f"finite-strain tissue law {law}: P1 and P2 solve it (P2 {p2_form}; P1 displacement "
-        f"formulation, penalty kappa = {p1_penalty(scene):.4g} = {why}, so same-mesh P1 is "
-        "the spring model's like-for-like model-error reference); P2 is the reference"
-    )
 
 
 # -- the registry ----------------------------------------------------------------------------

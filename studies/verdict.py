@@ -48,7 +48,7 @@ import pandas as pd
 from springfem.mechanics.limits import solve_limits
 from springfem.scene import Scene
 
-from . import metrics, models
+from . import fem_laws, metrics, models
 from .compare import LARGE_STRAIN, max_principal_strain
 from .timing import interleaved, median
 
@@ -158,7 +158,7 @@ def reference_model(scene: Scene, p1_strain: float) -> str:
     -------
     str
     """
-    if models.is_tissue(scene) or scene.material.law == "transverse-linear":
+    if fem_laws.is_tissue(scene) or scene.material.law == "transverse-linear":
         return "P2"
     if scene.material.law == "neo-hookean" or p1_strain > LARGE_STRAIN:
         return "P2-NH"

@@ -185,7 +185,7 @@ def with_nu(sc: StudyScene, nu: float) -> StudyScene:
     tissue law (Guccione, Holzapfel–Ogden) has its own shear response and a volumetric
     penalty ``kappa``: ``nu`` sets the penalty ``kappa = 2 mu (1 + nu) / (3 (1 - 2 nu))`` of
     the isotropic equivalent (``mu`` the mean shear modulus of the law's small-strain
-    tangent, as :func:`studies.models.p1_penalty` measures it), and an incompressible
+    tangent, as :func:`studies.fem_laws.p1_penalty` measures it), and an incompressible
     material becomes this nearly incompressible one, which every method solves.
 
     Parameters
