@@ -44,7 +44,7 @@ from .springs import is_conservative, lms_update, volume_measures
 from .stiffening import StiffeningPart, stiffening_modulus
 from .stop_reason import stopped_error
 from .tangent import MISMATCH_NORM
-from .tissue_element import TissuePart, kernel_split, law_parameters
+from .tissue_element import TissuePart, kernel_split, law_elements, law_parameters
 
 
 class SpringModel:
@@ -76,31 +76,32 @@ class SpringModel:
         self.elements: SpringElements = build_spring_elements(
             mesh.points, mesh.tets, scene.frames, self.options, scene.material
         )
-        if self.options.stiffening == "law":  # the law's own P1 element: no constants to miss
-            self.elements = replace(self.elements, mismatch=np.zeros(self.elements.n_elements))
+        # stiffening = "law": the law's own P1 element (no constants to miss, the law's kappa)
+        self.elements = law_elements(self.elements, self.options, scene.material)
         # volume_average = "nodal": (part of) the volume term on nodal volumes, else None
         self.nodal, kernel_elements = NodalPart.split(mesh, self.elements, self.options)
         modulus = None
         if self.options.stiffening == "exponential":
             modulus = stiffening_modulus(self.options, scene.material)
+        tissue = None  # torsion = "green": what the tissue element's energy is
+        if self.options.green_torsion:
+            tissue = law_parameters(self.options, scene.material, modulus)
         # strain_average = "nodal": the springs' share measured by nodal F, else None
         self.nodal_strain, kernel_elements = NodalStrainPart.split(
-            mesh, kernel_elements, self.options, modulus
+            mesh, kernel_elements, self.options, modulus, tissue
         )
-        # stiffening = "exponential": the part added to the quadratic kernel; torsion =
-        # "green": the tissue element's deviatoric springs (the kernel keeps the volume
+        # the element's own share (all of it, or alpha with nodal strain; none at alpha = 0):
+        # stiffening = "exponential", the part added to the quadratic kernel; torsion =
+        # "green", the tissue element's deviatoric springs (the kernel keeps the volume
         # spring alone); else None
         self.stiffening: StiffeningPart | TissuePart | None = None
         kernel_options = self.options
-        if self.options.green_torsion:
-            params = law_parameters(self.options, scene.material, modulus)
-            self.stiffening = TissuePart(kernel_elements, params)
-            kernel_elements, kernel_options = kernel_split(
-                kernel_elements, self.options, scene.material
-            )
-        elif modulus is not None and (
-            self.nodal_strain is None or self.options.strain_stabilisation
-        ):
+        own = self.nodal_strain is None or self.options.strain_stabilisation > 0.0
+        if tissue is not None:
+            if own:
+                self.stiffening = TissuePart(kernel_elements, tissue)
+            kernel_elements, kernel_options = kernel_split(kernel_elements, self.options)
+        elif modulus is not None and own:
             self.stiffening = StiffeningPart(kernel_elements, self.options, modulus)
         self.kernel = SpringKernel(
             kernel_elements,

@@ -18,9 +18,10 @@ spurious modes (``alpha = 0``, node-based smoothing): the element fraction ``alp
 stabilises them (docs/volumetric.rst#stabilised-nodal-strain). The springs here are the
 deviatoric ones: the volume stays on the nodal volumes of :mod:`springmodel.nodal_volume`.
 
-Each term ``W_e(Fbar_a) / 4`` is computed by the ordinary spring kernel on a *virtual*
-element: element ``e``'s rest vertices mapped by ``Fbar_a``, ``y_i = Fbar_a X_i`` (four per
-element, ``4 m`` virtual elements). The virtual forces ``f_y`` give the nodal stress
+Each term ``W_e(Fbar_a) / 4`` is computed by the ordinary spring kernel (or, with
+``torsion = "green"``, the tissue element's pass, :mod:`springmodel.tissue_element`) on a
+*virtual* element: element ``e``'s rest vertices mapped by ``Fbar_a``, ``y_i = Fbar_a X_i``
+(four per element, ``4 m`` virtual elements). The virtual forces ``f_y`` give the nodal stress
 ``T_a = sum sum_i f_{y,i} X_i^T`` (``-dW/dFbar_a``), the virtual element matrices the
 ``9 x 9`` nodal moduli ``A_a``; with the sparse nodal gradient ``B`` (``Fbar = B x``) the
 forces are ``B^T T`` and the tangent ``B^T diag(A_a) B``, which couples the nodes of two
@@ -46,6 +47,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from springfem.mesh import tet_volumes
+
+#: Virtual elements per block of the tissue pass's element matrices (bounds their memory).
+CHUNK = 16384
 
 __all__ = [
     "NodalStrainPart",
@@ -200,12 +204,18 @@ class NodalStrainPart:
         Spring options (conservative laws).
     modulus
         Stiffening modulus ``C`` (Pa) when ``stiffening = "exponential"``, else None.
+    tissue
+        With ``torsion = "green"``: the tissue element's
+        :class:`~springmodel.tissue_element.TissueLawParameters`; the virtual elements then
+        run the tissue pass (:class:`~springmodel.tissue_element.TissuePart`) in place of the
+        spring kernel and the stiffening.
     """
 
-    def __init__(self, X, tets, elements, options, modulus: float | None = None):
+    def __init__(self, X, tets, elements, options, modulus: float | None = None, tissue=None):
         from .hessian import SpringHessian
         from .spring_kernel import SpringKernel
         from .stiffening import StiffeningPart
+        from .tissue_element import TissuePart
 
         self.X = np.asarray(X, float)
         self.tets = np.asarray(tets, np.int64)
@@ -217,11 +227,14 @@ class NodalStrainPart:
         self.Xv = np.repeat(self.X[self.tets], 4, axis=0)  # (4m, 4, 3): X_i of its element
         opts = replace(options, volume_average="element", volume_stabilisation=None)
         self.elements = virtual_elements(elements)
-        self.kernel = SpringKernel(self.elements, opts, parallel=None)
-        self.hessian = SpringHessian(self.elements, opts)
-        self.stiffening = None
-        if modulus is not None and options.stiffening != "off":
-            self.stiffening = StiffeningPart(self.elements, opts, modulus)
+        # the virtual elements' energy: the tissue pass, or the spring kernel (+ stiffening)
+        self.tissue = None if tissue is None else TissuePart(self.elements, tissue)
+        self.kernel = self.hessian = self.stiffening = None
+        if self.tissue is None:
+            self.kernel = SpringKernel(self.elements, opts, parallel=None)
+            self.hessian = SpringHessian(self.elements, opts)
+            if modulus is not None and options.stiffening != "off":
+                self.stiffening = StiffeningPart(self.elements, opts, modulus)
         B = []  # rows 9 a + 3 alpha + beta, columns 3 j + alpha
         for beta in range(3):
             coo = self.Gb[beta].tocoo()
@@ -231,7 +244,7 @@ class NodalStrainPart:
         self.B = sp.csr_matrix((v, (r, c)), shape=(9 * self.n, 3 * self.n))
 
     @classmethod
-    def split(cls, mesh, elements, options, modulus: float | None = None):
+    def split(cls, mesh, elements, options, modulus: float | None = None, tissue=None):
         """The nodal-strain part of a model (None when off) and the elements for its kernel.
 
         Parameters
@@ -246,6 +259,8 @@ class NodalStrainPart:
             ``strain_stabilisation``).
         modulus
             Stiffening modulus or None.
+        tissue
+            The tissue element's law parameters (``torsion = "green"``) or None.
 
         Returns
         -------
@@ -258,7 +273,7 @@ class NodalStrainPart:
         alpha = float(options.strain_stabilisation)
         deviatoric = replace(elements, k_axis_volume=np.zeros(elements.n_elements))
         part = cls(mesh.points, mesh.tets, scaled_deviatoric(deviatoric, (1 - alpha) / 4),
-                   options, modulus)  # fmt: skip
+                   options, modulus, tissue)  # fmt: skip
         if alpha > 0.0:
             return part, scaled_deviatoric(elements, alpha)
         zero = np.zeros_like(elements.k_axial)
@@ -269,28 +284,42 @@ class NodalStrainPart:
         F = nodal_deformation_gradients(self.Gb, np.asarray(x, float).reshape(-1, 3))
         return np.einsum("kab,kib->kia", F[self.node], self.Xv).reshape(-1, 3)
 
-    def energy(self, x: np.ndarray) -> float:
-        """``sum_e (1 - alpha)/4 sum_a W_e(Fbar_a)`` (J)."""
-        y = self.virtual_positions(x)
+    def _energy(self, y: np.ndarray) -> float:
+        if self.tissue is not None:
+            return self.tissue.energy(y)
         W = self.kernel.energy(y)
         return W if self.stiffening is None else W + self.stiffening.energy(y)
 
+    def _forces(self, y: np.ndarray) -> np.ndarray:
+        if self.tissue is not None:
+            return self.tissue.forces(y)
+        fy = self.kernel.forces(y)
+        return fy if self.stiffening is None else fy + self.stiffening.forces(y)
+
+    def _element_matrices(self, y: np.ndarray) -> np.ndarray:
+        if self.tissue is not None:
+            k = self.elements.n_elements
+            return np.concatenate([
+                self.tissue.element_matrices(y, lo, min(lo + CHUNK, k))
+                for lo in range(0, k, CHUNK)
+            ])  # fmt: skip
+        K = self.hessian.element_matrices(y)
+        return K if self.stiffening is None else K + self.stiffening.element_matrices(y)
+
+    def energy(self, x: np.ndarray) -> float:
+        """``sum_e (1 - alpha)/4 sum_a W_e(Fbar_a)`` (J)."""
+        return self._energy(self.virtual_positions(x))
+
     def forces(self, x: np.ndarray) -> np.ndarray:
         """Nodal forces ``-dW/dx`` ``(n, 3)`` (N): ``B^T T``."""
-        y = self.virtual_positions(x)
-        fy = self.kernel.forces(y)
-        if self.stiffening is not None:
-            fy = fy + self.stiffening.forces(y)
+        fy = self._forces(self.virtual_positions(x))
         T = np.einsum("kia,kib->kab", fy.reshape(-1, 4, 3), self.Xv)  # -dW/dFbar per copy
         Ta = self._to_nodes @ T.reshape(-1, 9)
         return (self.B.T @ Ta.reshape(-1)).reshape(-1, 3)
 
     def moduli(self, x: np.ndarray) -> np.ndarray:
         """``A_a = d^2 W / dFbar_a^2`` of every node, ``(n, 9, 9)`` (rows ``3 alpha + beta``)."""
-        y = self.virtual_positions(x)
-        K = self.hessian.element_matrices(y)
-        if self.stiffening is not None:
-            K = K + self.stiffening.element_matrices(y)
+        K = self._element_matrices(self.virtual_positions(x))
         K = K.reshape(-1, 4, 3, 4, 3).transpose(0, 2, 4, 1, 3)  # [k, alpha, gamma, i, j]
         Xv = self.Xv[:, None, None]
         A = Xv.transpose(0, 1, 2, 4, 3) @ K @ Xv  # [k, alpha, gamma, beta, delta]

@@ -109,7 +109,8 @@ class SpringOptions:
         ``gamma_lm = zeta_l . zeta_m / (l_l^0 l_m^0)``, which is ``2 E_lm`` in the frame under
         any deformation; with Green axial springs the element measures all six components of
         ``E``, docs/tissue.rst#the-tissue-element-on-the-green-strain; needs volume
-        ``"axes"`` or off and ``strain_average = "element"``).
+        ``"axes"`` or off; with ``strain_average = "nodal"`` the nodal measures carry the
+        same pass, docs/tissue.rst#the-tissue-element-with-nodal-strain).
     torsion_cubic
         Dimensionless cubic coefficient of the ``cubic`` torsion law.
     volume
@@ -247,14 +248,15 @@ class SpringOptions:
         if not 0.0 <= self.strain_stabilisation <= 1.0:
             raise ValueError(f"strain_stabilisation {self.strain_stabilisation} is not in [0, 1]")
         if self.strain_average == "nodal" and (
-            self.axial == "stress-scaled" or self.torsion not in ("off", *ENERGY_TORSION)
+            self.axial == "stress-scaled"
+            or self.torsion not in ("off", *ENERGY_TORSION, GREEN_TORSION)
             or self.volume is True or self.lms is not None
             or self.volume_damping or self.axial_damping
         ):  # fmt: skip
             raise ValueError(
                 'strain_average = "nodal" needs the energy forms (axial linear, quadratic or '
-                'cubic, torsion "energy", "shear" or "off", volume "axes" or off, no damping '
-                f"or LMS; got axial {self.axial!r}, torsion {self.torsion!r}, volume "
+                'cubic, torsion "energy", "shear", "green" or "off", volume "axes" or off, no '
+                f"damping or LMS; got axial {self.axial!r}, torsion {self.torsion!r}, volume "
                 f"{self.volume!r})"
             )
         if self.stiffening not in get_args(Stiffening):
@@ -270,13 +272,11 @@ class SpringOptions:
             )
         if self.torsion == GREEN_TORSION and (
             self.axial == "stress-scaled" or self.volume is True
-            or self.strain_average != "element" or self.axial_damping or self.volume_damping
+            or self.axial_damping or self.volume_damping
         ):  # fmt: skip
             raise ValueError(
                 'torsion = "green" needs axial linear, quadratic or cubic, volume "axes" or '
-                "off, each tet's own strain (element strain average) and no damping (got "
-                f"axial {self.axial!r}, volume {self.volume!r}, strain average "
-                f"{self.strain_average!r})"
+                f"off and no damping (got axial {self.axial!r}, volume {self.volume!r})"
             )
         if self.stiffening == "law" and (
             self.torsion != GREEN_TORSION or self.volume != "axes"

@@ -67,6 +67,7 @@ __all__ = [
     "TissuePart",
     "frame_measures",
     "kernel_split",
+    "law_elements",
     "law_parameters",
     "measure_derivatives",
     "tissue_energy",
@@ -161,21 +162,49 @@ def law_kappa(material) -> float:
     return float(with_penalty - tissue_tangent(material.law, params, kappa=0.0)[1, 2])
 
 
-def kernel_split(elements, options: SpringOptions, material):
-    """The fused kernel's share of a tissue element: its volume spring alone.
+def law_elements(elements, options: SpringOptions, material):
+    """The calibrated elements as the tissue element takes them.
 
-    The tissue pass owns the axial, torsion and coupling springs, so the kernel's copy has
-    their constants at zero and the torsion off; with ``stiffening = "law"`` its axis-volume
-    spring carries the law's ``kappa`` (:func:`law_kappa`).
+    With ``stiffening = "law"`` the element is the law's own P1 element (no calibration
+    mismatch), and its axis-volume spring carries the law's ``kappa`` (:func:`law_kappa`);
+    this comes before the volume and strain are shared out between elements and nodes
+    (:meth:`NodalPart.split <springmodel.nodal_volume.NodalPart.split>`,
+    :meth:`NodalStrainPart.split <springmodel.nodal_strain.NodalStrainPart.split>`), which
+    scale it. Other elements are returned as they are.
 
     Parameters
     ----------
     elements
         The calibrated :class:`~springmodel.elements.SpringElements`.
     options
-        Spring options with ``torsion = "green"``.
+        Spring options.
     material
         The scene's material.
+
+    Returns
+    -------
+    SpringElements
+    """
+    if options.stiffening != "law":
+        return elements
+    m = elements.n_elements
+    return replace(elements, mismatch=np.zeros(m), k_axis_volume=np.full(m, law_kappa(material)))
+
+
+def kernel_split(elements, options: SpringOptions):
+    """The fused kernel's share of a tissue element: its volume spring alone.
+
+    The tissue pass owns the axial, torsion and coupling springs, so the kernel's copy has
+    their constants at zero and the torsion off; its axis-volume spring is the elements'
+    (the law's ``kappa`` with ``stiffening = "law"``, :func:`law_elements`).
+
+    Parameters
+    ----------
+    elements
+        The calibrated :class:`~springmodel.elements.SpringElements` (after the nodal
+        splits).
+    options
+        Spring options with ``torsion = "green"``.
 
     Returns
     -------
@@ -183,11 +212,8 @@ def kernel_split(elements, options: SpringOptions, material):
         For :class:`~springmodel.spring_kernel.SpringKernel` and
         :class:`~springmodel.hessian.SpringHessian`.
     """
-    m = elements.n_elements
-    zero = np.zeros((m, 3))
+    zero = np.zeros((elements.n_elements, 3))
     kernel_elements = replace(elements, k_axial=zero, k_torsion=zero, k_coupling=zero)
-    if options.stiffening == "law":
-        kernel_elements = replace(kernel_elements, k_axis_volume=np.full(m, law_kappa(material)))
     kernel_options = replace(
         options, axial="linear", axial_coefficients=(0.0, 0.0), torsion="off",
         coupling=False, stiffening="off", stiffening_modulus=None,
