@@ -161,6 +161,9 @@ class Model:
                     f"model {self.name}: neo-Hookean is not the scene's {law} law; P1 and P2 "
                     "solve that law"
                 )
+        if self.kind == "spring" and self.changes.get("stiffening") == "law":
+            if scene.material.law not in TISSUE_LAWS:
+                return f'model {self.name}: stiffening = "law" needs a tissue law'
         return None
 
     def spring_options(self, scene: Scene):

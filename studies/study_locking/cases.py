@@ -12,7 +12,7 @@ Examples
 >>> round(beam.table["material"]["kappa"], 2), "incompressible" in beam.table["material"]
 (165.56, False)
 >>> list(METHODS)[:3]
-['P1', 'P1-nodal-volume', 'MINI']
+['P1', 'P1-nodal-volume', 'P1-nodal-strain']
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from .. import models
 from ..scenes import StudyScene
 from ..study_convergence.levels import case_level
 
-STUDY, VERSION = "locking", 1
+STUDY, VERSION = "locking", 2
 
 #: The Poisson ratios of the study.
 NUS = (0.3, 0.45, 0.49, 0.499, 0.4999)
@@ -67,7 +67,8 @@ FEM_METHODS = (
 )
 #: The study's spelling of the spring elements: the specification's (seed) element, the
 #: exact element, + nodal volume, + nodal strain and nodal volume ("stabilised", with the
-#: default stabilisations of :mod:`springmodel.options`).
+#: default stabilisations of :mod:`springmodel.options`), and for a tissue law the tissue
+#: element (the law itself under homogeneous deformation) with the same stabilisation.
 SPRING_METHODS = {
     "spring-spec": models.get("spring-spec"),
     "spring-exact": models.get("spring-exact"),
@@ -79,6 +80,13 @@ SPRING_METHODS = {
         "exact spring element, stabilised nodal strain + nodal volume",
         volume_average="nodal",
         strain_average="nodal",
+    ),
+    "spring-tissue-stabilised": models.spring_variant(
+        "spring-tissue-stabilised",
+        "tissue spring element, stabilised nodal strain + nodal volume",
+        coupling=True,
+        element=True,
+        **{**models.TISSUE, "volume_average": "nodal", "strain_average": "nodal"},
     ),
 }
 #: Every method of the study, by name (the FEM ones whose formulation exists).
@@ -243,11 +251,13 @@ def cases(sc: StudyScene, s: Settings) -> list[dict[str, Any]]:
     """The scene's cases: every level, Poisson ratio and method (coarse levels first)."""
     probe = deflection_probe(sc)
     factors = tuple(sc.params.get("factors", s.factors))
+    tissue = sc.table.get("material", {}).get("law") in TISSUE_LAWS
+    methods = [m for m in s.methods if tissue or METHODS[m].changes.get("stiffening") != "law"]
     out = []
     for factor in factors:
         for nu in s.nus:
             at = with_nu(sc, nu)
-            for m in s.methods:
+            for m in methods:
                 cap = None if m == REFERENCE else s.max_time  # the reference is never capped
                 out.append(at.case(STUDY, VERSION, method=m, nu=nu, factor=factor, probe=probe,
                                    max_time=cap, timed=s.timed))  # fmt: skip
