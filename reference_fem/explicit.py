@@ -113,6 +113,50 @@ def strain_energy_density(F: np.ndarray, mu: float, lam: float, law: int) -> np.
     return mu * np.einsum("kij,kij->k", eps, eps) + 0.5 * lam * tr**2
 
 
+def tissue_energy_density(law: TissueLaw, F: np.ndarray, frames: np.ndarray | None) -> np.ndarray:
+    """``W(F)`` of a tissue law per element (``inf`` where ``J <= 0``), without its tangent.
+
+    The same energy as ``law.energy(F, frames)`` (:class:`~reference_fem.laws.TissueLaw`:
+    the law's own term, the active tension, the penalty ``U(J)``), which also builds the
+    penalty's fourth-order tangent; this one does not, so a recorded run stays cheap.
+
+    Parameters
+    ----------
+    law
+        The tissue law (at its activation).
+    F
+        Deformation gradients ``(m, 3, 3)``.
+    frames
+        Element frames ``(m, 3, 3)`` (rows: fibre, sheet, normal), or None.
+
+    Returns
+    -------
+    ndarray
+        Energy density ``(m,)``.
+
+    Examples
+    --------
+    >>> from reference_fem.laws import Guccione
+    >>> law = Guccione(C=2.0, b_f=8.0, kappa=10.0, active_tension=1.0)
+    >>> F = np.diag([1.1, 0.95, 1.0])[None]
+    >>> bool(np.isclose(tissue_energy_density(law, F, None)[0], law.energy(F)[0], rtol=1e-14))
+    True
+    """
+    from .hyperelastic import _det, _volumetric
+    from .laws.kinematics import to_frame
+
+    J = _det(F)
+    ok = J > 0
+    Fl = to_frame(F, frames)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        W, _, _ = law.local(Fl, False)
+        if law.active_tension != 0.0:
+            W = W + 0.5 * law.active_tension * (np.einsum("kj,kj->k", Fl[:, :, 0], Fl[:, :, 0]) - 1)
+        if law.kappa > 0:
+            W = W + _volumetric(np.where(ok, J, 1.0), law.kappa, law.volumetric)[0]
+    return np.where(ok, W, np.inf)
+
+
 # --------------------------------------------------------------------------- the system
 
 
@@ -368,8 +412,7 @@ class ExplicitFem:
         if self._law != _ANISOTROPIC:
             psi = strain_energy_density(F, self.mu, self.lam, self._law)
         elif self.tissue is not None:
-            psi = self._law_now().energy(F, frames=self.frames)
-            psi = np.where(np.isnan(psi), np.inf, psi)
+            psi = tissue_energy_density(self._law_now(), F, self.frames)
         else:
             from springfem.materials import VOIGT
 

@@ -242,6 +242,16 @@ def test_explicit_fem_forces_are_minus_energy_gradient(mesh, law):
         assert abs(f[dof] + g) <= 1e-6 * np.abs(f).max(), (dof, f[dof], -g)
 
 
+@pytest.mark.parametrize("law", ["guccione", "holzapfel-ogden"])
+def test_explicit_fem_energy_is_the_laws(mesh, law):
+    """ExplicitFem's (tangent-free) energy equals the numpy law's, integrated with V."""
+    scene = make_scene(mesh, law, volumetric="simo-taylor", active_tension=2.0)
+    fem = ExplicitFem(scene)
+    x = deformed(mesh.points, seed=3)
+    ref = FemProblem(scene, 1).energy((x - mesh.points).ravel())
+    assert fem.strain_energy(x) == pytest.approx(ref, rel=1e-12)
+
+
 def test_active_tension_ramps_with_the_load_factor(mesh):
     scene = make_scene(mesh, "guccione", active_tension=3.0)
     fem = ExplicitFem(scene)
