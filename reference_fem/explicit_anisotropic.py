@@ -281,8 +281,11 @@ def _block_run(law: str, volumetric: str, at):
                     J = Jb[j]
                     ok = J > zero
                     kappa = p4 if guc else p8
+                    lnJ = zero
+                    if vlog or not guc:  # one log per element (penalty and J^(-2/3))
+                        lnJ = math.log(J) if ok else zero
                     if vlog:
-                        s = kappa * math.log(J) / J if ok else zero
+                        s = kappa * lnJ / J if ok else zero
                     elif vquad:
                         s = kappa * (J - one)
                     else:
@@ -292,7 +295,7 @@ def _block_run(law: str, volumetric: str, at):
                         A2[j] = s
                     else:
                         I1, xf, xs, xfs = A1[j], A2[j], A3[j], A4[j]
-                        c = math.exp(m23 * math.log(J)) if ok else zero  # J^(-2/3)
+                        c = math.exp(m23 * lnJ) if ok else zero  # J^(-2/3)
                         e = math.exp(p1 * (c * I1 - three)) if ok else zero
                         cF = p0 * e * c
                         A1[j] = cF  # coefficient of F'
