@@ -323,6 +323,20 @@ class ExplicitFem:
         ----------
         level
             Activation level, 1 for the material's full ``active_tension``.
+
+        Examples
+        --------
+        >>> from dataclasses import replace
+        >>> from springfem.mesh import box_mesh
+        >>> from springfem.scene import scene_from_dict
+        >>> scene = scene_from_dict({"mesh": box_mesh((1.0, 1.0, 1.0), (1, 1, 1)),
+        ...     "material": {"law": "guccione", "C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0,
+        ...                  "kappa": 50.0, "active_tension": 6.0}})
+        >>> fem = ExplicitFem(scene)
+        >>> full = abs(fem.internal(fem.x0)).max()  # at rest: the active stress alone
+        >>> fem.set_activation(0.5)
+        >>> round(float(abs(fem.internal(fem.x0)).max() / full), 12)
+        0.5
         """
         if self._active and level != self.activation:
             self._params[0][_ACTIVE[self.law]] = level * self._active
