@@ -26,10 +26,15 @@ rotated gradients and the rest volume) and never rotates a stress. The linear la
 with ``U'(J)`` of the scene's ``volumetric`` (``log``: ``kappa ln J / J``, ``quadratic``:
 ``kappa (J - 1)``, ``simo-taylor``: ``kappa/2 (J - 1/J)``), ``cof F' = J F'^-T``, and the
 Holzapfel–Ogden fibre and sheet terms only in tension (``I4 - 1 >`` :data:`TENSION`), as
-the numpy laws define them. A tissue block runs three lane loops: ``F'`` and the
-invariants (vectorised), the exponentials and logarithms (scalar: no vector ``exp`` or
-``log`` without SVML), the stress and forces (vectorised). Elements with ``J <= 0`` are
-counted; the tissue laws give them no force.
+the numpy laws define them. A tissue block runs its lanes through: ``F'`` and the
+invariants (vectorised); the logarithm ``ln J`` of the log penalty and, for
+Holzapfel–Ogden, ``J^(-2/3)`` (scalar: no vector ``log`` without SVML); the law's
+exponentials (Guccione one, Holzapfel–Ogden four per element) in one vectorised pass of a
+written-out ``exp`` (``2^k p(r)``: Cody–Waite reduction, the degree-13 Taylor polynomial,
+``2^k`` from the bits of a round-to-integer constant; within 1 ulp of ``math.exp``, its
+argument clamped to the finite range, which no stress-bearing state reaches); the stress
+and forces (vectorised). Elements with ``J <= 0`` are counted; the tissue laws give them
+no force.
 
 A frame with ``det R = -1`` gets its normal negated (``J`` keeps its sign; every law here
 is even in the normal).
@@ -211,6 +216,24 @@ def _block_run(law: str, volumetric: str, at):
     guc = law == "guccione"
     vlog = volumetric == "log"
     vquad = volumetric == "quadratic"
+    NE = 1 if guc else 4  # exponentials per element (vectorised pass)
+    f32 = at is np.float32
+    ity = np.int32 if f32 else np.int64
+    # exp(x) = 2^k p(r), k = round(x / ln 2), r = x - k ln 2 (Cody–Waite split of ln 2),
+    # p the Taylor polynomial of degree 13 (|r| <= ln 2 / 2: truncation < 1e-17); 2^k by
+    # the round-to-integer constant 1.5 2^52 (2^23 in float32), whose low bits hold k
+    lo_x, hi_x = (at(-87.0), at(88.0)) if f32 else (at(-708.0), at(709.0))
+    log2e = at(1.4426950408889634)
+    ln2hi, ln2lo = (
+        (at(0.693359375), at(-2.12194440e-4))
+        if f32
+        else (at(6.93147180369123816490e-01), at(1.90821492927058770002e-10))
+    )
+    magic = at(1.5 * 2.0**23) if f32 else at(1.5 * 2.0**52)
+    magic_bits = int(np.array([magic], dtype=at).view(ity)[0])
+    bias, shift = (127, 23) if f32 else (1023, 52)
+    coef = [at(1.0 / math.factorial(i)) for i in range(14)]
+    c0, c1, c2, c3, c4, c5, c6, c7, c8, c9, c10, c11, c12, c13 = coef
 
     def run(lo, hi, x, w, T, K, m, prm, q_, out):
         X = np.empty(9 * B, at)
@@ -221,6 +244,10 @@ def _block_run(law: str, volumetric: str, at):
         A3 = np.empty(B, at)
         A4 = np.empty(B, at)
         A5 = np.empty(B, at)
+        A6 = np.empty(B, at)
+        Ea = np.empty(NE * B, at)  # exponents, then exponentials
+        Eb = np.empty(NE * B, at)
+        Ebits = Eb.view(ity)
         Fo = np.empty(12 * B, at)
         p0, p1, p2, p3, p4 = at(prm[0]), at(prm[1]), at(prm[2]), at(prm[3]), at(prm[4])
         p5, p6, p7, p8, p9 = at(prm[5]), at(prm[6]), at(prm[7]), at(prm[8]), at(prm[9])
@@ -266,7 +293,7 @@ def _block_run(law: str, volumetric: str, at):
                 if guc:  # Q = sum_ab B_ab E_ab^2, E = (C' - I) / 2
                     e00, e11, e22 = half * (C00 - one), half * (C11 - one), half * (C22 - one)
                     e01, e02, e12 = half * C01, half * C02, half * C12
-                    A1[j] = (
+                    Ea[j] = (
                         p1 * e00 * e00
                         + p2 * (e11 * e11 + e22 * e22 + two * e12 * e12)
                         + two * p3 * (e01 * e01 + e02 * e02)
@@ -277,7 +304,7 @@ def _block_run(law: str, volumetric: str, at):
                     A3[j] = C11 - one
                     A4[j] = C01
             if not lin:
-                for j in range(B):  # exponentials and logarithms, scalar
+                for j in range(B):  # logarithms (and J^(-2/3)), scalar
                     J = Jb[j]
                     ok = J > zero
                     kappa = p4 if guc else p8
@@ -291,26 +318,39 @@ def _block_run(law: str, volumetric: str, at):
                     else:
                         s = half * kappa * (J - one / J) if ok else zero
                     if guc:
-                        A1[j] = p0 * math.exp(A1[j])  # C e^Q
                         A2[j] = s
-                    else:
+                    else:  # holzapfel-ogden: J^(-2/3) and the four exponents
                         I1, xf, xs, xfs = A1[j], A2[j], A3[j], A4[j]
-                        c = math.exp(m23 * lnJ) if ok else zero  # J^(-2/3)
-                        e = math.exp(p1 * (c * I1 - three)) if ok else zero
-                        cF = p0 * e * c
-                        A1[j] = cF  # coefficient of F'
-                        A2[j] = s - cF * I1 * third / J if ok else zero  # of cof F'
-                        # psi_i' = a_i x e^(b_i x^2); fibre and sheet only in tension
-                        df = zero
-                        if xf > tension and p2 != zero:
-                            df = p2 * xf * math.exp(p3 * xf * xf)
-                        ds = zero
-                        if xs > tension and p4 != zero:
-                            ds = p4 * xs * math.exp(p5 * xs * xs)
-                        dfs = p6 * xfs * math.exp(p7 * xfs * xfs) if p6 != zero else zero
-                        A3[j] = two * df + p9  # S_00 (+ T_a)
-                        A4[j] = two * ds  # S_11
-                        A5[j] = dfs  # S_01 = S_10
+                        cJ = math.exp(m23 * lnJ) if ok else zero
+                        A5[j] = cJ
+                        A6[j] = s
+                        Ea[j] = p1 * (cJ * I1 - three)
+                        Ea[B + j] = p3 * xf * xf
+                        Ea[2 * B + j] = p5 * xs * xs
+                        Ea[3 * B + j] = p7 * xfs * xfs
+                for j in range(NE * B):  # exp, vectorised (see above)
+                    xa = min(max(Ea[j], lo_x), hi_x)
+                    tt = xa * log2e + magic
+                    kk = tt - magic
+                    r = xa - kk * ln2hi - kk * ln2lo
+                    pe = c13 * r + c12
+                    pe = pe * r + c11
+                    pe = pe * r + c10
+                    pe = pe * r + c9
+                    pe = pe * r + c8
+                    pe = pe * r + c7
+                    pe = pe * r + c6
+                    pe = pe * r + c5
+                    pe = pe * r + c4
+                    pe = pe * r + c3
+                    pe = pe * r + c2
+                    pe = pe * r + c1
+                    Ea[j] = pe * r + c0
+                    Eb[j] = tt
+                for j in range(NE * B):
+                    Ebits[j] = (Ebits[j] - magic_bits + bias) << shift  # 2^k
+                for j in range(NE * B):
+                    Ea[j] *= Eb[j]
             for j in range(B):  # stress and forces, vectorised
                 F0, F1, F2 = Fs[j], Fs[B + j], Fs[2 * B + j]
                 F3, F4, F5 = Fs[3 * B + j], Fs[4 * B + j], Fs[5 * B + j]
@@ -360,7 +400,7 @@ def _block_run(law: str, volumetric: str, at):
                     k3, k4, k5 = F2 * F7 - F1 * F8, F0 * F8 - F2 * F6, F1 * F6 - F0 * F7
                     k6, k7, k8 = F1 * F5 - F2 * F4, F2 * F3 - F0 * F5, F0 * F4 - F1 * F3
                     if guc:
-                        cq, s = A1[j], A2[j]
+                        cq, s = p0 * Ea[j], A2[j]  # C e^Q, U'(J)
                         C00 = F0 * F0 + F3 * F3 + F6 * F6
                         C11 = F1 * F1 + F4 * F4 + F7 * F7
                         C22 = F2 * F2 + F5 * F5 + F8 * F8
@@ -386,8 +426,15 @@ def _block_run(law: str, volumetric: str, at):
                             F6 * S02 + F7 * S12 + F8 * S22 + s * k8,
                         )
                     else:
-                        cF, ck = A1[j], A2[j]
-                        S00, S11, S01 = A3[j], A4[j], A5[j]
+                        I1, xf, xs, xfs, cJ = A1[j], A2[j], A3[j], A4[j], A5[j]
+                        cF = p0 * Ea[j] * cJ  # coefficient of F'
+                        ck = A6[j] - cF * I1 * third / J if J > zero else zero  # of cof F'
+                        # psi_i' = a_i x e^(b_i x^2); fibre and sheet only in tension
+                        df = p2 * xf * Ea[B + j] if xf > tension else zero
+                        ds = p4 * xs * Ea[2 * B + j] if xs > tension else zero
+                        S00 = two * df + p9  # (+ T_a)
+                        S11 = two * ds
+                        S01 = p6 * xfs * Ea[3 * B + j]
                         P = (
                             cF * F0 + ck * k0 + F0 * S00 + F1 * S01,
                             cF * F1 + ck * k1 + F0 * S01 + F1 * S11,

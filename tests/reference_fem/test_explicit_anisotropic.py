@@ -141,6 +141,20 @@ def test_float64_equals_numpy_residual(mesh, law, volumetric):
     assert rel(f, numpy_forces(scene, x)) < 1e-12
 
 
+@pytest.mark.parametrize(
+    ("law", "steep"),
+    [("guccione", {"b_f": 300.0, "b_fs": 100.0}),
+     ("holzapfel-ogden", {"b": 60.0, "b_f": 300.0, "b_s": 200.0, "b_fs": 300.0})],
+)  # fmt: skip
+def test_steep_exponentials_equal_numpy_residual(mesh, law, steep):
+    """Exponents up to ~60 (2^k up to 2^90): the written-out exp over a wide range; an
+    exponent rounded in its last bit moves e^x by x eps, ~1e-14 here."""
+    scene = make_scene(mesh, law, **steep)
+    x = deformed(mesh.points, seed=4)
+    f, _ = kernel_forces(scene, x)
+    assert rel(f, numpy_forces(scene, x)) < 1e-12
+
+
 @pytest.mark.parametrize("law", ["guccione", "holzapfel-ogden"])
 def test_active_tension_equals_numpy_residual(mesh, law):
     scene = make_scene(mesh, law, active_tension=3.0)
