@@ -4,7 +4,8 @@
 lumped masses), ``"implicit"`` runs :func:`springfem.mechanics.implicit` (backward Euler
 with the analytic tangent of :meth:`ExplicitFem.stiffness`; a follower load has none, and
 the tangent is then taken by coloured finite differences). Only P1: the explicit kernel
-is the linear tet's.
+is the linear tet's. Every law but the uncoupled neo-Hookean forms has a kernel; a tissue
+material needs its penalty ``kappa`` (not ``incompressible = true``).
 
 Examples
 --------
@@ -37,7 +38,9 @@ def dynamic_system(scene: Scene, order: int | None = None, law: str | None = Non
     order
         Must be 1 (or ``None``): the dynamic FEM is P1.
     law
-        ``linear`` or ``neo-hookean`` (default: the scene's law).
+        ``linear``, ``neo-hookean`` or the scene's anisotropic law (``transverse-linear``,
+        ``guccione``, ``holzapfel-ogden``, :mod:`reference_fem.explicit_anisotropic`);
+        default: the scene's law.
 
     Returns
     -------

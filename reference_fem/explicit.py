@@ -11,22 +11,27 @@ constant, so one pass over the elements gathers the four vertices, forms
     neo-Hookean (coupled):  P = mu (F - F^-T) + lam ln J F^-T,    F^-T = cof(F) / J
     linear:                 P = 2 mu eps + lam tr(eps) I,          eps = sym(F - I)
 
-and scatters ``f_a = -V P grad N_a`` (``f_0 = -(f_1 + f_2 + f_3)``, so each element's net
-force is zero by construction). The energies are those of :mod:`reference_fem.hyperelastic`
-(``psi = mu/2 (I1 - 3) - mu ln J + lam/2 ln^2 J``) and of small-strain isotropic
-elasticity; per element the kernel reads 4 int32 node ids and 10 constants (three shape
-gradients and the rest volume).
+or, for the anisotropic laws (``transverse-linear``, ``guccione``, ``holzapfel-ogden``:
+the scene's material and element frames), the law's stress in the element frame
+(:mod:`reference_fem.explicit_anisotropic`), and scatters ``f_a = -V P grad N_a``
+(``f_0 = -(f_1 + f_2 + f_3)``, so each element's net force is zero by construction). The
+energies are those of :mod:`reference_fem.hyperelastic` (``psi = mu/2 (I1 - 3) - mu ln J +
+lam/2 ln^2 J``), of small-strain elasticity and of :mod:`reference_fem.laws`; per element
+the kernel reads 4 int32 node ids and 10 constants (three shape gradients, rotated into the
+element frame for the tissue laws, and the rest volume; ``transverse-linear`` adds the
+frame, 19).
 
-The kernels are those of :mod:`reference_fem.explicit_kernels`: specialised per law and
-precision (``float64``, ``mixed``, ``float32``), on the blocked layout the spring kernels
-use, serial or parallel (one force buffer per thread, summed in a fixed order), so the two
-models are compared like for like.
+The kernels are those of :mod:`reference_fem.explicit_kernels` (isotropic) and
+:mod:`reference_fem.explicit_anisotropic`: specialised per law and precision (``float64``,
+``mixed``, ``float32``), on the blocked layout the spring kernels use, serial or parallel
+(one force buffer per thread, summed in a fixed order), so the two models are compared
+like for like.
 
 Inverted elements (``J <= 0``) get no force from the kernel and are counted; for the
-neo-Hookean law :class:`ExplicitFem` then raises a :class:`~springfem.errors.SolverError`
-naming the element and the step ("inverted element k at step n") instead of letting NaN
-propagate, or (``on_inverted="nan"``) returns NaN at the element's nodes so a Newton line
-search can back off.
+neo-Hookean and tissue laws :class:`ExplicitFem` then raises a
+:class:`~springfem.errors.SolverError` naming the element and the step ("inverted element
+k at step n") instead of letting NaN propagate, or (``on_inverted="nan"``) returns NaN at
+the element's nodes so a Newton line search can back off.
 
 Examples
 --------
@@ -52,14 +57,23 @@ from springfem.loads import external_forces, has_follower_loads, lumped_masses
 from springfem.mesh import tet_volumes
 from springfem.scene import Scene, model_precision
 
+from .explicit_anisotropic import (
+    ANISOTROPIC_LAWS,
+    anisotropic_kernel,
+    anisotropic_layout,
+    law_parameters,
+)
 from .explicit_kernels import fem_kernel, fem_layout
+from .laws import TISSUE_LAWS, TissueLaw, tissue_law
 from .space import p1_gradients
 
-Law = Literal["neo-hookean", "linear"]
+Law = Literal["neo-hookean", "linear", "transverse-linear", "guccione", "holzapfel-ogden"]
 Precision = Literal["float64", "mixed", "float32"]
 OnInverted = Literal["raise", "nan", "ignore"]
-LAWS = ("neo-hookean", "neo-hookean/coupled", "linear")
-_NEO, _LINEAR = 0, 1
+LAWS = ("neo-hookean", "neo-hookean/coupled", "linear") + ANISOTROPIC_LAWS
+_NEO, _LINEAR, _ANISOTROPIC = 0, 1, 2
+#: Index of the active tension in the tissue kernels' parameters (law_parameters).
+_ACTIVE = {"guccione": 5, "holzapfel-ogden": 9}
 #: ``ExplicitFem(parallel=None)`` runs serially unless this is on, as the spring kernel: two
 #: threads were never faster than one here (neo-Hookean 0.64-0.73x wall at 210,912 tets on
 #: the shared 2-core machine, reference_fem.explicit_kernels).
@@ -99,6 +113,50 @@ def strain_energy_density(F: np.ndarray, mu: float, lam: float, law: int) -> np.
     return mu * np.einsum("kij,kij->k", eps, eps) + 0.5 * lam * tr**2
 
 
+def tissue_energy_density(law: TissueLaw, F: np.ndarray, frames: np.ndarray | None) -> np.ndarray:
+    """``W(F)`` of a tissue law per element (``inf`` where ``J <= 0``), without its tangent.
+
+    The same energy as ``law.energy(F, frames)`` (:class:`~reference_fem.laws.TissueLaw`:
+    the law's own term, the active tension, the penalty ``U(J)``), which also builds the
+    penalty's fourth-order tangent; this one does not, so a recorded run stays cheap.
+
+    Parameters
+    ----------
+    law
+        The tissue law (at its activation).
+    F
+        Deformation gradients ``(m, 3, 3)``.
+    frames
+        Element frames ``(m, 3, 3)`` (rows: fibre, sheet, normal), or None.
+
+    Returns
+    -------
+    ndarray
+        Energy density ``(m,)``.
+
+    Examples
+    --------
+    >>> from reference_fem.laws import Guccione
+    >>> law = Guccione(C=2.0, b_f=8.0, kappa=10.0, active_tension=1.0)
+    >>> F = np.diag([1.1, 0.95, 1.0])[None]
+    >>> bool(np.isclose(tissue_energy_density(law, F, None)[0], law.energy(F)[0], rtol=1e-14))
+    True
+    """
+    from .hyperelastic import _det, _volumetric
+    from .laws.kinematics import to_frame
+
+    J = _det(F)
+    ok = J > 0
+    Fl = to_frame(F, frames)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        W, _, _ = law.local(Fl, False)
+        if law.active_tension != 0.0:
+            W = W + 0.5 * law.active_tension * (np.einsum("kj,kj->k", Fl[:, :, 0], Fl[:, :, 0]) - 1)
+        if law.kappa > 0:
+            W = W + _volumetric(np.where(ok, J, 1.0), law.kappa, law.volumetric)[0]
+    return np.where(ok, W, np.inf)
+
+
 # --------------------------------------------------------------------------- the system
 
 
@@ -106,10 +164,21 @@ def _parse_law(scene: Scene, law: str) -> int:
     if law not in LAWS:
         raise InputError(f"explicit FEM law {law!r} is not one of {', '.join(LAWS)}")
     mat = scene.material
+    if law in ANISOTROPIC_LAWS:
+        if mat.law != law:
+            raise InputError(
+                f"explicit FEM law {law} needs a {law} material; the scene's is {mat.law}"
+            )
+        if mat.incompressible:
+            raise InputError(
+                f"explicit FEM of {law} needs a volumetric penalty: give [material] kappa "
+                "instead of incompressible = true"
+            )
+        return _ANISOTROPIC
     if mat.law == "transverse-linear":
         raise InputError(
-            "explicit FEM is isotropic (neo-hookean or linear); the scene's material is "
-            "transverse-linear"
+            f"explicit FEM law {law} is isotropic; the scene's material is transverse-linear "
+            "(use law transverse-linear)"
         )
     if law.startswith("neo-hookean") and mat.law == "neo-hookean" and mat.formulation != "coupled":
         raise InputError(
@@ -130,10 +199,15 @@ class ExplicitFem:
     Parameters
     ----------
     scene
-        Mesh, isotropic material (``mu``, ``lam``), boundaries and loads.
+        Mesh, material (``mu``, ``lam`` of the isotropic laws; an anisotropic law's own
+        constants and the element frames), boundaries and loads.
     law
         ``neo-hookean`` (the coupled energy of :mod:`reference_fem.hyperelastic`, whatever
-        the scene's law) or ``linear`` (small-strain isotropic elasticity).
+        the scene's isotropic law), ``linear`` (small-strain isotropic elasticity), or the scene's
+        anisotropic law: ``transverse-linear``, ``guccione`` or ``holzapfel-ogden`` (with the
+        material's ``kappa`` and ``volumetric`` penalty; an active tension ramps with the
+        load factor of :meth:`forces`). Default (``None``): the scene's law if it is
+        anisotropic, else ``neo-hookean``.
     parallel
         ``True``: parallel kernel on all numba threads; ``False``: serial, in mesh order;
         ``None`` (default): serial unless :data:`PARALLEL_BY_DEFAULT` is on, then parallel
@@ -160,7 +234,7 @@ class ExplicitFem:
     def __init__(
         self,
         scene: Scene,
-        law: str = "neo-hookean",
+        law: str | None = None,
         parallel: bool | None = None,
         on_inverted: OnInverted = "raise",
         precision: Precision | None = None,
@@ -175,8 +249,13 @@ class ExplicitFem:
             )
         self.precision: Precision = precision
         self.scene = scene
-        self.law = "linear" if law == "linear" else "neo-hookean"
+        if law is None:
+            law = scene.material.law if scene.material.law in ANISOTROPIC_LAWS else "neo-hookean"
         self._law = _parse_law(scene, law)
+        if self._law == _ANISOTROPIC:
+            self.law = law
+        else:
+            self.law = "linear" if law == "linear" else "neo-hookean"
         self.on_inverted = on_inverted
         mat = scene.material
         self.mu, self.lam = float(mat.mu), float(mat.lam)
@@ -194,8 +273,23 @@ class ExplicitFem:
             parallel = PARALLEL_BY_DEFAULT and m >= PARALLEL_MIN_ELEMENTS
         self.parallel = bool(parallel) and numba.get_num_threads() > 1
         self._grad = np.ascontiguousarray(G[:, 1:])  # grad N_1..3 (energy, in numpy)
-        self._serial, self._parallel = fem_kernel(self.law, precision)
-        self._T, self._K = fem_layout(self.tets, self.x0, precision)
+        #: The tissue law (numpy; energy and tangent), None for the other laws.
+        self.tissue: TissueLaw | None = None
+        self.frames: np.ndarray | None = None
+        self._active = 0.0
+        if self._law == _ANISOTROPIC:
+            self.frames = np.asarray(scene.frames, dtype=float)
+            if law in TISSUE_LAWS:
+                self.tissue = tissue_law(mat)
+                self._active = self.tissue.active_tension
+            self._params: tuple = (law_parameters(law, mat, self.tissue),)
+            self._serial, self._parallel = anisotropic_kernel(law, mat.volumetric, precision)
+            self._T, self._K = anisotropic_layout(self.tets, self.x0, self.frames, law, precision)
+        else:
+            self._params = (self.mu, self.lam)
+            self._serial, self._parallel = fem_kernel(self.law, precision)
+            self._T, self._K = fem_layout(self.tets, self.x0, precision)
+        self.activation = 1.0
         self._ptr = chunks(self._T.shape[0])
         self._buf = np.zeros((self._ptr.size - 1 if self.parallel else 0, self.n_points, 3))
         # MechanicalSystem members
@@ -214,6 +308,44 @@ class ExplicitFem:
     def n_elements(self) -> int:
         return self.tets.shape[0]
 
+    @property
+    def _positive_J(self) -> bool:
+        """Whether the law needs ``J > 0`` (neo-Hookean, tissue): inverted elements fail."""
+        return self._law == _NEO or self.tissue is not None
+
+    def set_activation(self, level: float) -> None:
+        """Scale a tissue law's active tension to ``level`` (the load factor) in the kernel.
+
+        :meth:`forces`, :meth:`energy` and :meth:`stiffness` set it from their ``scale``;
+        :meth:`internal` and :meth:`kernel` use the level set last (1 at construction).
+
+        Parameters
+        ----------
+        level
+            Activation level, 1 for the material's full ``active_tension``.
+
+        Examples
+        --------
+        >>> from dataclasses import replace
+        >>> from springfem.mesh import box_mesh
+        >>> from springfem.scene import scene_from_dict
+        >>> scene = scene_from_dict({"mesh": box_mesh((1.0, 1.0, 1.0), (1, 1, 1)),
+        ...     "material": {"law": "guccione", "C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0,
+        ...                  "kappa": 50.0, "active_tension": 6.0}})
+        >>> fem = ExplicitFem(scene)
+        >>> full = abs(fem.internal(fem.x0)).max()  # at rest: the active stress alone
+        >>> fem.set_activation(0.5)
+        >>> round(float(abs(fem.internal(fem.x0)).max() / full), 12)
+        0.5
+        """
+        if self._active and level != self.activation:
+            self._params[0][_ACTIVE[self.law]] = level * self._active
+        self.activation = level
+
+    def _law_now(self) -> TissueLaw:
+        assert self.tissue is not None
+        return self.tissue.activated(self.activation)
+
     def reset(self) -> None:
         """Zero the step and evaluation counters (a new run on the same system)."""
         self.steps, self.time, self.evaluations, self.last_inverted = 0, 0.0, 0, 0
@@ -226,7 +358,7 @@ class ExplicitFem:
         x = np.ascontiguousarray(x, dtype=np.float64).reshape(self.n_points, 3)
         if out is None:
             out = np.empty((self.n_points, 3))
-        args = (x, self._T, self._K, self.n_elements, self.mu, self.lam)
+        args = (x, self._T, self._K, self.n_elements, *self._params)
         if self.parallel:
             bad = self._parallel(*args, self._ptr, self._buf, out)
         else:
@@ -250,7 +382,7 @@ class ExplicitFem:
         self.evaluations += 1
         f, bad = self.kernel(x, out)
         self.last_inverted = bad
-        if bad and self._law == _NEO and self.on_inverted != "ignore":
+        if bad and self._positive_J and self.on_inverted != "ignore":
             ids = self.inverted_elements(x, bad)
             if self.on_inverted == "nan":
                 f[self.tets[ids].ravel()] = np.nan
@@ -277,16 +409,35 @@ class ExplicitFem:
 
     def forces(self, x: np.ndarray, v: np.ndarray | None = None, scale: float = 1.0) -> np.ndarray:
         """Internal plus external nodal forces (no viscous damping: ``v`` is not used)."""
+        self.set_activation(scale)
         f = self.internal(x)
         f += self.external(x, scale)
         return f
 
     def strain_energy(self, x: np.ndarray) -> float:
-        """``sum_e V_e psi(F_e)`` (``inf`` when a neo-Hookean element is inverted)."""
+        """``sum_e V_e psi(F_e)`` (``inf`` when a neo-Hookean or tissue element is inverted).
+
+        The anisotropic laws' ``psi`` is the numpy law's (:mod:`reference_fem.laws`, or
+        ``eps : C : eps / 2`` of :mod:`reference_fem.materials`), at the current activation.
+        """
         x = np.ascontiguousarray(x, dtype=np.float64).reshape(self.n_points, 3)
         X = x[self.tets]
         F = np.einsum("kac,kad->kcd", X[:, 1:] - X[:, :1], self._grad)
-        return float(np.sum(self.V0 * strain_energy_density(F, self.mu, self.lam, self._law)))
+        if self._law != _ANISOTROPIC:
+            psi = strain_energy_density(F, self.mu, self.lam, self._law)
+        elif self.tissue is not None:
+            psi = tissue_energy_density(self._law_now(), F, self.frames)
+        else:
+            from springfem.materials import VOIGT
+
+            from .materials import material_groups
+
+            D, group = material_groups(self.scene.material, self.scene.frames)
+            eps = 0.5 * (F + F.transpose(0, 2, 1)) - np.eye(3)
+            ev = eps[:, [0, 1, 2, 1, 0, 0], [0, 1, 2, 2, 2, 1]] * [1, 1, 1, 2, 2, 2]
+            assert VOIGT[1, 2] == 3 and VOIGT[0, 1] == 5  # (xx, yy, zz, yz, xz, xy)
+            psi = 0.5 * np.einsum("ki,kij,kj->k", ev, D[group], ev)
+        return float(np.sum(self.V0 * psi))
 
     def energy(self, x: np.ndarray, scale: float = 1.0) -> float | None:
         """Strain energy minus the work of the dead loads; ``None`` with follower loads."""
@@ -294,13 +445,15 @@ class ExplicitFem:
             return None
         x = np.asarray(x, dtype=float).reshape(self.n_points, 3)
         work = scale * float(np.sum(self._f_dead * (x - self.x0)))
+        self.set_activation(scale)
         return self.strain_energy(x) - work
 
     def stiffness(self, x: np.ndarray, scale: float = 1.0) -> sp.csr_matrix | None:
         """Tangent ``K = -d forces / dx`` (``None`` with follower loads).
 
         Assembled with :mod:`reference_fem.assembly` from the law's tangent
-        (:class:`~reference_fem.hyperelastic.NeoHookean`), constant for the linear law.
+        (:class:`~reference_fem.hyperelastic.NeoHookean`, the tissue law of
+        :mod:`reference_fem.laws` in the element frames), constant for the linear laws.
         """
         if self._follower:
             return None
@@ -314,15 +467,25 @@ class ExplicitFem:
             space = Space(self.scene.mesh, 1)
             self._assembly = (space, BlockPattern(space.element_nodes, space.n_nodes))
         space, pattern = self._assembly
-        if self._law == _LINEAR:
+        if self._law == _LINEAR or self.law == "transverse-linear":
             if self._K_linear is None:
                 mat = self.scene.material
-                D = isotropic_matrix(mat.E, mat.nu)[None]
-                K = stiffness_matrix(space, D, np.zeros(self.n_elements, np.int64), pattern)
+                if self._law == _LINEAR:
+                    D, group = isotropic_matrix(mat.E, mat.nu)[None], np.zeros(self.n_elements, int)
+                else:
+                    from .materials import material_groups
+
+                    D, group = material_groups(mat, self.scene.frames)
+                K = stiffness_matrix(space, D, group.astype(np.int64), pattern)
                 self._K_linear = sp.csr_matrix(K)
             return self._K_linear
         u = np.asarray(x, dtype=float).reshape(-1, 3) - self.x0
-        _, Ke = hyperelastic_element_arrays(space, NeoHookean(self.mu, self.lam), u, True)
+        if self.tissue is not None:
+            self.set_activation(scale)
+            frames = None if self.frames is None else self.frames[:, None]
+            _, Ke = hyperelastic_element_arrays(space, self._law_now(), u, True, frames)
+        else:
+            _, Ke = hyperelastic_element_arrays(space, NeoHookean(self.mu, self.lam), u, True)
         assert Ke is not None  # asked for
         return sp.csr_matrix(pattern.matrix(Ke))
 

@@ -8,14 +8,15 @@ machine change every number, docs/verification.rst#how-speed-is-measured).
 ``forces``
     On a box of about ``--tets`` tets (default 500k), for each precision (``float64``,
     ``mixed``, ``float32``): the spring kernel of the scene's variant and the explicit P1
-    neo-Hookean and linear FEM kernels, serial and on all threads, and the numpy spring
-    oracle; ``--variants`` adds every spring variant (serial) and the stiffened exact element
-    (kernel + :mod:`springmodel.stiffening_kernel`, float64) with its parts
-    (:mod:`studies.bench_stiffening`). Each kernel's ratio to the neo-Hookean FEM kernel of
-    the same precision and threads, its bytes read per element and the bandwidth-bound limit
-    (a measured read bandwidth / bytes per element); whether the spring kernel's threads rule
-    picks the faster at this size. NVIDIA Warp is timed as a peer when installed (it is
-    skipped with a note when not).
+    neo-Hookean and linear FEM kernels and the anisotropic ones (transverse-linear,
+    Guccione, Holzapfel–Ogden with the log penalty, rotated frames), serial and on all
+    threads, and the numpy spring oracle; ``--variants`` adds every spring variant (serial)
+    and the stiffened exact element (kernel + :mod:`springmodel.stiffening_kernel`,
+    float64) with its parts (:mod:`studies.bench_stiffening`). Each kernel's ratio to the
+    neo-Hookean FEM kernel of the same precision and threads, its bytes read per element and
+    the bandwidth-bound limit (a measured read bandwidth / bytes per element); whether the
+    spring kernel's threads rule picks the faster at this size. NVIDIA Warp is timed as a
+    peer when installed (it is skipped with a note when not).
 ``threads``
     :func:`studies.bench_threads.bench_threads`: serial and parallel force passes at sizes
     from 1k tets up to ``--tets``, and whether the kernels' threads rule picks the faster.
@@ -55,6 +56,29 @@ PRECISIONS = ("float64", "mixed", "float32")
 #: Explicit steps (and force passes) per timing in ``bench step``.
 STEP_COUNT = 10
 _FEM_BYTES = {"float64": 10 * 8 + 16, "mixed": 10 * 4 + 16, "float32": 10 * 4 + 16}
+#: The anisotropic FEM kernels (reference_fem.explicit_anisotropic): constants per element.
+_ANISOTROPIC_FEM = {"transverse-linear": 19, "guccione": 10, "holzapfel-ogden": 10}
+
+
+def anisotropic_fem_scene(scene, law: str):
+    """``scene`` with an anisotropic ``law`` (Land's Guccione constants, a Holzapfel–Ogden
+    and a transverse material of the same order) and one rotated frame for every element."""
+    from dataclasses import replace
+
+    from scipy.spatial.transform import Rotation
+
+    from springfem.scene import Material
+
+    params = {
+        "guccione": {"C": 2.0e3, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0, "kappa": 1.0e5},
+        "holzapfel-ogden": {"a": 1.0e3, "b": 5.0, "a_f": 2.0e3, "b_f": 5.0, "a_s": 1.0e3,
+                            "b_s": 5.0, "a_fs": 0.5e3, "b_fs": 5.0, "kappa": 1.0e5},
+    }.get(law, {})  # fmt: skip
+    transverse = {"E_fiber": 3.0e4, "E_cross": 1.0e4, "nu_fiber_cross": 0.3, "nu_cross": 0.4,
+                  "G_fiber": 5.0e3} if law == "transverse-linear" else {}  # fmt: skip
+    mat = Material(law, 1.0e4, 0.3, parameters=params, **transverse)  # type: ignore[arg-type]
+    R = Rotation.from_rotvec([0.3, -0.5, 0.7]).as_matrix().T
+    return replace(scene, material=mat, frames=np.broadcast_to(R, scene.frames.shape).copy())
 
 
 def spring_variants() -> list[SpringOptions]:
@@ -162,6 +186,12 @@ def bench_forces(
                 fem = ExplicitFem(scene, law=law, parallel=par, precision=p)
                 cases[name] = lambda f=fem: f.kernel(x, out)
                 meta[name] = _meta(f"fem-{law}", p, nthreads, _FEM_BYTES[p], fem_name)
+            for law, ncol in _ANISOTROPIC_FEM.items():
+                name = f"FEM {law} {p} {nthreads}"
+                fem = ExplicitFem(anisotropic_fem_scene(scene, law), parallel=par, precision=p)
+                cases[name] = lambda f=fem: f.kernel(x, out)
+                nbytes = ncol * (8 if p == "float64" else 4) + 16
+                meta[name] = _meta(f"fem-{law}", p, nthreads, nbytes, fem_name)
             kernel = SpringKernel(el, options, parallel=par, precision=p)
             name = f"spring {short_label(options)} {p} {nthreads}"
             cases[name] = lambda k=kernel: k.forces(x, None, out)

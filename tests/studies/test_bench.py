@@ -111,9 +111,15 @@ def test_bench_forces_structure(forces_result, capsys):
     assert {
         "FEM neo-Hookean float64 1",
         "FEM linear float64 1",
+        "FEM transverse-linear float64 1",
+        "FEM guccione float64 1",
+        "FEM holzapfel-ogden float64 1",
         "spring linear/cosine/gradient float64 1",
         "spring numpy oracle",
     } == names
+    by = {r["name"]: r for r in res["rows"]}
+    assert by["FEM guccione float64 1"]["bytes_per_element"] == 10 * 8 + 16  # as isotropic
+    assert by["FEM transverse-linear float64 1"]["bytes_per_element"] == 19 * 8 + 16
     for r in res["rows"]:
         assert r["wall_seconds"] > 0 and r["ratio_to_fem"] > 0
     seed = res["seed_row"]
