@@ -23,7 +23,8 @@ Modules, one idea each:
   strain; ``volumetric_split``: a law as element part
   plus ``U(J)``.
 - ``solver``: :func:`solve` (scene in, Result out).
-- ``explicit``, ``explicit_kernels``, ``dynamics``: explicit P1 FEM and time integration.
+- ``explicit``, ``explicit_kernels``, ``explicit_anisotropic``, ``dynamics``: explicit P1 FEM
+  (isotropic and anisotropic compiled kernels) and time integration.
 - ``scenes``: verification scenes built in code; ``bench``: the speed benchmark;
   ``bench_formulations``: one Newton iteration per formulation, interleaved.
 
