@@ -3,7 +3,7 @@
 A tissue scene's P2 model keeps the scene's ``[fem]`` options (its formulation); P1, which
 cannot be Taylor–Hood, is the displacement formulation with the penalty
 :func:`p1_penalty`, so that same-mesh P1 stays the spring model's like-for-like reference
-(docs/studies.rst#models).
+(docs/studies.rst#the-model-registry).
 
 Examples
 --------
