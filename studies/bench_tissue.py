@@ -167,12 +167,10 @@ class _Case:
                                     "factorizations": r.info.get("factorizations")}})  # fmt: skip
 
 
-def warm_up(ngsolve: bool) -> None:
-    """Solve every form once on a tiny beam (imports, caches), untimed."""
+def warm_up(forms) -> None:
+    """Solve each of ``forms`` once on a tiny beam (imports, caches), untimed."""
     tiny = land_scenes(divisions=(4, 1, 1))["beam"]
-    for form in FORMS:
-        if form == "ngsolve" and not ngsolve:
-            continue
+    for form in forms:
         _Case(tiny if form == "ngsolve" else form_scene(tiny, form), form)()
 
 
@@ -224,7 +222,7 @@ def bench_tissue(
         s = scenes[key]
         runs[name] = _Case(s if form == "ngsolve" else form_scene(s, form), form)
     if warmup:
-        warm_up(ngsolve=missing is None and any(n.endswith("-ngsolve") for n in names))
+        warm_up([f for f in FORMS if any(n.endswith(f"-{f}") for n in names)])
     load_before = load_average()
     samples = interleaved(dict(runs.items()), rounds=repeats, warmup=0)
     rows = []
