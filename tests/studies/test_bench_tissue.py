@@ -9,6 +9,7 @@ Guccione problem agrees with reference_fem.
 
 from __future__ import annotations
 
+import doctest
 import json
 
 import numpy as np
@@ -16,7 +17,7 @@ import pytest
 
 from reference_fem.options import FemOptions
 from springfem.errors import InputError
-from studies import bench_tissue
+from studies import bench_tissue, ngsolve_peer
 from studies.cli import main
 
 TINY = ["--divisions", "4,1,1", "--cases", "beam-P1,beam-mixed", "--repeats", "2"]
@@ -74,6 +75,11 @@ def test_case_selection_and_form_scenes():
     fem = FemOptions.of(p2)
     assert (fem.order, fem.formulation) == (2, "displacement")
     assert bench_tissue.form_scene(beam, "mixed") is beam
+
+
+@pytest.mark.parametrize("module", [bench_tissue, ngsolve_peer], ids=lambda m: m.__name__)
+def test_doctests(module):
+    assert doctest.testmod(module).failed == 0
 
 
 def test_agreement_is_relative_to_the_largest_component():
