@@ -215,12 +215,21 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=_subcommand("studies.cli.study", "cmd_report"))
 
-    p = sub.add_parser("bench", help="benchmarks: spring force kernel, threads rule, FEM, steps")
-    p.add_argument("what", choices=("forces", "fem", "step", "threads"))
+    p = sub.add_parser(
+        "bench", help="benchmarks: spring force kernel, threads rule, FEM, steps, tissue solves"
+    )
+    p.add_argument("what", choices=("forces", "fem", "step", "threads", "tissue"))
     p.add_argument("--tets", type=int, default=None, help="approximate number of tets")
-    p.add_argument("--repeats", type=int, default=7, help="repeats (median reported)")
+    p.add_argument("--repeats", type=int, default=None,
+                   help="repeats (median reported; default 7, tissue 3)")  # fmt: skip
     p.add_argument("--json", action="store_true", help="print JSON")
     p.add_argument("--variants", action="store_true", help="forces: every spring variant too")
+    p.add_argument("--cases", default=None,
+                   help="tissue: cases, beam, ventricle, default or all")  # fmt: skip
+    p.add_argument("--size", type=float, default=None,
+                   help="tissue: ventricle element size in mm (default 4)")  # fmt: skip
+    p.add_argument("--divisions", default=None, metavar="NX,NY,NZ",
+                   help="tissue: beam divisions (default 30,3,3)")  # fmt: skip
     p.set_defaults(func=_subcommand("studies.cli.bench", "cmd_bench"))
     return parser
 

@@ -1,4 +1,4 @@
-"""``springfem bench forces|fem|step|threads``: interleaved benchmarks (medians, ratios)."""
+"""``springfem bench forces|fem|step|threads|tissue``: interleaved benchmarks (medians, ratios)."""
 
 from __future__ import annotations
 
@@ -17,8 +17,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from springfem.errors import InputError
 
     what = args.what
+    if what == "tissue":
+        return _bench_tissue(args)
     n = args.tets if args.tets is not None else DEFAULT_TETS[what]
-    repeats = int(getattr(args, "repeats", 7) or 7)
+    repeats = int(getattr(args, "repeats", None) or 7)
     if n < 6:
         raise InputError(f"--tets must be at least 6, got {n}")
     if repeats < 1:
@@ -48,9 +50,50 @@ def cmd_bench(args: argparse.Namespace) -> int:
             print_fem(res, file=sys.stdout)  # its default stream is bound at import time
             print(f"  machine load average {res['machine']['load_average']}")
     else:  # argparse restricts the choices
-        raise InputError(f"unknown benchmark {what!r}; valid: forces, fem, step, threads")
+        raise InputError(f"unknown benchmark {what!r}; valid: forces, fem, step, threads, tissue")
     if as_json:
-        from springfem.files import jsonable as _jsonable
+        _print_json(res)
+    return 0
 
-        print(json.dumps(_jsonable(res), indent=2, sort_keys=True))
+
+def _print_json(res: dict) -> None:
+    from springfem.files import jsonable as _jsonable
+
+    print(json.dumps(_jsonable(res), indent=2, sort_keys=True))
+
+
+def _bench_tissue(args: argparse.Namespace) -> int:
+    """``springfem bench tissue`` (:mod:`studies.bench_tissue`)."""
+    from springfem.errors import InputError
+
+    from ..bench_tissue import (
+        DEFAULT_DIVISIONS,
+        DEFAULT_REPEATS,
+        DEFAULT_SIZE,
+        bench_tissue,
+        print_tissue,
+    )
+
+    if args.tets is not None:
+        raise InputError("bench tissue: --tets does not apply; use --size and --divisions")
+    repeats = int(args.repeats if args.repeats is not None else DEFAULT_REPEATS)
+    if repeats < 1:
+        raise InputError(f"--repeats must be at least 1, got {repeats}")
+    size = DEFAULT_SIZE if args.size is None else float(args.size)
+    if not size > 0:
+        raise InputError(f"--size must be positive, got {size:g}")
+    divisions = DEFAULT_DIVISIONS
+    if args.divisions is not None:
+        try:
+            divisions = tuple(int(d) for d in str(args.divisions).split(","))
+        except ValueError:
+            divisions = ()
+        if len(divisions) != 3 or min(divisions) < 1:
+            raise InputError(f"--divisions must be three positive integers NX,NY,NZ, "
+                             f"got {args.divisions!r}")  # fmt: skip
+    res = bench_tissue(repeats, args.cases, size, divisions)
+    if args.json:
+        _print_json(res)
+    else:
+        print_tissue(res)
     return 0
