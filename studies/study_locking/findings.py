@@ -3,12 +3,21 @@ methods lock, the references, and the headline numbers."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
 
 from springfem.materials.tissue import TISSUE_LAWS
 
 from .cases import REFERENCE, TOLERANCE
+
+#: The methods whose error at the most incompressible ratio and finest level is a headline
+#: number: those that solve well inside the quick preset's cap, so that the headline does
+#: not depend on the machine's speed (the stabilised spring elements and displacement P2
+#: can take the cap on a busy machine; the cheapest method depends on timings too).
+HEADLINE_METHODS = ("P1", "P1-nodal-volume", "P1-nodal-strain", "MINI", "spring-spec",
+                    "spring-exact", "spring-nodal-volume")  # fmt: skip
 
 
 def _name(row: pd.Series) -> str:
@@ -163,6 +172,8 @@ def report_findings(
     nu = df.nu.max()
     for (scene, m), g in df[df.nu == nu].groupby(["scene", "method"], sort=False):
         fine = g[g.factor == g.factor.max()]
-        if len(fine) and fine.status.iloc[0] == "ok" and not fine.reference.iloc[0]:
-            headline[f"error_{scene}_{m}_nu{nu:g}"] = round(float(fine.error.iloc[0]), 4)
+        if m in HEADLINE_METHODS and len(fine) and not fine.reference.iloc[0]:
+            ok = fine.status.iloc[0] == "ok"
+            value = round(float(fine.error.iloc[0]), 4) if ok else math.nan
+            headline[f"error_{scene}_{m}_nu{nu:g}"] = value
     return findings, headline
