@@ -1,0 +1,177 @@
+"""Cases of the dynamics study: the settings, the models, the bundled beam and the cases of
+each scene (:mod:`.work` runs them).
+
+Every case is a :meth:`~studies.scenes.StudyScene.case` of its scene with the study's own
+keys: ``kind`` (``period``: the reference's static solve and Rayleigh period; ``release``:
+one model released from its static state; ``cost``: every model's step cost, interleaved in
+one process), ``model`` / ``models``, ``t_end``, ``samples``, ``safety``, ``rounds``,
+``steps``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from springfem.errors import InputError
+from springfem.scene import Scene
+
+from .. import models
+from ..scenes import StudyScene
+
+STUDY, VERSION = "dynamics", 1
+
+#: The spring elements compared with explicit P1 of the same law: the tissue element (the
+#: law's own energy per element), the stiffened exact element (one exponent per element)
+#: and the exact small-strain element (linear springs, P1's small-strain tangent).
+SPRINGS = ("spring-tissue", "spring-stiffened", "spring-exact")
+#: Line colours of the models (the reference is black).
+COLORS = {"spring-tissue": "tab:orange", "spring-stiffened": "tab:blue",
+          "spring-exact": "tab:green", "spring-spec": "tab:purple"}  # fmt: skip
+#: Land's beam, made compressible: ``kappa`` = this × ``C`` (as the explicit kernels' test).
+KAPPA_PER_C = 50.0
+#: Density of the bundled beam: 1000 kg/m³ in the scene's mm-kPa units (kg/mm³; forces in
+#: mN = kg mm/s², so time is in seconds).
+BEAM_DENSITY = 1.0e-6
+#: Land's load (0.004 kPa on the bottom face), here a dead traction.
+BEAM_TRACTION = 0.004
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Mesh, load, run length and timing of the dynamics study.
+
+    Parameters
+    ----------
+    beam
+        Divisions of the bundled beam.
+    load
+        Factor on Land's 0.004 kPa.
+    periods
+        Run length after the release, in Rayleigh periods of the reference's static
+        deflection (:func:`studies.study_dynamics.work.rayleigh_period`).
+    samples
+        Points of the common time grid the probe is compared on.
+    safety
+        Time step of every model: this × its own critical step (the smaller at rest and at
+        the loaded state).
+    models
+        The spring models compared with explicit P1.
+    rounds, steps
+        Cost per step: ``rounds`` interleaved rounds of ``steps`` steps per model.
+    """
+
+    beam: tuple[int, int, int] = (30, 3, 3)
+    load: float = 1.0
+    periods: float = 1.5
+    samples: int = 400
+    safety: float = 0.5
+    models: tuple[str, ...] = SPRINGS
+    rounds: int = 5
+    steps: int = 200
+
+    @classmethod
+    def full(cls) -> Settings:
+        """Land's 30×3×3 beam (1,620 tets), 1.5 periods."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> Settings:
+        """A 10×2×2 beam, one period, fewer timed steps."""
+        return cls(beam=(10, 2, 2), periods=1.0, samples=200, rounds=3, steps=100)
+
+
+def beam_table(divisions: tuple[int, int, int], load: float = 1.0) -> StudyScene:
+    """Land's beam made compressible for explicit dynamics: ``kappa = 50 C``, density
+    1000 kg/m³, P1 in the displacement formulation, the 0.004 kPa pressure as a dead
+    traction (× ``load``) on the bottom face.
+
+    Examples
+    --------
+    >>> sc = beam_table((10, 1, 1))
+    >>> m = sc.build().material
+    >>> m.incompressible, m.parameters["kappa"], m.density
+    (False, 100.0, 1e-06)
+    >>> sc.table["load"][0]["value"]
+    [0.0, 0.0, 0.004]
+    """
+    C = float(StudyScene.bundled("land-beam").table["material"]["C"])
+    sets = {
+        "material.incompressible": False,
+        "material.kappa": KAPPA_PER_C * C,
+        "material.density": BEAM_DENSITY,
+        "mesh.divisions": list(divisions),
+        "fem.order": 1,
+        "fem.formulation": "displacement",
+    }
+    sc = StudyScene.bundled("land-beam", sets, label="land-beam")
+    table = dict(sc.table)
+    value = [0.0, 0.0, BEAM_TRACTION * load]
+    table["load"] = [{"type": "traction", "region": "z_min", "value": value}]
+    return StudyScene(sc.label, table, roles=("release",))
+
+
+def bundled_scenes(s: Settings) -> list[StudyScene]:
+    """The compressible Guccione beam (Land's problem 1 made compressible).
+
+    Examples
+    --------
+    >>> [x.label for x in bundled_scenes(Settings.quick())]
+    ['land-beam']
+    """
+    return [beam_table(s.beam, s.load)]
+
+
+def reference_model(scene: Scene) -> str:
+    """The explicit P1 of the scene's law: ``P1`` (its own law, or small-strain linear),
+    ``P1-NH`` for a neo-Hookean material.
+
+    Examples
+    --------
+    >>> reference_model(beam_table((4, 1, 1)).build())
+    'P1'
+    """
+    return "P1-NH" if scene.material.law == "neo-hookean" else "P1"
+
+
+def check_scene(sc: StudyScene) -> Scene:
+    """The built scene, or a one-line refusal: an incompressible material (explicit P1 has
+    no pressure unknown), no load to release from."""
+    scene = sc.build()
+    if scene.material.incompressible:
+        raise InputError(
+            f"study dynamics: scene {sc.label} is incompressible; explicit P1 needs a "
+            "volumetric penalty: give [material] kappa instead of incompressible = true"
+        )
+    if not scene.loads:
+        raise InputError(f"study dynamics: scene {sc.label} has no [[load]] to release from")
+    return scene
+
+
+def spring_models(scene: Scene, s: Settings) -> list[str]:
+    """The settings' spring models that apply to the scene (the tissue element needs a tissue
+    law)."""
+    return [m for m in s.models if models.get(m).applies(scene) is None]
+
+
+def period_case(sc: StudyScene) -> dict[str, Any]:
+    """The reference's static solve (for the run length)."""
+    scene = check_scene(sc)
+    return sc.case(STUDY, VERSION, kind="period", model=reference_model(scene))
+
+
+def release_cases(sc: StudyScene, s: Settings, t_end: float) -> list[dict[str, Any]]:
+    """The reference and every spring model, released from its static state for ``t_end``
+    seconds."""
+    scene = sc.build()
+    names = [reference_model(scene), *spring_models(scene, s)]
+    run = {"t_end": t_end, "samples": s.samples, "safety": s.safety}
+    return [sc.case(STUDY, VERSION, kind="release", model=m, **run) for m in names]
+
+
+def cost_case(sc: StudyScene, s: Settings) -> dict[str, Any]:
+    """Every model's cost per step, interleaved in one process."""
+    scene = sc.build()
+    names = [reference_model(scene), *spring_models(scene, s)]
+    return sc.case(STUDY, VERSION, kind="cost", models=names, rounds=s.rounds, steps=s.steps,
+                   safety=s.safety)  # fmt: skip
