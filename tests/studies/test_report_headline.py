@@ -32,6 +32,14 @@ WRITTEN = Path(os.environ.get("SPRINGFEM_QUICK_REPORT", ROOT / "reports" / "quic
 
 #: Timing-derived headlines (fitted cost slopes): noisy on a shared machine, finite only.
 TIMING_KEYS = {
+    # costs per explicit step
+    "dynamics": {
+        "land-beam_P1_step_us",
+        *(
+            f"land-beam_{m}_cost_ratio"
+            for m in ("spring-exact", "spring-stiffened", "spring-tissue")
+        ),
+    },
     # the cheapest method within the tolerance is picked by its solve time
     "locking": {
         f"cheapest_error_{scene}_nu{nu}"
