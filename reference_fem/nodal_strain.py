@@ -121,6 +121,10 @@ class NodalStrainProblem(NodalVolumeProblem):
         self._pair_nodes = keys // (frame_id.max() + 1)
         self._pair_weight = np.bincount(pair, np.repeat(self.V0 / 4.0, 4), len(keys))
         self._pair_frames = None if self.frames is None else self.frames[first]
+        n_pairs = len(keys)
+        self._pair_sum = sp.csr_matrix(  # nodal sums of weighted pair values
+            (self._pair_weight, (self._pair_nodes, np.arange(n_pairs))), shape=(n, n_pairs)
+        )
 
     def default_share(self) -> float:
         """The default volumetric share ``f = alpha mu / kappa`` (at most 1).
@@ -139,8 +143,7 @@ class NodalStrainProblem(NodalVolumeProblem):
 
     def _nodal_sum(self, values: np.ndarray) -> np.ndarray:
         """Sum weighted pair values into their nodes: ``(n, ...)``."""
-        flat = (self._pair_weight[:, None] * values.reshape(len(values), -1)).T
-        out = np.stack([np.bincount(self._pair_nodes, v, self.space.n_nodes) for v in flat], 1)
+        out = self._pair_sum @ values.reshape(len(values), -1)
         return out.reshape((self.space.n_nodes,) + values.shape[1:])
 
     def _check_nodal(self, Fbar: np.ndarray) -> None:
