@@ -94,36 +94,15 @@ class NodalStrainProblem(NodalVolumeProblem):
         if stabilisation is None and opts.stabilisation is None:
             self.fraction = self.default_share()
         self.law_name = self.law_name.replace("/nodal-volume", "/nodal-strain")
-        tets = self.space.element_nodes
-        m, n = len(tets), self.space.n_nodes
-        patch = np.bincount(tets.ravel(), np.repeat(self.V0, 4), minlength=n)
-        # B[(a, i, j), (c, k)] = delta_ik sum_{e ni a, c} V_e dN_c/dX_j / V_a  (Fbar = I + B u)
-        w = self.V0[:, None] / patch[tets]  # (m, 4 a)
-        vals = w[:, :, None, None] * self.G[:, None, :, :]  # (m, 4 a, 4 c, 3 j)
-        vals = np.broadcast_to(vals[:, :, :, None, :], (m, 4, 4, 3, 3))  # (.., i, j)
-        a = tets[:, :, None, None, None]
-        c = tets[:, None, :, None, None]
-        i = np.arange(3)[None, None, None, :, None]
-        j = np.arange(3)[None, None, None, None, :]
-        shape = (m, 4, 4, 3, 3)
-        rows = np.broadcast_to(9 * a + 3 * i + j, shape).ravel()
-        cols = np.broadcast_to(3 * c + i, shape).ravel()
-        self.B_strain = sp.csr_matrix((vals.ravel(), (rows, cols)), shape=(9 * n, 3 * n))
+        tets, n = self.space.element_nodes, self.space.n_nodes
+        self.B_strain = strain_gradient(tets, self.V0, self.G, n)
         # the pairs (e, a): element e's part measured at its vertex a, weight V_e / 4; pairs
         # of one node with equal frames (all of them for an isotropic law) are one evaluation
-        frame_id = np.zeros(m, dtype=np.int64)
-        if self.frames is not None:
-            _, frame_id = np.unique(self.frames.reshape(m, 9), axis=0, return_inverse=True)
-        key = tets.ravel() * (frame_id.max() + 1) + np.repeat(frame_id.ravel(), 4)
-        keys, pair = np.unique(key, return_inverse=True)
-        first = np.zeros(len(keys), dtype=np.int64)
-        first[pair] = np.repeat(np.arange(m), 4)  # an element of each pair (for its frame)
-        self._pair_nodes = keys // (frame_id.max() + 1)
-        self._pair_weight = np.bincount(pair, np.repeat(self.V0 / 4.0, 4), len(keys))
+        self._pair_nodes, self._pair_weight, first = frame_pairs(tets, self.V0, self.frames)
         self._pair_frames = None if self.frames is None else self.frames[first]
-        n_pairs = len(keys)
         self._pair_sum = sp.csr_matrix(  # nodal sums of weighted pair values
-            (self._pair_weight, (self._pair_nodes, np.arange(n_pairs))), shape=(n, n_pairs)
+            (self._pair_weight, (self._pair_nodes, np.arange(len(first)))),
+            shape=(n, len(first)),
         )
 
     def default_share(self) -> float:
@@ -217,3 +196,78 @@ class NodalStrainProblem(NodalVolumeProblem):
         Wn = base.energy(Fbar[self._pair_nodes], frames=self._pair_frames)
         nodal = (1.0 - self.alpha) * float(self._pair_weight @ Wn)
         return float(whole) + nodal
+
+
+def strain_gradient(tets: np.ndarray, V0: np.ndarray, G: np.ndarray, n: int) -> sp.csr_matrix:
+    """The nodal strain operator ``B``: ``Fbar = I + B u``, ``(9 n, 3 n)``.
+
+    ``B[(a, i, j), (c, k)] = delta_ik sum_{e ni a, c} V_e dN_c/dX_j / V_a`` with ``V_a``
+    the volume of node ``a``'s patch (rows ``9 a + 3 i + j``, columns ``3 c + k``).
+
+    Parameters
+    ----------
+    tets, V0, G
+        Connectivity ``(m, 4)``, rest volumes ``(m,)`` and shape gradients ``(m, 4, 3)``.
+    n
+        Number of nodes.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+
+    Examples
+    --------
+    >>> X = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    >>> G = np.linalg.inv(np.c_[np.ones(4), X])[1:].T[None]  # grad N of the one tet
+    >>> B = strain_gradient(np.array([[0, 1, 2, 3]]), np.array([1 / 6]), G, 4)
+    >>> H = np.array([[0.1, 0.2, 0.0], [0.0, -0.1, 0.3], [0.05, 0.0, 0.0]])
+    >>> bool(np.allclose(B @ (X @ H.T).ravel(), np.tile(H.ravel(), 4)))  # exact if affine
+    True
+    """
+    m = len(tets)
+    patch = np.bincount(tets.ravel(), np.repeat(V0, 4), minlength=n)
+    w = V0[:, None] / patch[tets]  # (m, 4 a)
+    vals = w[:, :, None, None] * G[:, None, :, :]  # (m, 4 a, 4 c, 3 j)
+    shape = (m, 4, 4, 3, 3)  # (e, a, c, i, j)
+    vals = np.broadcast_to(vals[:, :, :, None, :], shape)
+    a = tets[:, :, None, None, None]
+    c = tets[:, None, :, None, None]
+    i = np.arange(3)[None, None, None, :, None]
+    j = np.arange(3)[None, None, None, None, :]
+    rows = np.broadcast_to(9 * a + 3 * i + j, shape).ravel()
+    cols = np.broadcast_to(3 * c + i, shape).ravel()
+    return sp.csr_matrix((vals.ravel(), (rows, cols)), shape=(9 * n, 3 * n))
+
+
+def frame_pairs(tets: np.ndarray, V0: np.ndarray, frames: np.ndarray | None):
+    """The distinct (node, frame) pairs of the elements' vertices and their weights.
+
+    Parameters
+    ----------
+    tets, V0
+        Connectivity ``(m, 4)`` and rest volumes ``(m,)``.
+    frames
+        Element frames ``(m, 3, 3)``, or ``None`` (one pair per node).
+
+    Returns
+    -------
+    nodes, weights, first
+        Each pair's node, its weight (the sum of ``V_e / 4`` over its elements) and one
+        element of it (whose frame it carries).
+
+    Examples
+    --------
+    >>> tets = np.array([[0, 1, 2, 3], [1, 2, 3, 4]])
+    >>> nodes, w, first = frame_pairs(tets, np.array([1.0, 2.0]), None)
+    >>> nodes.tolist(), w.tolist()
+    ([0, 1, 2, 3, 4], [0.25, 0.75, 0.75, 0.75, 0.5])
+    """
+    m = len(tets)
+    frame_id = np.zeros(m, dtype=np.int64)
+    if frames is not None:
+        _, frame_id = np.unique(frames.reshape(m, 9), axis=0, return_inverse=True)
+    k = int(frame_id.max()) + 1
+    keys, pair = np.unique(tets.ravel() * k + np.repeat(frame_id.ravel(), 4), return_inverse=True)
+    first = np.zeros(len(keys), dtype=np.int64)
+    first[pair] = np.repeat(np.arange(m), 4)
+    return keys // k, np.bincount(pair, np.repeat(V0 / 4.0, 4), len(keys)), first
