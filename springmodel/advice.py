@@ -103,8 +103,11 @@ def model_warnings(
         f"spring model: calibration mismatch {np.nanmedian(mm):.2%} (median; max "
         f"{np.nanmax(mm):.2%}; {bad} of {mm.size} tets above {threshold:.1%})"
     )
-    if fix:  # the fix implies the cause
-        return [f"{head}, so much model error vs P1; set {', '.join(fix)} in [spring]"]
+    if len(fix) > 1:  # the fix implies the cause; the named element sets them all
+        alone = ", ".join(fix)
+        return [f'{head}, so much model error vs P1; set [spring] element = "exact" (or {alone})']
+    if fix:
+        return [f"{head}, so much model error vs P1; set {fix[0]} in [spring]"]
     why = f" ({', '.join(cause)})" if cause else ""
     return [f"{head}{why}: the element's constants cannot match the law's tangent exactly"]
 

@@ -9,6 +9,7 @@ import numpy as np
 from springfem.scene import Scene
 
 from .advice import scene_warnings
+from .inert import inert_keys
 from .intersections import axis_vectors, cast_rays
 from .options import SpringOptions
 from .tangent import MISMATCH_NORM
@@ -36,13 +37,18 @@ def inspect_scene(scene: Scene, calibration: bool = True) -> dict[str, Any]:
 
     Examples
     --------
+    The default element (the exact one) matches P1 on every tet; the specification's
+    element does not, and says so:
+
     >>> from springfem.scene import scene_from_dict
-    >>> scene = scene_from_dict({
-    ...     "mesh": {"generator": "box", "size": [0.1, 0.01, 0.01], "divisions": [10, 1, 1]},
-    ...     "material": {"law": "linear", "E": 1.0e4, "nu": 0.3}})
-    >>> report = inspect_scene(scene)
+    >>> d = {"mesh": {"generator": "box", "size": [0.1, 0.01, 0.01], "divisions": [10, 1, 1]},
+    ...      "material": {"law": "linear", "E": 1.0e4, "nu": 0.3}}
+    >>> report = inspect_scene(scene_from_dict(d))
     >>> report["tets"], len(report["warnings"])
-    (60, 1)
+    (60, 0)
+    >>> seed = inspect_scene(scene_from_dict({**d, "spring": {"element": "seed"}}))
+    >>> [("calibration mismatch" in w) for w in seed["warnings"]]
+    [True]
     """
     mesh = scene.mesh
     q = mesh.quality()
@@ -86,4 +92,5 @@ def _calibration_stats(scene: Scene) -> dict[str, Any]:
         "calibration_mismatch_median": float(np.median(mm)),
         "calibration_mismatch_max": float(mm.max()),
         "warnings": scene_warnings(scene, mm, options),
+        "notes": inert_keys(scene, options),
     }

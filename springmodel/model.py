@@ -34,6 +34,7 @@ from springfem.result import Result, frame_cell_data, volume_summary
 from springfem.scene import Scene, model_precision
 
 from .advice import scene_warnings
+from .inert import inert_keys
 from .elements import SpringElements, build_spring_elements
 from .nodal_strain import NodalStrainPart
 from .nodal_volume import NodalPart
@@ -365,6 +366,9 @@ def solve_spring(
     warnings = scene_warnings(scene, model.elements.mismatch, opts)
     for line in warnings:
         print(f"springfem: warning: {line}", file=sys.stderr)
+    notes = inert_keys(scene, opts)
+    for line in notes:
+        print(f"springfem: note: {line}", file=sys.stderr)
     extra = {
         "solver": opts.solver,
         "variant": variant_label(opts),
@@ -373,6 +377,7 @@ def solve_spring(
         else None,
         "calibration_mismatch_norm": MISMATCH_NORM,
         "warnings": warnings,
+        "notes": notes,
         "message": getattr(info, "message", ""),
         "dt": getattr(info, "dt", None),
         "steps": int(getattr(info, "steps", 0) or 0),

@@ -11,7 +11,10 @@ Models
     the spring model with the scene's ``[spring]`` options;
 ``spring-<variant>``
     the spring model with a variant's changes to the scene's ``[spring]`` options
-    (:func:`spring_variant`; ``spring-energy``, ``spring-cosine``: that torsion law), or a
+    (:func:`spring_variant`; ``spring-energy``, ``spring-cosine``: that torsion law; on a
+    scene that names an element other than ``seed``, or gets one by default, the changes
+    are made to the specification's element, so that a variant means the same on every
+    scene), or a
     whole element of its own: ``spring-spec`` (the specification's element: barycentric
     volume springs, cosine torsion, the analytic calibration), ``spring-exact`` (axis-volume
     + energy torsion + the exact calibration, with the Poisson-coupling springs for an
@@ -60,38 +63,22 @@ from springfem.mechanics.limits import SolveStopped
 from springfem.plausibility import check_solution
 from springfem.scene import Scene
 from springfem.scene.reader import suggestion
+from springmodel.options import ANISOTROPIC_LAWS, ELEMENT_KEYS, ELEMENTS
 
 from .fem_laws import linear_law, tissue_scene
 from .partial import partial_solution
 from .solve import Solution
 
 #: The exact spring element: small-strain P1 on any tet (with coupling when anisotropic).
-EXACT = {"volume": "axes", "torsion": "energy", "calibration": "exact"}
+EXACT = dict(ELEMENTS["exact"])
 #: The spring element for tissue at finite strain: the exact element with Green axial
 #: springs, the shear torsion law, the exponential stiffening of the element energy and the
 #: tissue laws' log penalty ``U(J)``.
-STIFFENED = {
-    "volume": "axes",
-    "torsion": "shear",
-    "calibration": "exact",
-    "axial": "green",
-    "stiffening": "exponential",
-    "volumetric": "log",
-}
+STIFFENED = dict(ELEMENTS["stiffened"])
 #: The tissue element: the stiffened element's Green measures with the Green torsion (all six
 #: frame components of E) and each spring group stiffened as the law's own terms, so that
 #: it equals its law under any homogeneous deformation (docs/tissue.rst).
-TISSUE = {**STIFFENED, "torsion": "green", "stiffening": "law"}
-#: The ``[spring]`` options that choose the element (the rest choose the solver): a model
-#: that *defines* an element resets them to the defaults before its changes.
-ELEMENT_KEYS = (
-    *("axial", "axial_coefficients", "torsion", "torsion_cubic", "volume", "volume_average"),
-    *("nodal_fraction", "stiffening", "stiffening_modulus", "volumetric", "coupling"),
-    *("volume_form", "lms", "calibration", "k_axial", "k_torsion", "k_volume"),
-    *("volume_stabilisation", "strain_average", "strain_stabilisation"),
-)
-#: Laws with an anisotropic small-strain tangent (the exact element adds coupling springs).
-ANISOTROPIC_LAWS = ("transverse-linear", *TISSUE_LAWS)
+TISSUE = dict(ELEMENTS["tissue"])
 
 
 @dataclass(frozen=True)
@@ -109,7 +96,8 @@ class Model:
     changes
         Spring models: changes to the scene's ``[spring]`` options (values of
         :class:`springmodel.options.SpringOptions`; ``lms`` may be a rule name and
-        ``axial`` ``"green"``, as in a scene file).
+        ``axial`` ``"green"``, as in a scene file). If the scene's element is not the
+        seed's, the changes are made to the seed's element.
     coupling
         Spring models: add the Poisson-coupling springs when the law is anisotropic.
     element
@@ -188,9 +176,12 @@ class Model:
         if self.coupling and scene.material.law in ANISOTROPIC_LAWS:
             changes["coupling"] = True
         options = SpringOptions.of(scene)
-        if self.element:
+        if self.element or (changes and options.element != "seed"):
+            # a whole element, or a variant of one option: a variant is of the spec's
+            # element, whichever element the scene names (docs/studies.rst)
             default = SpringOptions()
-            options = replace(options, **{k: getattr(default, k) for k in ELEMENT_KEYS})
+            reset = {k: getattr(default, k) for k in ELEMENT_KEYS}
+            options = replace(options, **reset, element="seed")
         return replace(options, **changes)
 
     def fem_settings(self, scene: Scene) -> tuple[Scene, int | None, str | None]:

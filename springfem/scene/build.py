@@ -185,7 +185,8 @@ def scene_from_dict(data: dict, path: str | os.PathLike | None = None) -> Scene:
     top.used.update({"boundary", "load", "probe"})
     parsers = model_sections()
     options = {
-        name: parse(TableReader(data.get(name, {}), name, file)) for name, parse in parsers.items()
+        name: parse(TableReader(data.get(name, {}), name, file, root=data))
+        for name, parse in parsers.items()
     }
     top.used.update(parsers)
     unknown = _unknown_top_level(data, file)

@@ -16,7 +16,7 @@ from __future__ import annotations
 import difflib
 import math
 import numbers
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 import numpy as np
@@ -111,12 +111,22 @@ class TableReader:
         Every key valid in the table, if the parser declares them: then a missing required
         key is matched against the table's invalid keys only (a valid key asked for later
         is never taken for a misspelling).
+    root
+        The whole scene's table, for a section whose defaults depend on another section
+        (the ``[spring]`` element on the ``[material]`` law); ``None`` if not known.
     """
 
-    def __init__(self, table: Any, where: str, file: str, keys: Iterable[str] | None = None):
+    def __init__(
+        self,
+        table: Any,
+        where: str,
+        file: str,
+        keys: Iterable[str] | None = None,
+        root: Mapping[str, Any] | None = None,
+    ):
         if not isinstance(table, dict):
             raise SceneError(f"{file}: {where} must be a table")
-        self.t, self.where, self.file = table, where, file
+        self.t, self.where, self.file, self.root = table, where, file, root
         self.used: set[str] = set()
         self.keys = None if keys is None else frozenset(keys)
         self.known: set[str] = set(self.keys or ())

@@ -221,7 +221,8 @@ class Scene:
         """
         if name not in self.options:
             file = str(self.path) if self.path is not None else "<scene>"
-            self.options[name] = parse(TableReader(self.raw.get(name, {}), name, file))
+            table = self.raw.get(name, {})
+            self.options[name] = parse(TableReader(table, name, file, root=self.raw))
         return self.options[name]
 
     def with_options(self, **sections: Any) -> Scene:

@@ -188,7 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "capped solve is a stopped row")  # fmt: skip
     p.add_argument("--tolerance", type=_positive_float, default=None, metavar="ERROR",
                    help="the model error a variant may have to count (studies with a "
-                   "tolerance: ablation)")  # fmt: skip
+                   "tolerance: ablation, speed-accuracy)")  # fmt: skip
     add_set_option(p)
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, nargs="?", const=0, default=None, metavar="N",

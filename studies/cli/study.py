@@ -72,7 +72,9 @@ def cmd_study(args: argparse.Namespace) -> int:
         base = spec.settings_for(args.quick)
         if not hasattr(base, "max_error"):
             name = spec.name.replace("_", "-")
-            raise InputError(f"study {name} has no tolerance (--tolerance applies to: ablation)")
+            raise InputError(
+                f"study {name} has no tolerance (--tolerance applies to: ablation, speed-accuracy)"
+            )
         settings = dataclasses.replace(base, max_error=tolerance)
     cap = getattr(args, "max_time", None)
     if cap is None and scene is not None:

@@ -107,13 +107,16 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
             sdf = step_frame(s, levels, steps)
         finest = level_label(s.table, levels[-1])
         findings, headline, front = report_findings(
-            df, steps[-1] if steps else None, how, finest, s.label
+            df, steps[-1] if steps else None, how, finest, s.label, settings.max_error
         )
         if notes:
             findings.insert(0, f"{s.label}: {'; '.join(notes)}.")
         out.findings += findings
         out.tables += write_tables(ctx, s, df, sdf, ref, ref_text, how, suffix)
-        out.figures.append(pareto_figure(ctx, df, how.column, ref_text, front, s.label, suffix))
+        ref_seconds = float(ref.get("cpu_seconds", ref["seconds"]))
+        out.figures.append(
+            pareto_figure(ctx, df, how.column, ref_text, front, s.label, suffix, ref_seconds)
+        )
         out.headline.update({f"{k}{suffix}": v for k, v in headline.items()})
     out.title = f"Speed against accuracy ({', '.join(s.label for s in scenes)})"
     return out

@@ -66,6 +66,10 @@ class Settings:
         Time-step factor of the implicit runs -> the largest level it runs on.
     max_tets
         Levels with more tets are left out (the two coarsest always run).
+    max_error
+        The tolerance: the findings name the cheapest point (CPU time) whose error is at
+        most this, overall and among the spring model's (``study speed-accuracy
+        --tolerance``).
     """
 
     levels: tuple[int, ...] = (1, 2, 4)
@@ -73,6 +77,7 @@ class Settings:
     explicit: tuple[tuple[float, float], ...] = ((1e-3, 0.3), (1e-6, 0.3), (1e-6, 0.5))
     implicit: dict[float, int] = field(default_factory=lambda: {100.0: 2, 1e4: 4})
     max_tets: int = 40_000
+    max_error: float = 0.05
 
     @classmethod
     def full(cls) -> Settings:

@@ -27,10 +27,12 @@ COLOURS = {
 
 def pareto_figure(
     ctx: StudyContext, df: pd.DataFrame, column: str, reference: str, front_text: str,
-    label: str, suffix: str = "",
+    label: str, suffix: str = "", reference_seconds: float | None = None,
 ) -> Figure:  # fmt: skip
     """Every solve's CPU time against its error ``column`` (log-log) with the Pareto front;
-    the findings' sentence about the front, ``front_text``, ends the caption.
+    the findings' sentence about the front, ``front_text``, ends the caption. The reference,
+    whose error is zero by definition and has no place on a log axis, is a vertical line at
+    its CPU time ``reference_seconds``.
     """
     plt = pyplot()
 
@@ -48,6 +50,9 @@ def pareto_figure(
         fx = np.r_[front["seconds"].to_numpy(), good["seconds"].max() * 1.5]
         fy = np.r_[100 * front[column].to_numpy(), 100 * front[column].iloc[-1]]
         ax.step(fx, fy, where="post", color="k", ls="--", lw=1, label="Pareto front", zorder=2)
+    if reference_seconds is not None and np.isfinite(reference_seconds):
+        ax.axvline(reference_seconds, color="k", ls=":", lw=1.2, zorder=1,
+                   label=f"reference {reference}: {reference_seconds:.2g} s, error 0")  # fmt: skip
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("CPU time from scene to answer (s)")
@@ -57,6 +62,12 @@ def pareto_figure(
     ax.legend(fontsize=7, loc="best")
     caption = (
         f"CPU time against error of every solve of {label} (log-log; labels: refinement "
-        f"factor of its mesh), with the Pareto front. {front_text}"
+        f"factor of its mesh), with the Pareto front"
+        + (
+            f" and the reference's time (dotted; {reference}, error 0 by definition). "
+            if reference_seconds is not None
+            else ". "
+        )
+        + front_text
     )
     return ctx.figure(fig, f"pareto{suffix}.png", caption)

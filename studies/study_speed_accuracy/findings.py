@@ -12,8 +12,9 @@ COMPARED_SETTING = "tol 1e-06, dt = 0.5 dt_crit"
 
 
 def report_findings(
-    df: pd.DataFrame, steps: dict | None, how: Measure, finest: str, label: str
-) -> tuple[list[str], dict[str, float], str]:
+    df: pd.DataFrame, steps: dict | None, how: Measure, finest: str, label: str,
+    tolerance: float = 0.05,
+) -> tuple[list[str], dict[str, float], str]:  # fmt: skip
     """The findings, the headline errors and the Pareto-front sentence of one scene.
 
     ``steps``: the step costs on the finest level (``None``: none); ``finest``: its label
@@ -91,6 +92,7 @@ def report_findings(
         "faster and more accurate."
     )
     findings.append(front_text)
+    findings.append(cheapest_sentence(good, err, tolerance))
     for _, r in failed.iterrows():
         findings.append(
             f"{r['method']} on {r['mesh']} ({r['setting']}) {r['status']}: {r['message'][:140]}"
@@ -114,3 +116,38 @@ def report_findings(
                 "the specification's element does not.",
             )
     return findings, headline, front_text
+
+
+def cheapest_sentence(good: pd.DataFrame, column: str, tolerance: float) -> str:
+    """The cheapest point (CPU time) whose error ``column`` is at most ``tolerance``, and the
+    cheapest spring-model point within it, in a sentence.
+
+    Examples
+    --------
+    >>> df = pd.DataFrame({"method": ["P1 static", "spring-energy static", "P2 static"],
+    ...     "mesh": ["10x1x1", "20x2x2", "10x1x1"], "seconds": [0.1, 0.5, 0.3],
+    ...     "err": [0.2, 0.04, 0.01]})
+    >>> overall, spring = cheapest_sentence(df, "err", 0.05).split("; ")
+    >>> overall
+    'Within 5% of the reference the cheapest point is P2 static on 10x1x1 (0.30 s, 1.0% off)'
+    >>> spring[spring.index("spring-energy"):]
+    'spring-energy static on 20x2x2 (0.50 s, 4.0% off), 1.7x its time.'
+    """
+
+    def point(r) -> str:
+        return f"{r['method']} on {r['mesh']} ({r['seconds']:.2f} s, {100 * r[column]:.1f}% off)"
+
+    within = good[good[column] <= tolerance].sort_values("seconds")
+    head = f"Within {tolerance:.0%} of the reference"
+    if within.empty:
+        return f"{head} no point qualifies: every method's error is larger on these levels."
+    first = within.iloc[0]
+    text = f"{head} the cheapest point is {point(first)}"
+    if str(first["method"]).startswith("spring"):
+        return text + "; it is a spring-model point."
+    spring = within[within["method"].str.startswith("spring")]
+    if spring.empty:
+        return text + "; no spring-model point is within it."
+    sp = spring.iloc[0]
+    ratio = sp["seconds"] / first["seconds"]
+    return text + f"; the cheapest spring-model point is {point(sp)}, {ratio:.1f}x its time."

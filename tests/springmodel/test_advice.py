@@ -31,13 +31,18 @@ def cantilever(**spring) -> dict:
 def test_seed_cantilever_warns_with_count_and_fix():
     from springmodel.model import SpringModel
 
-    scene = scene_from_dict(cantilever())
+    scene = scene_from_dict(cantilever(element="seed"))
     report = inspect_scene(scene)
     n_bad = int(np.sum(SpringModel(scene).elements.mismatch > MISMATCH_WARN))
     assert n_bad == report["tets"]  # every six-split tet: mismatch ~0.58, far above 0.1%
     (line,) = report["warnings"]
     assert f"{n_bad} of {report['tets']} tets" in line and len(line) < 250  # the former ran to 400
-    for fix in ('volume = "axes"', 'torsion = "energy"', 'calibration = "exact"'):
+    for fix in (
+        'element = "exact"',
+        'volume = "axes"',
+        'torsion = "energy"',
+        'calibration = "exact"',
+    ):
         assert fix in line
     assert "Frobenius" in report["calibration_mismatch_norm"]
 
@@ -47,6 +52,8 @@ def test_exact_options_do_not_warn():
     report = inspect_scene(scene_from_dict(d))
     assert report["calibration_mismatch_max"] < 1e-12
     assert report["warnings"] == []
+    default = inspect_scene(scene_from_dict(cantilever()))  # the default element is exact
+    assert default["calibration_mismatch_max"] < 1e-12 and default["warnings"] == []
 
 
 def test_transverse_material_asks_for_coupling():

@@ -6,6 +6,8 @@ study runs in seconds.
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -55,19 +57,19 @@ def accuracy_out(scene_file, tmp_path_factory):
 
 
 def test_accuracy_on_a_gmsh_scene(accuracy_out):
-    """On an unstructured gmsh mesh the exact element matches P1 neo-Hookean to higher order
-    in the strain (below the max Green-Lagrange strain;
-    docs/theory.rst#the-exact-element-is-the-p1-element: its small-strain element
-    is P1's) while the specification's element, whose volume spring depends on the element shapes,
-    misses
-    by more than 5 %."""
+    """On an unstructured gmsh mesh a scene with no ``[spring]`` section gets the exact
+    element, which matches P1 neo-Hookean to higher order in the strain (below the max
+    Green-Lagrange strain; docs/theory.rst#the-exact-element-is-the-p1-element: its
+    small-strain element is P1's), and the findings say that it is the exact element."""
     code, out = accuracy_out
     assert code == 0
     e = pd.read_csv(out / "accuracy" / "accuracy_errors.csv").set_index("scene")
     assert list(e.index) == ["gbox"]
     strain = e.at["gbox", "max strain (ref)"]
     assert e.at["gbox", "exact model nh err L2"] < strain
-    assert e.at["gbox", "model err L2"] > 0.05
+    assert e.at["gbox", "model nh err L2"] == pytest.approx(e.at["gbox", "exact model nh err L2"])
+    findings = " ".join(json.loads((out / "accuracy" / "output.json").read_text())["findings"])
+    assert "is the exact element" in findings and "drops from" not in findings
     assert (out / "accuracy" / "error_field_gbox.png").read_bytes()[:4] == b"\x89PNG"
 
 
