@@ -95,9 +95,13 @@ def report_findings(
 def peer_findings(e: pd.DataFrame) -> list[str]:
     """One sentence per plug-in model (``<name> total err L2`` columns): its total error
     per scene beside the same-mesh P1's (and against P1-NH, the finite-strain P1)."""
+    from .. import models
+
     out = []
-    for col in [c for c in e.columns if c.endswith(" total err L2") and c != "total err L2"]:
-        name = col.removesuffix(" total err L2")
+    for name in [m.name for m in models.sync_plugins()]:
+        col = f"{name} total err L2"
+        if col not in e.columns:
+            continue
         parts = []
         for scene, row in e.iterrows():
             if not np.isfinite(row[col]):
