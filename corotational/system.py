@@ -223,9 +223,9 @@ class Corotational:
                     dsig = stress(0.5 * (A + A.transpose(0, 2, 1)), self.D)
                     dP = np.einsum("kij,kjl->kil", R, dsig)
                 # f_b = -V dP g_b  ->  K[:, (b, i), (a, d)] = V (dP g_b)_i
-                Ke[:, :, 3 * a + d] = (self.V[:, None, None] * np.einsum("kil,kbl->kbi", dP, g)).reshape(
-                    m, 12
-                )
+                Ke[:, :, 3 * a + d] = (
+                    self.V[:, None, None] * np.einsum("kil,kbl->kbi", dP, g)
+                ).reshape(m, 12)
         return Ke
 
     def stiffness(self, x: np.ndarray, scale: float = 1.0) -> sp.csr_matrix | None:

@@ -49,7 +49,9 @@ def main() -> None:
     e = metrics.relative_l2_error(rows["corotational"].u, rows["P2-NH"].u)
     e1 = metrics.relative_l2_error(rows["P1-NH"].u, rows["P2-NH"].u)
     print(f"  against P2-NH: corotational {e:.3f}, P1-NH {e1:.3f}")
-    mild = load_scene_with("studies/scenes/cantilever-large-rotation.toml", ["load.0.value=[0, 0, -1.0]"])
+    mild = load_scene_with(
+        "studies/scenes/cantilever-large-rotation.toml", ["load.0.value=[0, 0, -1.0]"]
+    )
     static_rows(mild, ["P1-NH", "corotational", "corotational-warped"], "P1-NH")
     small = load_scene("cantilever")
     static_rows(small, ["P1", "corotational", "P2"], "P1")

@@ -126,11 +126,15 @@ def test_forces_are_r_k_rt_of_the_linear_element(gmsh_scene):
     Vt[:, 2, :] *= np.linalg.det(Vt)[:, None]
     R = U @ Vt
     local = np.einsum("kji,kaj->kai", R, Y) - X  # R^T x - X per node
-    fe = -np.einsum("kij,kaj->kai", R, np.einsum("kij,kj->ki", Ke, local.reshape(-1, 12)).reshape(-1, 4, 3))
+    fe = -np.einsum(
+        "kij,kaj->kai", R, np.einsum("kij,kj->ki", Ke, local.reshape(-1, 12)).reshape(-1, 4, 3)
+    )
     f = np.zeros_like(x)
     np.add.at(f, s.tets, fe)
     np.testing.assert_allclose(s.internal(x), f, atol=1e-10 * np.abs(f).max())
-    np.testing.assert_allclose(forces_numpy(x, s.tets, s.G, s.V, s.D), f, atol=1e-10 * np.abs(f).max())
+    np.testing.assert_allclose(
+        forces_numpy(x, s.tets, s.G, s.V, s.D), f, atol=1e-10 * np.abs(f).max()
+    )
 
 
 def test_small_strain_tangent_is_linear_p1(gmsh_scene):
@@ -196,7 +200,9 @@ def test_consistent_tangent_is_the_force_derivative(law):
 def test_an_inverted_element_is_pushed_back():
     """One tet with its apex pushed through the opposite face: the apex's force points back
     through the face (Irving's sign fix), and the element energy is larger than at rest."""
-    mesh = TetMesh(np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]), np.array([[0, 1, 2, 3]]))
+    mesh = TetMesh(
+        np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]), np.array([[0, 1, 2, 3]])
+    )
     scene = scene_from_dict({"mesh": mesh, "material": ISOTROPIC})
     s = Corotational(scene)
     x = s.x0.copy()
@@ -260,8 +266,10 @@ def test_refusals_are_one_line():
     with pytest.raises(InputError, match="guccione"):
         Corotational(scene)
     with pytest.raises(InputError, match="tangent"):
-        Corotational(_scene({"generator": "box", "size": [1, 1, 1], "divisions": [1, 1, 1]}),
-                     tangent="secant")  # type: ignore[arg-type]
+        Corotational(
+            _scene({"generator": "box", "size": [1, 1, 1], "divisions": [1, 1, 1]}),
+            tangent="secant",
+        )  # type: ignore[arg-type]
 
 
 def test_isotropic_matrix_of_the_kernel_is_the_cores():

@@ -4,7 +4,6 @@ linearity of small-strain FEM and beam theory."""
 import pytest
 
 from studies import models
-
 from studies.study_stability.cases import (
     VERSION,
     bar,

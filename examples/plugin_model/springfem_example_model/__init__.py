@@ -75,5 +75,6 @@ def _applies(scene):
 
 
 #: The plug-in (what the entry point names).
-MODEL = SystemModel("example-p1", "example plug-in: linear P1 in numpy", LinearP1,
-                    applies=_applies, law="linear")
+MODEL = SystemModel(
+    "example-p1", "example plug-in: linear P1 in numpy", LinearP1, applies=_applies, law="linear"
+)
