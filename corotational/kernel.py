@@ -25,12 +25,14 @@ True
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit
 
 from .polar import polar_rotation, rotations
 
-_FLAGS = {"cache": True, "error_model": "numpy", "fastmath": {"contract"}}
+_FLAGS: dict[str, Any] = {"cache": True, "error_model": "numpy", "fastmath": {"contract"}}
 
 
 def shape_gradients(points: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -30,11 +30,12 @@ True
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
 
-_FLAGS = {"cache": True, "error_model": "numpy"}
+_FLAGS: dict[str, Any] = {"cache": True, "error_model": "numpy"}
 #: Jacobi sweeps at most (each sweep three rotations; 4-5 reach round-off from any F).
 SWEEPS = 20
 
