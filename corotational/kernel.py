@@ -196,3 +196,121 @@ def force_kernel(x, tets, G, V, D, per_element, out):  # pragma: no cover - comp
                 total += fa
             out[i0, i] -= total
     return bad
+
+
+@njit(**_FLAGS)
+def tangent_kernel(x, tets, G, V, D, per_element, warped, Ke):  # pragma: no cover - compiled
+    """Element tangents ``-d f_e / d x_e`` into ``Ke (m, 12, 12)`` (DOF ``3 node + comp``):
+    the consistent tangent, or with ``warped`` the warped stiffness ``R K_e R^T``
+    (:mod:`corotational.system` gives the formulas; its numpy form is the oracle)."""
+    F = np.empty((3, 3))
+    R = np.empty((3, 3))
+    S = np.empty((3, 3))
+    W = np.empty((4, 3, 3))
+    sig = np.empty((3, 3))
+    g = np.empty((4, 3))
+    A = np.empty((3, 3))
+    Hi = np.empty((3, 3))
+    Wk = np.empty((3, 3))
+    dS = np.empty((3, 3))
+    ds = np.empty((3, 3))
+    M = np.empty((3, 3))
+    dP = np.empty((3, 3))
+    e = np.empty(6)
+    sv = np.empty(6)
+    for k in range(tets.shape[0]):
+        i0 = tets[k, 0]
+        for r in range(3):
+            for c in range(3):
+                s = 0.0
+                for a in range(3):
+                    s += (x[tets[k, a + 1], r] - x[i0, r]) * G[k, a, c]
+                F[r, c] = s
+        for c in range(3):
+            g[0, c] = -(G[k, 0, c] + G[k, 1, c] + G[k, 2, c])
+            for a in range(3):
+                g[a + 1, c] = G[k, a, c]
+        polar_rotation(F, R, W)
+        for i in range(3):
+            for j in range(3):
+                S[i, j] = R[0, i] * F[0, j] + R[1, i] * F[1, j] + R[2, i] * F[2, j]
+        d = k if per_element else 0
+        # sigma = C : (sym S - I)
+        e[0], e[1], e[2] = S[0, 0] - 1.0, S[1, 1] - 1.0, S[2, 2] - 1.0
+        e[3], e[4], e[5] = S[1, 2] + S[2, 1], S[0, 2] + S[2, 0], S[0, 1] + S[1, 0]
+        for i in range(6):
+            t = 0.0
+            for j in range(6):
+                t += D[d, i, j] * e[j]
+            sv[i] = t
+        sig[0, 0], sig[1, 1], sig[2, 2] = sv[0], sv[1], sv[2]
+        sig[1, 2] = sig[2, 1] = sv[3]
+        sig[0, 2] = sig[2, 0] = sv[4]
+        sig[0, 1] = sig[1, 0] = sv[5]
+        # H = tr S I - S and its inverse (zero where singular: no rotation derivative)
+        tr = S[0, 0] + S[1, 1] + S[2, 2]
+        h00, h11, h22 = tr - S[0, 0], tr - S[1, 1], tr - S[2, 2]
+        h01, h02, h12 = (
+            -0.5 * (S[0, 1] + S[1, 0]),
+            -0.5 * (S[0, 2] + S[2, 0]),
+            -0.5 * (S[1, 2] + S[2, 1]),
+        )
+        c00 = h11 * h22 - h12 * h12
+        c01 = h02 * h12 - h01 * h22
+        c02 = h01 * h12 - h02 * h11
+        det = h00 * c00 + h01 * c01 + h02 * c02
+        use_w = (not warped) and abs(det) > 1e-12 * abs(tr) ** 3
+        if use_w:
+            Hi[0, 0], Hi[0, 1], Hi[0, 2] = c00 / det, c01 / det, c02 / det
+            Hi[1, 1] = (h00 * h22 - h02 * h02) / det
+            Hi[1, 2] = (h01 * h02 - h00 * h12) / det
+            Hi[2, 2] = (h00 * h11 - h01 * h01) / det
+            Hi[1, 0], Hi[2, 0], Hi[2, 1] = Hi[0, 1], Hi[0, 2], Hi[1, 2]
+        v = V[k]
+        for a in range(4):
+            for dd in range(3):
+                for i in range(3):  # A = R^T (e_dd (x) g_a) = R[dd] (x) g_a
+                    for j in range(3):
+                        A[i, j] = R[dd, i] * g[a, j]
+                if use_w:
+                    r0 = A[2, 1] - A[1, 2]
+                    r1 = A[0, 2] - A[2, 0]
+                    r2 = A[1, 0] - A[0, 1]
+                    w0 = Hi[0, 0] * r0 + Hi[0, 1] * r1 + Hi[0, 2] * r2
+                    w1 = Hi[1, 0] * r0 + Hi[1, 1] * r1 + Hi[1, 2] * r2
+                    w2 = Hi[2, 0] * r0 + Hi[2, 1] * r1 + Hi[2, 2] * r2
+                else:
+                    w0 = w1 = w2 = 0.0
+                Wk[0, 0], Wk[0, 1], Wk[0, 2] = 0.0, -w2, w1
+                Wk[1, 0], Wk[1, 1], Wk[1, 2] = w2, 0.0, -w0
+                Wk[2, 0], Wk[2, 1], Wk[2, 2] = -w1, w0, 0.0
+                for i in range(3):
+                    for j in range(3):
+                        dS[i, j] = A[i, j] - (
+                            Wk[i, 0] * S[0, j] + Wk[i, 1] * S[1, j] + Wk[i, 2] * S[2, j]
+                        )
+                e[0], e[1], e[2] = dS[0, 0], dS[1, 1], dS[2, 2]
+                e[3], e[4], e[5] = dS[1, 2] + dS[2, 1], dS[0, 2] + dS[2, 0], dS[0, 1] + dS[1, 0]
+                for i in range(6):
+                    t = 0.0
+                    for j in range(6):
+                        t += D[d, i, j] * e[j]
+                    sv[i] = t
+                ds[0, 0], ds[1, 1], ds[2, 2] = sv[0], sv[1], sv[2]
+                ds[1, 2] = ds[2, 1] = sv[3]
+                ds[0, 2] = ds[2, 0] = sv[4]
+                ds[0, 1] = ds[1, 0] = sv[5]
+                for i in range(3):  # M = W sigma + d sigma, dP = R M
+                    for j in range(3):
+                        M[i, j] = (
+                            Wk[i, 0] * sig[0, j] + Wk[i, 1] * sig[1, j] + Wk[i, 2] * sig[2, j]
+                        ) + ds[i, j]
+                for i in range(3):
+                    for j in range(3):
+                        dP[i, j] = R[i, 0] * M[0, j] + R[i, 1] * M[1, j] + R[i, 2] * M[2, j]
+                col = 3 * a + dd
+                for b in range(4):
+                    for i in range(3):
+                        Ke[k, 3 * b + i, col] = v * (
+                            dP[i, 0] * g[b, 0] + dP[i, 1] * g[b, 1] + dP[i, 2] * g[b, 2]
+                        )

@@ -42,7 +42,15 @@ from springfem.materials import material_matrix
 from springfem.materials.tissue import TISSUE_LAWS
 from springfem.scene import Scene
 
-from .kernel import VOIGT, force_kernel, gradients, isotropic_d, shape_gradients, stress
+from .kernel import (
+    VOIGT,
+    force_kernel,
+    gradients,
+    isotropic_d,
+    shape_gradients,
+    stress,
+    tangent_kernel,
+)
 from .polar import rotations
 
 Tangent = Literal["consistent", "warped"]
@@ -179,10 +187,37 @@ class Corotational:
     # -- tangent -------------------------------------------------------------------------
     def _pattern(self) -> tuple[np.ndarray, np.ndarray]:
         dofs = (3 * self.tets[:, :, None] + np.arange(3)).reshape(-1, 12)
-        return np.repeat(dofs, 12, axis=1).ravel(), np.tile(dofs, (1, 12)).ravel()
+        rows, cols = np.repeat(dofs, 12, axis=1).ravel(), np.tile(dofs, (1, 12)).ravel()
+        n = 3 * self.n_points
+        # the CSR pattern once; each tangent sums its element entries into it (bincount)
+        keys, self._slot = np.unique(rows * n + cols, return_inverse=True)
+        indptr = np.searchsorted(keys // n, np.arange(n + 1))
+        self._csr = (keys % n, indptr)
+        return rows, cols
 
     def element_tangents(self, x: np.ndarray, tangent: Tangent | None = None) -> np.ndarray:
-        """Element tangents ``-d f_e / d x_e`` ``(m, 12, 12)`` (DOFs ``3 node + component``).
+        """Element tangents ``-d f_e / d x_e`` ``(m, 12, 12)`` (DOFs ``3 node + component``),
+        from the compiled kernel (:func:`corotational.kernel.tangent_kernel`).
+
+        Parameters
+        ----------
+        x
+            Positions ``(n, 3)``.
+        tangent
+            ``consistent`` or ``warped`` (default: the system's).
+
+        Returns
+        -------
+        ndarray
+        """
+        x = np.ascontiguousarray(x, dtype=np.float64).reshape(self.n_points, 3)
+        Ke = np.empty((self.n_elements, 12, 12))
+        warped = (tangent or self.tangent) == "warped"
+        tangent_kernel(x, self.tets, self.G, self.V, self.D, self._per_element, warped, Ke)
+        return Ke
+
+    def element_tangents_numpy(self, x: np.ndarray, tangent: Tangent | None = None) -> np.ndarray:
+        """The same element tangents in numpy (the kernel's oracle).
 
         Parameters
         ----------
@@ -233,11 +268,10 @@ class Corotational:
         then take a finite-difference Jacobian)."""
         if self._follower:
             return None
-        Ke = self.element_tangents(np.asarray(x, dtype=float).reshape(self.n_points, 3))
+        Ke = self.element_tangents(x)
         n = 3 * self.n_points
-        K = sp.csr_matrix((Ke.ravel(), (self._rows, self._cols)), shape=(n, n))
-        K.sum_duplicates()
-        return K
+        data = np.bincount(self._slot, weights=Ke.ravel(), minlength=self._csr[0].size)
+        return sp.csr_matrix((data, *self._csr), shape=(n, n))
 
     def element_nodes(self) -> np.ndarray:
         return self.tets

@@ -282,3 +282,12 @@ def test_docstring_examples(name):
     module = importlib.import_module("corotational" + ("" if name == "__init__" else f".{name}"))
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.failed == 0 and result.attempted > 0
+
+
+@pytest.mark.parametrize("tangent", ["consistent", "warped"])
+def test_compiled_tangent_is_the_numpy_one(gmsh_scene, tangent):
+    """The compiled element tangents (what stiffness() assembles) equal the numpy ones."""
+    s = Corotational(gmsh_scene, tangent=tangent)
+    x = _deformed(s, 0.03, seed=9)
+    a, b = s.element_tangents(x), s.element_tangents_numpy(x)
+    np.testing.assert_allclose(a, b, atol=1e-12 * np.abs(b).max())
