@@ -83,8 +83,9 @@ class Verdict:
         simulated second, what it solves against the reference's law, and whether it is
         within the tolerance.
     static_pick, dynamic_pick
-        The cheapest model within the tolerance for static solves and for explicit
-        dynamics (``None``: none qualifies).
+        The cheapest model within the tolerance for static solves (the reference when no
+        other model within it is cheaper) and for explicit dynamics (``None``: none
+        qualifies).
     sentence
         The answer in words (:func:`verdict_sentence`).
     notes
@@ -319,8 +320,10 @@ def verdict(
             }
         )
     table = pd.DataFrame(rows)
+    # the reference competes too (a model within the tolerance but dearer is no answer);
+    # the rows that are the same solve as the reference are the reference
     same_as_ref = table["model"].map(lambda n: alias.get(n, n) == alias.get(ref, ref))
-    ok = table[table["within tolerance"] & ~same_as_ref]
+    ok = table[table["within tolerance"] & (~same_as_ref | (table["model"] == ref))]
     static_pick = _cheapest(ok, "static time (s)")
     dynamic_pick = _cheapest(ok, "cost per simulated s")
     sentence = verdict_sentence(table, ref, tolerance, static_pick, dynamic_pick)
@@ -449,7 +452,7 @@ For explicit dynamics spring-exact (small-strain calibration, not the reference'
     within = f"within {_pct(tol)} of {ref}"
     if not ref:
         return "No FEM reference finished: no error, no verdict."
-    if static_pick:
+    if static_pick and static_pick != ref:
         r = t.loc[static_pick]
         ratio = r["static time (s)"] / t.at[ref, "static time (s)"]
         in_time = f", in {ratio:.2g}× the reference's time" if np.isfinite(ratio) else ""
@@ -459,16 +462,17 @@ For explicit dynamics spring-exact (small-strain calibration, not the reference'
         )
     else:
         others = t[(t["rel L2 error"] > 0) & np.isfinite(t["rel L2 error"])]
-        closest = (
-            f" (closest: {others['rel L2 error'].idxmin()}, "
-            f"{_pct(others['rel L2 error'].min())} off)"
-            if not others.empty
-            else ""
-        )
-        first = (
-            f"{ref}, the reference, is the cheapest static solve {within}: no other model "
-            f"is{closest}."
-        )
+        good = others[others["rel L2 error"] <= tol]
+        if not good.empty:  # within it, but dearer than the reference
+            n = good["static time (s)"].idxmin()
+            ratio = good.at[n, "static time (s)"] / t.at[ref, "static time (s)"]
+            rest = f"{n} ({_pct(good.at[n, 'rel L2 error'])} off) takes {ratio:.2g}× its time"
+        elif not others.empty:
+            n = others["rel L2 error"].idxmin()
+            rest = f"no other model is (closest: {n}, {_pct(others.at[n, 'rel L2 error'])} off)"
+        else:
+            rest = "no other model is"
+        first = f"{ref}, the reference, is the cheapest static solve {within}: {rest}."
     if not dynamic_pick:
         return first
     r = t.loc[dynamic_pick]
@@ -476,6 +480,8 @@ For explicit dynamics spring-exact (small-strain calibration, not the reference'
     vs = ""
     if dynamic_pick != "P1" and "P1" in t.index and np.isfinite(t.at["P1", "cost per simulated s"]):
         vs = f", {cost / t.at['P1', 'cost per simulated s']:.3g}× explicit P1's"
+    if dynamic_pick == static_pick:
+        return f"{first} For explicit dynamics it is too: {cost:.3g} s per simulated second{vs}."
     return (
         f"{first} For explicit dynamics {dynamic_pick}{_unlike(r)} is: "
         f"{_pct(r['rel L2 error'])} off, {cost:.3g} s per simulated second{vs}."
