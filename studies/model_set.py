@@ -210,6 +210,8 @@ def formulation_notes(scene: Scene, names: Sequence[str]) -> list[str]:
         m = models.get(n)
         if m.kind != "fem" or m.law == "scene" or m.applies(scene) is not None:
             continue
+        if m.order == 1 and scene.material.law in TISSUE_LAWS:
+            continue  # a tissue law's P1 is displacement P1 with a penalty (fem_laws.tissue_note)
         form = FemOptions.of(m.fem_settings(scene)[0]).formulation
         if form != own:
             changed.append((n, form, m.order))

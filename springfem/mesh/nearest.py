@@ -10,7 +10,7 @@ element of the mesh and refuse one farther out.
 Examples
 --------
 >>> import numpy as np
->>> from springfem.mesh import box_mesh
+>>> from springfem.mesh.generate import box_mesh
 >>> m = box_mesh((1.0, 1.0, 1.0), (2, 2, 2))
 >>> near = nearest_boundary_point(m, np.array([1.1, 0.5, 0.25]))
 >>> near.point.round(12).tolist(), round(near.distance, 12)
