@@ -67,7 +67,6 @@ def default_density(units: str = "SI") -> float:
     return DEFAULT_DENSITY / DENSITY_UNITS[units]
 
 
-
 @dataclass(frozen=True)
 class Material:
     """Material parameters (SI units). Isotropic constants are derived where possible.
