@@ -8,7 +8,9 @@ Its output (sentences, figures, the ``springfem compare`` command) is in
 
 The models are those of :mod:`studies.models` (``spring``, ``P1``, ``P2``, and ``P1-NH``,
 ``P2-NH`` when the scene's law is neo-Hookean or its strains are large,
-:data:`LARGE_STRAIN`; never for a tissue law); any registered model may be asked for.
+:data:`LARGE_STRAIN`; never for a tissue law; on a nearly incompressible scene the
+locking-free methods too, with P2/P1 mixed as the reference of a hyperelastic law:
+:mod:`studies.model_set`); any registered model may be asked for.
 """
 
 from __future__ import annotations
@@ -25,6 +27,13 @@ from springfem.scene import Scene
 
 from . import metrics
 from .fem_laws import is_tissue, tissue_note
+from .model_set import (
+    formulation_notes,
+    locking_free_models,
+    locking_note,
+    mixed_reference,
+    same_solves,
+)
 from .models import get as get_model
 from .models import run as run_model
 from .partial import partial_row
@@ -33,7 +42,7 @@ from .solve import Solution
 #: The models a comparison runs by default (neo-Hookean ones when strains are large).
 MODELS = ("spring", "P1", "P2", "P1-NH", "P2-NH")
 
-REFERENCE_PREFERENCE = ("P2-NH", "P2", "P1-NH", "P1", "fem")
+REFERENCE_PREFERENCE = ("fem-P2-mixed", "P2-NH", "P2", "P1-NH", "P1", "fem")
 LARGE_STRAIN = 0.05  # max |principal Green-Lagrange strain| of the P1 linear solution
 COMPONENTS = "xyz"
 
@@ -81,7 +90,10 @@ class Comparison:
     @property
     def same_mesh_p1(self) -> str | None:
         """The P1 solution with the reference's law (for the spring model's *model* error)."""
-        name = "P1-NH" if self.reference.endswith("-NH") else "P1"
+        nh = self.reference.endswith("-NH") or (
+            self.reference == "fem-P2-mixed" and self.scene.material.law == "neo-hookean"
+        )
+        name = "P1-NH" if nh else "P1"
         return name if name in self.solutions else None
 
     def error_field(self, name: str, against: str | None = None) -> np.ndarray:
@@ -206,8 +218,17 @@ def compare_scene(
         else:
             notes.append(f"small strains (max {strain:.2%} <= {strain_limit:.0%}): linear FEM")
         models = ["spring", "P1", "P2"] + (["P1-NH", "P2-NH"] if nh else [])
+        models += [n for n in locking_free_models(scene) if n not in models]
+        same = same_solves(scene, models)
+        models = [n for n in models if n not in same]  # e.g. P2 of a mixed tissue scene
+        weighed = [n for n in locking_free_models(scene) if n in models or n in same]
+        if weighed:
+            ref = mixed_reference(scene)
+            name = same.get(ref, ref) if ref else "P2"
+            notes.append(locking_note(scene, weighed, name, mixed=ref is not None))
     else:
         models = [get_model(n).name for n in models]  # one spelling, whatever was typed
+    notes += formulation_notes(scene, models)
     for name in models:  # validate names before any expensive solve
         why = get_model(name).applies(scene)
         if why is not None:
@@ -216,7 +237,7 @@ def compare_scene(
         if name not in solutions and name not in failures:
             run(name)
     solutions = {n: solutions[n] for n in models if n in solutions}  # table order
-    reference = choose_reference(models, solutions, failures, notes)
+    reference = choose_reference(models, solutions, failures, notes, tissue=is_tissue(scene))
     if asked and reference:
         notes.append(
             f"reference: {reference}, the finest FEM of the models asked for "
@@ -247,13 +268,18 @@ def compare_scene(
 
 
 def choose_reference(
-    models: Sequence[str], solutions: dict, failures: dict[str, str], notes: list[str]
+    models: Sequence[str],
+    solutions: dict,
+    failures: dict[str, str],
+    notes: list[str],
+    tissue: bool = False,
 ) -> str | None:
     """The reference: the finest solution of the strongest law that was run.
 
-    A neo-Hookean reference that failed is replaced only by the other neo-Hookean one (P1
-    for P2, said in a note), never by a small-strain solution; with none left the
-    reference is ``None`` and a note says why.
+    P2/P1 mixed (``fem-P2-mixed``, the scene's own law) comes first. A finite-strain
+    reference that failed is replaced only by another finite-strain one (P2-NH, then P1-NH;
+    on a tissue scene P2 and P1, which solve the tissue law; said in a note), never by a
+    small-strain solution; with none left the reference is ``None`` and a note says why.
 
     Parameters
     ----------
@@ -263,6 +289,8 @@ def choose_reference(
         Their outcomes.
     notes
         Appended to.
+    tissue
+        The scene's law is a tissue law (P1 and P2 solve it).
 
     Returns
     -------
@@ -276,7 +304,9 @@ def choose_reference(
     >>> notes[-1][:45]
     'no finite-strain reference: P1-NH and P2-NH f'
     """
-    finite = [n for n in ("P2-NH", "P1-NH") if n in models]
+    finite = [n for n in ("fem-P2-mixed", "P2-NH", "P1-NH") if n in models]
+    if finite and tissue:
+        finite += [n for n in ("P2", "P1") if n in models]
     pool = finite or [n for n in REFERENCE_PREFERENCE if n in models]
     intended = pool[0] if pool else None
     reference = next((n for n in pool if n in solutions), None)

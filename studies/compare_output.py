@@ -122,7 +122,8 @@ MAX_DRAWN_ERROR = 0.5  # small-strain solutions further off than this are not dr
 def figure_fields(
     fields: dict[str, np.ndarray], reference: str
 ) -> tuple[dict[str, np.ndarray], str | None]:
-    """The fields worth drawing next to a neo-Hookean reference, and a note on the rest.
+    """The fields worth drawing next to a finite-strain reference (neo-Hookean, P2/P1
+    mixed), and a note on the rest.
 
     Small-strain P1/P2 solutions whose largest nodal error exceeds
     :data:`MAX_DRAWN_ERROR` × the largest reference displacement are left out (their
@@ -141,7 +142,7 @@ def figure_fields(
     tuple
         The fields to draw, and a note naming the omitted ones (``None`` if none).
     """
-    if not reference.endswith("-NH"):
+    if not (reference.endswith("-NH") or reference == "fem-P2-mixed"):
         return dict(fields), None
     ref = fields[reference]
     omitted = [

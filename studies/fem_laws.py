@@ -74,6 +74,113 @@ def p1_penalty(scene: Scene) -> float:
     return kappa if kappa > 0.0 else float(scene.material.kappa)
 
 
+#: The laws the u–p formulations (``mixed``, ``mini``) take: the hyperelastic ones.
+HYPERELASTIC = ("neo-hookean", *TISSUE_LAWS)
+#: Formulations of linear tets only, and of P2 only.
+LINEAR_TET_FORMULATIONS = ("nodal-volume", "nodal-strain", "mini")
+
+
+def fitting_formulation(formulation: str, order: int | None, law: str) -> str:
+    """The scene's ``[fem] formulation``, or the nearest one that an FEM model of ``order``
+    and ``law`` can solve.
+
+    A P1 model of a ``mixed`` (P2/P1) scene gets the P1 u–p pair (``mini``) for a
+    hyperelastic law, else the nodal-strain tet (the locking-free linear tet that takes a
+    small-strain law); a P2 model of a linear-tet scene (``nodal-volume``, ``nodal-strain``,
+    ``mini``) gets ``mixed`` for a hyperelastic law, else the displacement formulation.
+
+    Parameters
+    ----------
+    formulation
+        The scene's ``[fem] formulation``.
+    order
+        The model's order (``None``: the scene's, which fits by construction).
+    law
+        The law the model solves (``linear``, ``neo-hookean``, a tissue law, ...).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> fitting_formulation("mixed", 1, "neo-hookean"), fitting_formulation("mixed", 1, "linear")
+    ('mini', 'nodal-strain')
+    >>> fitting_formulation("nodal-strain", 2, "guccione")
+    'mixed'
+    >>> fitting_formulation("mixed", 2, "linear")
+    'displacement'
+    """
+    hyper = law.split("/")[0] in HYPERELASTIC
+    if order == 1 and formulation == "mixed":
+        return "mini" if hyper else "nodal-strain"
+    if order == 2 and formulation in LINEAR_TET_FORMULATIONS:
+        return "mixed" if hyper else "displacement"
+    if not hyper and formulation in ("mixed", "mini"):
+        return "nodal-strain" if order != 2 else "displacement"
+    return formulation
+
+
+def fitted_scene(scene: Scene, order: int | None, law: str) -> Scene:
+    """``scene`` with the ``[fem] formulation`` an FEM model of ``order`` and ``law`` solves
+    (:func:`fitting_formulation`; the scene itself when its own fits).
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    order, law
+        The model's.
+
+    Returns
+    -------
+    Scene
+    """
+    fem = FemOptions.of(scene)
+    form = fitting_formulation(fem.formulation, order, law)
+    if form == fem.formulation:
+        return scene
+    return scene.with_options(fem=replace(fem, formulation=form))  # type: ignore[arg-type]
+
+
+def formulation_problem(scene: Scene, formulation: str, model_law: str) -> str | None:
+    """Why an FEM model with ``[fem] formulation`` cannot solve ``scene``'s law (``None``:
+    it can).
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    formulation
+        The model's formulation.
+    model_law
+        The model's law setting (``scene``, ``neo-hookean`` or ``small-strain``).
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> from springfem.scene import load_scene
+    >>> formulation_problem(load_scene("cantilever"), "mini", "scene")
+    'formulation mini needs a hyperelastic law (neo-hookean, guccione, holzapfel-ogden), not linear'
+    """
+    law = scene.material.law
+    if model_law == "neo-hookean":
+        law = "neo-hookean"
+    elif model_law == "small-strain" and law not in TISSUE_LAWS:
+        law = linear_law(scene)
+    if formulation in ("mixed", "mini") and law not in HYPERELASTIC:
+        return (
+            f"formulation {formulation} needs a hyperelastic law ({', '.join(HYPERELASTIC)}), "
+            f"not {law}"
+        )
+    if formulation in ("nodal-volume", "nodal-strain") and law == "transverse-linear":
+        return f"formulation {formulation} needs an isotropic or hyperelastic law, not {law}"
+    return None
+
+
 def tissue_scene(scene: Scene, order: int | None) -> Scene:
     """The scene a tissue FEM model of ``order`` solves.
 
@@ -94,7 +201,8 @@ def tissue_scene(scene: Scene, order: int | None) -> Scene:
     """
     fem = FemOptions.of(scene)
     if order == 2:
-        return scene.with_options(fem=replace(fem, order=2))
+        form = fitting_formulation(fem.formulation, 2, scene.material.law)
+        return scene.with_options(fem=replace(fem, order=2, formulation=form))
     mat = scene.material
     params = {**mat.parameters, "kappa": p1_penalty(scene)}
     p1 = replace(scene, material=replace(mat, parameters=params, incompressible=False))

@@ -19,9 +19,12 @@ True
 
 from __future__ import annotations
 
-from springfem.scene import UNIT_SYSTEMS, Material, Scene
+from springfem.scene import LENGTH_UNITS, UNIT_SYSTEMS, Material, Scene
 
 E_RANGE = (10.0, 1.0e9)  # Pa
+#: Bodies of soft tissue (a cell sheet to a torso) are 0.1 mm to 10 m across: a size
+#: outside is almost surely a length unit slip (a mesh in mm read as metres).
+SIZE_RANGE = (1.0e-4, 10.0)  # m
 
 
 def modulus_warning(material: Material, units: str = "SI") -> str | None:
@@ -51,6 +54,40 @@ def modulus_warning(material: Material, units: str = "SI") -> str | None:
                 "tissue: check the units" + ("" if scale == 1.0 else f" (the scene's: {units})")
             )
     return None
+
+
+def size_warning(scene: Scene) -> str | None:
+    """A line when the body's size (its bounding-box diagonal, in m through the scene's
+    ``units``) is outside :data:`SIZE_RANGE`.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> from springfem.scene import scene_from_dict
+    >>> mesh = {"generator": "box", "size": [40.0, 20.0, 20.0], "divisions": [1, 1, 1]}
+    >>> s = scene_from_dict({"mesh": mesh, "material": {"law": "linear", "E": 5e3, "nu": 0.3}})
+    >>> size_warning(s)[:50]
+    'the body is 49 m across (units = "SI"), outside 0.'
+    >>> size_warning(scene_from_dict({**s.raw, "units": "mm-kPa"})) is None  # 49 mm
+    True
+    """
+    lo, hi = scene.mesh.bounding_box()
+    size = float(((hi - lo) ** 2).sum() ** 0.5) * LENGTH_UNITS[scene.units]
+    low, high = SIZE_RANGE
+    if low <= size <= high:
+        return None
+    return (
+        f'the body is {size:.3g} m across (units = "{scene.units}"), outside {low * 1e3:g} mm '
+        f"– {high:g} m, the size of soft tissue: check the scene's units or mesh.scale"
+    )
 
 
 def locking_warnings(scene: Scene, models: tuple[str, ...] = ("spring", "fem")) -> list[str]:

@@ -70,7 +70,7 @@ from springfem.scene import Scene
 from springfem.scene.reader import suggestion
 from springmodel.options import ANISOTROPIC_LAWS, ELEMENT_KEYS, ELEMENTS
 
-from .fem_laws import linear_law, tissue_scene
+from .fem_laws import fitted_scene, formulation_problem, linear_law, tissue_scene
 from .partial import partial_solution
 from .solve import Solution
 
@@ -162,6 +162,9 @@ class Model:
         if self.kind == "spring" and self.changes.get("stiffening") == "law":
             if scene.material.law not in TISSUE_LAWS:
                 return f'model {self.name}: stiffening = "law" needs a tissue law'
+        if self.kind == "fem" and self.fem.get("formulation"):
+            why = formulation_problem(scene, str(self.fem["formulation"]), self.law)
+            return None if why is None else f"model {self.name}: {why}"
         return None
 
     def spring_options(self, scene: Scene):
@@ -210,11 +213,13 @@ class Model:
             scene = scene.with_options(fem=replace(FemOptions.of(scene), **self.fem))
         if self.law == "scene":
             return scene, self.order, None
+        # the scene's formulation, or the nearest one of this order (fem_laws.fitted_scene)
         if self.law == "neo-hookean":
-            return scene, self.order, "neo-hookean"
+            return fitted_scene(scene, self.order, "neo-hookean"), self.order, "neo-hookean"
         if scene.material.law in TISSUE_LAWS:
             return tissue_scene(scene, self.order), self.order, scene.material.law
-        return scene, self.order, linear_law(scene)
+        law = linear_law(scene)
+        return fitted_scene(scene, self.order, law), self.order, law
 
     def solve(self, scene: Scene, verbose: bool = False) -> Solution:
         """Solve ``scene`` with this model (raises what the model raises).
@@ -501,6 +506,31 @@ P2 = register(Model("P2", "FEM P2", "fem", order=2))
 P1_NH = register(Model("P1-NH", "FEM P1 neo-Hookean", "fem", order=1, law="neo-hookean"))
 P2_NH = register(Model("P2-NH", "FEM P2 neo-Hookean", "fem", order=2, law="neo-hookean"))
 
+# the locking-free methods (docs/volumetric.rst), in the locking study's spelling
+for _name, _label, _order, _form in (
+    ("fem-P1-nodal-volume", "FEM P1, nodal-averaged volume", 1, "nodal-volume"),
+    ("fem-P1-nodal-strain", "FEM P1, nodal-averaged strain", 1, "nodal-strain"),
+    ("fem-MINI", "FEM MINI (P1-bubble / P1)", 1, "mini"),
+    ("fem-P2-mixed", "FEM P2/P1 Taylor–Hood", 2, "mixed"),
+):
+    register(Model(_name, _label, "fem", order=_order, law="scene",
+                   fem={"order": _order, "formulation": _form}))  # fmt: skip
+_NODAL = {"volume_average": "nodal", "strain_average": "nodal"}
+spring_variant(
+    "spring-stabilised",
+    "exact spring element, stabilised nodal strain + nodal volume",
+    coupling=True,
+    element=True,
+    **{**EXACT, **_NODAL},
+)
+spring_variant(
+    "spring-tissue-stabilised",
+    "tissue spring element, stabilised nodal strain + nodal volume",
+    coupling=True,
+    element=True,
+    **{**TISSUE, **_NODAL},
+)
+
 #: The models a verdict weighs on a user's scene: the scene's own spring model, the three
 #: spring elements and the FEM of the scene's law (the torsion variants and the studies'
 #: own variants are the studies' business).
@@ -588,3 +618,16 @@ def plugin_sources() -> list[Path]:
             path = Path(src).parent if Path(src).name == "__init__.py" else Path(src)
             folders.add(path)
     return sorted(folders)
+
+
+#: What a verdict, a comparison and a sweep weigh as well on a nearly incompressible scene
+#: (:func:`springfem.plausibility.nearly_incompressible`): the locking-free P1 tets, the
+#: stabilised spring elements and the P2/P1 mixed reference (docs/studies.rst#the-verdict).
+LOCKING_FREE = (
+    "fem-P1-nodal-strain",
+    "fem-P1-nodal-volume",
+    "fem-MINI",
+    "spring-stabilised",
+    "spring-tissue-stabilised",
+    "fem-P2-mixed",
+)

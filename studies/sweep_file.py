@@ -4,7 +4,9 @@
 
     name = "cantilever-nu"                     # optional; default: the file's stem
     scene = "cantilever"                       # a bundled name or a path relative to this file
-    models = ["spring", "P1", "P2"]            # any model of studies.models ("P1-NH", ...)
+    models = ["spring", "P1", "P2"]            # any model of studies.models ("P1-NH", ...);
+                                               # default: these and, when a case is nearly
+                                               # incompressible, the locking-free ones
     reference = "P2"                           # optional; default: the finest FEM listed
     [grid]                                     # every combination (or [[cases]] tables)
     "material.nu" = [0.3, 0.45]
@@ -38,8 +40,34 @@ from . import models as registry
 from .overrides import apply_overrides, parse_assignment, read_scene_table, scene_with_overrides
 from .scenes import scene_path as bundled
 
-REFERENCE_PREFERENCE = ("P2-NH", "P2", "P1-NH", "P1")
-"""The finest FEM first (P2 before P1; neo-Hookean, valid at any strain, before linear)."""
+REFERENCE_PREFERENCE = ("fem-P2-mixed", "P2-NH", "P2", "P1-NH", "P1")
+"""The finest FEM first (P2/P1 mixed, free of locking, first; P2 before P1; neo-Hookean,
+valid at any strain, before linear)."""
+
+
+def default_locking_free(scenes: Sequence) -> list[str]:
+    """The locking-free models a sweep without ``models`` adds: those of
+    :func:`studies.model_set.locking_free_models` when a case is nearly incompressible,
+    kept if they apply to every case (P2/P1 mixed, added so, becomes the reference).
+
+    Parameters
+    ----------
+    scenes
+        The cases' scenes.
+
+    Returns
+    -------
+    list of str
+    """
+    from .model_set import locking_free_models
+
+    found = [n for s in scenes for n in locking_free_models(s)]
+    return [
+        n
+        for n in registry.LOCKING_FREE
+        if n in found and all(registry.get(n).applies(s) is None for s in scenes)
+    ]
+
 
 TOP_KEYS = ("name", "scene", "models", "reference", "grid", "cases")
 
@@ -165,6 +193,16 @@ def parse_sweep(
         raise fail(f"models: {exc}") from None
     if len(set(models)) != len(models):
         raise fail("models: a model is listed twice")
+    keys, cases = _cases(data, fail)
+    scene_data = apply_overrides(read_scene_table(scene_path), map(parse_assignment, sets or []))
+    scenes = []
+    for case in cases:  # every case's scene is valid before anything is solved
+        try:
+            scenes.append(scene_with_overrides(scene_data, case.items(), path=scene_path))
+        except (SceneError, InputError) as exc:
+            raise InputError(f"{file}: case {_show_case(case)}: {exc}") from None
+    if "models" not in data:
+        models += [n for n in default_locking_free(scenes) if n not in models]
     reference = data.get("reference")
     if reference is None:
         reference = next((m for m in REFERENCE_PREFERENCE if m in models), None)
@@ -179,16 +217,9 @@ def parse_sweep(
             raise fail(f"reference: {reference!r} is not a FEM model")
     if reference not in models:
         models = [*models, reference]
-    keys, cases = _cases(data, fail)
     name = data.get("name", Path(file).stem if path is not None else "sweep")
     if not isinstance(name, str) or not name:
         raise fail("name: must be a non-empty string")
-    scene_data = apply_overrides(read_scene_table(scene_path), map(parse_assignment, sets or []))
-    for case in cases:  # every case's scene is valid before anything is solved
-        try:
-            scene_with_overrides(scene_data, case.items(), path=scene_path)
-        except (SceneError, InputError) as exc:
-            raise InputError(f"{file}: case {_show_case(case)}: {exc}") from None
     return SweepSpec(name, scene_path, scene_data, tuple(models), reference, keys, cases)
 
 

@@ -4,7 +4,8 @@ One idea per module: :mod:`~springfem.mesh.tetmesh` (the :class:`TetMesh` type, 
 quality, boundary facets), :mod:`~springfem.mesh.generate` (box meshes and their splits),
 :mod:`~springfem.mesh.validate` and :mod:`~springfem.mesh.topology` (what is rejected,
 repaired or noted), :mod:`~springfem.mesh.io` (meshio files) and
-:mod:`~springfem.mesh.colouring` (element colouring). Both models use the same
+:mod:`~springfem.mesh.colouring` (element colouring), :mod:`~springfem.mesh.nearest` (the
+nearest boundary point). Both models use the same
 :class:`TetMesh`.
 
 Examples
@@ -19,6 +20,7 @@ Examples
 from .colouring import element_colouring
 from .generate import Split, box_mesh
 from .io import mesh_from_meshio, read_mesh, write_vtu
+from .nearest import NearestPoint, nearest_boundary_point
 from .refine import refine_uniform
 from .tetmesh import (
     TetMesh,
@@ -32,6 +34,7 @@ from .validate import MAX_COORDINATE, SLIVER_QUALITY, validate_mesh
 
 __all__ = [
     "MAX_COORDINATE",
+    "NearestPoint",
     "SLIVER_QUALITY",
     "Split",
     "TetMesh",
@@ -40,6 +43,7 @@ __all__ = [
     "element_colouring",
     "mean_ratio_quality",
     "mesh_from_meshio",
+    "nearest_boundary_point",
     "read_mesh",
     "refine_uniform",
     "tet_volumes",

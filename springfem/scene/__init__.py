@@ -34,6 +34,7 @@ from .types import (
     COMPONENTS,
     FORMULATIONS,
     LAWS,
+    LENGTH_UNITS,
     LOAD_TYPES,
     UNIT_SYSTEMS,
     VOLUMETRIC,
@@ -43,6 +44,7 @@ from .types import (
     Material,
     Probe,
     Scene,
+    default_density,
 )
 
 register_section("output", parse_output)
@@ -57,6 +59,7 @@ __all__ = [
     "COMPONENTS",
     "FORMULATIONS",
     "LAWS",
+    "LENGTH_UNITS",
     "LOAD_TYPES",
     "MAX_INT",
     "MAX_MAGNITUDE",
@@ -75,6 +78,7 @@ __all__ = [
     "SceneError",
     "TableReader",
     "check_mesh_size",
+    "default_density",
     "load_scene",
     "machine_memory",
     "opt_splits",

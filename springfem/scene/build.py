@@ -161,7 +161,7 @@ def scene_from_dict(data: dict, path: str | os.PathLike | None = None) -> Scene:
         material = data["material"]
     else:
         material = parse_material(
-            TableReader(data["material"], "material", file, SECTION_KEYS["material"])
+            TableReader(data["material"], "material", file, SECTION_KEYS["material"]), units
         )
     top.used.add("material")
     frames = parse_axes(TableReader(data.get("axes", {}), "axes", file, SECTION_KEYS["axes"]), mesh)

@@ -21,7 +21,7 @@ import numpy as np
 from .. import axes
 from ..errors import InputError, SceneError
 from ..materials.tissue import TISSUE_LAWS
-from ..mesh import Split, TetMesh, box_mesh, read_mesh
+from ..mesh import Split, TetMesh, box_mesh, nearest_boundary_point, read_mesh
 from ..regions import Region, locate_points, resolve_region
 from .cook import parse_cook
 from .limits import check_mesh_size
@@ -38,6 +38,7 @@ from .types import (
     Load,
     Material,
     Probe,
+    default_density,
 )
 from .ventricle import ELLIPSOID_KEYS, RULE_BASED_KEYS, parse_ellipsoid, parse_rule_based
 
@@ -62,6 +63,12 @@ SECTION_KEYS = {
     "load": ("type", "value", "region"),
     "probe": ("name", "point"),
 }
+
+
+#: A probe outside the mesh by at most this share of the nearest element's size (its mean
+#: edge length) is snapped to the nearest boundary point, with a note; farther out it is
+#: refused.
+SNAP_DISTANCE = 0.5
 
 
 def parse_mesh(r: TableReader, base: Path) -> TetMesh:
@@ -141,7 +148,7 @@ def opt_splits() -> tuple[str, ...]:
     return get_args(Split)
 
 
-def parse_material(r: TableReader) -> Material:
+def parse_material(r: TableReader, units: str = "SI") -> Material:
     """The ``[material]`` section: law, density and elastic constants.
 
     ``E`` and ``nu``, or ``mu`` and ``kappa``, for the isotropic laws; the five
@@ -152,6 +159,9 @@ def parse_material(r: TableReader) -> Material:
     ----------
     r
         Reader over the ``[material]`` table; every error names the file and key.
+    units
+        The scene's unit system: a ``density`` left out is 1000 kg/m³ in it
+        (:func:`~springfem.scene.types.default_density`).
 
     Returns
     -------
@@ -163,7 +173,7 @@ def parse_material(r: TableReader) -> Material:
             "active_tension",
             f"needs a law with fibres ({', '.join(TISSUE_LAWS)}), not law = {law!r}",
         )
-    density = r.get("density", "float", default=1000.0, positive=True)
+    density = r.get("density", "float", default=default_density(units), positive=True)
     kw: dict[str, Any] = {"law": law, "density": density}
     if law == "transverse-linear":
         for k in ("E_fiber", "E_cross", "G_fiber"):
@@ -391,7 +401,8 @@ def _volume_region_note(r: TableReader, mesh: TetMesh, region: Region, kind: str
 
 
 def parse_probe(r: TableReader, mesh: TetMesh) -> Probe:
-    """One ``[[probe]]``: a named point inside the mesh.
+    """One ``[[probe]]``: a named point inside the mesh (or within :data:`SNAP_DISTANCE` of
+    an element outside it: snapped to the nearest boundary point, with a note on the mesh).
 
     Parameters
     ----------
@@ -408,11 +419,20 @@ def parse_probe(r: TableReader, mesh: TetMesh) -> Probe:
     point = r.get("point", "vec", length=3)
     r.finish()
     tet, bary = locate_points(mesh.points, mesh.tets, point[None])
-    if tet[0] < 0:
-        lo, hi = mesh.bounding_box()
-        raise r.fail(
-            "point",
-            f"probe {_show(name)} at {point.tolist()} is outside the mesh "
-            f"(bounding box {lo.tolist()} – {hi.tolist()})",
+    if tet[0] >= 0:
+        return Probe(name=name, point=point, tet=int(tet[0]), bary=bary[0])
+    near = nearest_boundary_point(mesh, point)
+    if near.distance <= SNAP_DISTANCE * near.size:  # a curved surface's faceted mesh
+        mesh.notes.append(
+            f"{r.file}: probe {_show(name)} at {point.tolist()} is {near.distance:.3g} outside "
+            f"the mesh (element size {near.size:.3g}): snapped to the nearest boundary point "
+            f"{np.round(near.point, 12).tolist()}"
         )
-    return Probe(name=name, point=point, tet=int(tet[0]), bary=bary[0])
+        return Probe(name=name, point=near.point, tet=near.tet, bary=near.bary)
+    lo, hi = mesh.bounding_box()
+    raise r.fail(
+        "point",
+        f"probe {_show(name)} at {point.tolist()} is outside the mesh, {near.distance:.3g} "
+        f"from its surface (more than {SNAP_DISTANCE:g} of an element, {near.size:.3g}; "
+        f"bounding box {lo.tolist()} – {hi.tolist()})",
+    )

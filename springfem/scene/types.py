@@ -38,6 +38,33 @@ COMPONENTS = ("x", "y", "z")
 #: Consistent unit systems a scene may declare (``units = "..."``), with the size of their
 #: stress unit in Pa (length mm, force mN for kPa and N for MPa).
 UNIT_SYSTEMS = {"SI": 1.0, "mm-kPa": 1.0e3, "mm-MPa": 1.0e6}
+#: The length unit of each unit system, in m.
+LENGTH_UNITS = {"SI": 1.0, "mm-kPa": 1.0e-3, "mm-MPa": 1.0e-3}
+#: The density unit of each unit system, in kg/m³: its mass unit over its length unit cubed
+#: (mm-kPa: mN = kg mm/s², so kg/mm³; mm-MPa: N = t mm/s², so t/mm³; time in s in all).
+DENSITY_UNITS = {"SI": 1.0, "mm-kPa": 1.0e9, "mm-MPa": 1.0e12}
+#: The density of a material that gives none, kg/m³ (water; soft tissue is 1000–1100).
+DEFAULT_DENSITY = 1000.0
+
+
+def default_density(units: str = "SI") -> float:
+    """:data:`DEFAULT_DENSITY` in the unit system ``units`` (:data:`UNIT_SYSTEMS`).
+
+    Parameters
+    ----------
+    units
+        The scene's unit system.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> default_density(), default_density("mm-kPa"), default_density("mm-MPa")
+    (1000.0, 1e-06, 1e-09)
+    """
+    return DEFAULT_DENSITY / DENSITY_UNITS[units]
 
 
 @dataclass(frozen=True)
@@ -55,7 +82,8 @@ class Material:
     E, nu
         Young's modulus (Pa) and Poisson's ratio.
     density
-        kg/m³.
+        kg/m³ (in the scene's unit system when read from a scene:
+        :func:`default_density`).
     E_fiber, E_cross, nu_fiber_cross, nu_cross, G_fiber
         Transversely isotropic constants (``transverse-linear`` only).
     formulation, volumetric

@@ -13,7 +13,7 @@ from springfem.result import write_result
 
 from ..compare import compare_scene
 from ..compare_output import printable, render_comparison, summary_lines
-from ..guards import locking_warnings
+from ..guards import locking_warnings, size_warning
 from ..overrides import load_scene_with
 from ..scenes import scene_path
 from ..tables import write_table
@@ -44,6 +44,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         print(f"note: {note}", file=sys.stderr)
     for line in locking_warnings(scene):
         print(f"warning: {line}", file=sys.stderr)
+    if (w := size_warning(scene)) is not None:
+        print(f"warning: {w}", file=sys.stderr)
     log(
         f"{scene.name}: {scene.mesh.n_points} nodes, {scene.mesh.n_tets} tets, "
         f"law {scene.material.law}"

@@ -35,6 +35,8 @@ def cmd_solve(args: argparse.Namespace) -> int:
         print(f"note: {note}", file=sys.stderr)
     if (w := guards.modulus_warning(scene.material, scene.units)) is not None:
         warn(w)
+    if (w := guards.size_warning(scene)) is not None:
+        warn(w)
     for line in guards.locking_warnings(scene, (args.model,)):
         warn(line)
     tag = (

@@ -10,10 +10,11 @@ from pathlib import Path
 from springfem.files import jsonable, output_folder
 
 from ..compare_output import printable
+from ..guards import size_warning
 from ..overrides import load_scene_with
 from ..scenes import scene_path
 from ..tables import write_table
-from ..verdict import verdict
+from ..verdict import verdict, write_verdict_markdown
 
 
 def cmd_verdict(args: argparse.Namespace) -> int:
@@ -36,10 +37,13 @@ def cmd_verdict(args: argparse.Namespace) -> int:
     def log(line: str) -> None:
         print(line, file=sys.stderr if quiet else sys.stdout, flush=True)
 
+    warning = size_warning(scene)
+    if warning is not None:
+        print(f"warning: {warning}", file=sys.stderr)
     log(f"{scene.name}: {scene.mesh.n_tets} tets, law {scene.material.law}")
     v = verdict(scene, args.tolerance, args.budget, args.models, log=log)
     out = Path(args.out) if args.out else output_folder("verdict", scene.name)
-    md = write_table(v.table, out / "verdict")
+    md = write_verdict_markdown(v, write_table(v.table, out / "verdict"))
     if quiet:
         payload = {
             "scene": v.scene,
@@ -49,6 +53,7 @@ def cmd_verdict(args: argparse.Namespace) -> int:
             "dynamic": v.dynamic_pick,
             "sentence": v.sentence,
             "notes": v.notes,
+            "warnings": [warning] if warning is not None else [],
             "rows": v.table.to_dict(orient="records"),
             "files": {"csv": str(md.with_suffix(".csv")), "markdown": str(md)},
         }

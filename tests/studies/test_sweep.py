@@ -73,6 +73,22 @@ def test_reference_is_the_finest_fem(models, reference, expected):
     assert spec.reference == expected and expected in spec.models
 
 
+def test_a_sweep_without_models_adds_the_locking_free_ones_where_a_case_needs_them():
+    """Cook's neo-Hookean membrane at nu = 0.49 (nearly incompressible) gets the
+    locking-free methods and the P2/P1 mixed reference; at nu = 0.3 only, none."""
+    cases = {"mesh.divisions": [[2, 2, 1]]}
+    spec = parse_sweep({"scene": "cook-membrane", "grid": {**cases, "material.nu": [0.3, 0.49]}})
+    assert spec.models[:3] == ("spring", "P1", "P2")
+    assert {"fem-P1-nodal-strain", "fem-P1-nodal-volume", "fem-MINI", "spring-stabilised",
+            "fem-P2-mixed"} <= set(spec.models)  # fmt: skip
+    assert "spring-tissue-stabilised" not in spec.models  # a tissue law's element
+    assert spec.reference == "fem-P2-mixed"
+    spec = parse_sweep({"scene": "cook-membrane", "grid": {**cases, "material.nu": [0.3]}})
+    assert spec.models == ("spring", "P1", "P2") and spec.reference == "P2"
+    listed = parse_sweep({"scene": "cook-membrane", "models": ["spring", "P1"], "grid": cases})
+    assert listed.models == ("spring", "P1")  # models listed: only those
+
+
 def test_scene_path_is_relative_to_the_sweep_file(tmp_path):
     (tmp_path / "sub").mkdir()
     text = (ROOT / "studies" / "scenes" / "cantilever.toml").read_text()

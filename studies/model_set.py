@@ -1,0 +1,269 @@
+"""Which models a verdict, a comparison and a sweep weigh on a scene, and what each solves.
+
+- :func:`locking_free_models`: on a nearly incompressible scene
+  (:func:`springfem.plausibility.nearly_incompressible`: ν ≥ 0.45, κ > 10 μ or an
+  incompressible flag) the locking-free methods of :data:`studies.models.LOCKING_FREE` that
+  apply to its law: nodal-strain and nodal-volume P1, MINI, the stabilised spring elements
+  and P2/P1 mixed, which is then the reference of a neo-Hookean or tissue law
+  (:func:`mixed_reference`, with the one-line :func:`locking_note`).
+- :func:`same_solves`: models whose options resolve to the same solve on the scene (the
+  scene's own spring element and a named one, ``P2-NH`` of a mixed scene and
+  ``fem-P2-mixed``), to be solved once.
+- :func:`formulation_notes`: the FEM rows whose order the scene's ``[fem] formulation`` does
+  not fit, and the formulation they solve instead
+  (:func:`studies.fem_laws.fitting_formulation`).
+- :func:`law_versus`: whether a model solves the reference's law, or a small-strain law or
+  calibration of it (a speed is compared like for like only in the first case).
+
+Examples
+--------
+>>> from springfem.scene import load_scene
+>>> beam = load_scene("land-beam")  # incompressible Guccione, [fem] formulation = "mixed"
+>>> locking_free_models(beam)[:3], mixed_reference(beam)
+(['fem-P1-nodal-strain', 'fem-P1-nodal-volume', 'fem-MINI'], 'fem-P2-mixed')
+>>> same_solves(beam, ["P2", "fem-P2-mixed"])  # the scene's P2 is P2/P1 mixed already
+{'fem-P2-mixed': 'P2'}
+>>> locking_free_models(load_scene("cantilever"))  # nu = 0.3
+[]
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import Any
+
+from reference_fem.options import FemOptions
+from springfem.materials.tissue import TISSUE_LAWS
+from springfem.plausibility import nearly_incompressible
+from springfem.scene import Scene
+
+from . import models
+from .fem_laws import HYPERELASTIC
+
+#: The P2/P1 mixed reference of a nearly incompressible hyperelastic scene.
+MIXED = "fem-P2-mixed"
+#: The small-strain laws (a model solving one against a hyperelastic reference is not
+#: like for like).
+SMALL_STRAIN_LAWS = ("linear", "transverse-linear")
+
+
+def _applies(scene: Scene, name: str) -> bool:
+    m = models.get(name)
+    if m.applies(scene) is not None:
+        return False
+    if m.kind == "spring":
+        try:
+            opts = m.spring_options(scene)
+        except (ValueError, TypeError):
+            return False
+        if opts.stiffening != "off" and opts.stiffening_modulus is None:
+            return scene.material.law in TISSUE_LAWS
+    return True
+
+
+def locking_free_models(scene: Scene) -> list[str]:
+    """The models of :data:`studies.models.LOCKING_FREE` that apply to ``scene`` when it is
+    nearly incompressible (else none).
+
+    Parameters
+    ----------
+    scene
+        The scene.
+
+    Returns
+    -------
+    list of str
+    """
+    if not nearly_incompressible(scene):
+        return []
+    return [n for n in models.LOCKING_FREE if _applies(scene, n)]
+
+
+def mixed_reference(scene: Scene) -> str | None:
+    """``fem-P2-mixed`` when it is the scene's reference: a nearly incompressible scene of
+    a hyperelastic law (neo-Hookean, Guccione, Holzapfel–Ogden), on which P1 and the
+    displacement P2 lock; else ``None``.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+
+    Returns
+    -------
+    str or None
+    """
+    if scene.material.law in HYPERELASTIC and MIXED in locking_free_models(scene):
+        return MIXED
+    return None
+
+
+def locking_note(
+    scene: Scene, weighed: Sequence[str], reference: str | None, mixed: bool | None = None
+) -> str:
+    """One line: why the locking-free methods are weighed and which is the reference.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    weighed
+        The locking-free models weighed.
+    reference
+        The reference model.
+    mixed
+        Whether the reference is P2/P1 mixed (default: it is ``fem-P2-mixed``); a row
+        that is the same solve, such as ``P2-NH`` of a mixed scene, may stand for it.
+
+    Returns
+    -------
+    str
+    """
+    mat = scene.material
+    nu = getattr(mat, "nu", None)
+    if mat.incompressible:
+        why = "incompressible material"
+    elif nu is not None and nu >= 0.45:
+        why = f"nu = {nu:.4g} >= 0.45"
+    else:
+        why = f"kappa = {mat.kappa / mat.mu:.3g} mu"
+    ref = (
+        f"P2/P1 mixed ({reference}) is the reference, as P1 and displacement P2 lock"
+        if (reference == MIXED if mixed is None else mixed)
+        else f"the reference is {reference} (P2/P1 mixed takes no {mat.law} law)"
+    )
+    others = ", ".join(n for n in weighed if n != MIXED)
+    return f"nearly incompressible ({why}): {others} weighed too; {ref}"
+
+
+def _solve_key(scene: Scene, name: str) -> Any:
+    """What identifies the solve of model ``name`` on ``scene``."""
+    m = models.get(name)
+    if m.kind == "spring":
+        return ("spring", repr(m.spring_options(scene)))
+    fem_scene, order, law = m.fem_settings(scene)
+    fem = FemOptions.of(fem_scene)
+    fem = replace(fem, order=fem.order if order is None else order)
+    return ("fem", repr(fem), law or fem_scene.material.law, repr(fem_scene.material))
+
+
+def same_solves(scene: Scene, names: Sequence[str]) -> dict[str, str]:
+    """Models whose options resolve to the same solve on ``scene``: name -> the first one.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    names
+        Model names.
+
+    Returns
+    -------
+    dict
+    """
+    seen: dict[Any, str] = {}
+    alias = {}
+    for n in names:
+        try:
+            key = _solve_key(scene, n)
+        except Exception:  # noqa: BLE001 - a model that cannot be set up is solved (and fails) alone
+            continue
+        if key in seen:
+            alias[n] = seen[key]
+        else:
+            seen[key] = n
+    return alias
+
+
+def formulation_notes(scene: Scene, names: Sequence[str]) -> list[str]:
+    """Notes on the FEM rows that solve another formulation than the scene's ``[fem]
+    formulation``, which does not fit their order or law
+    (:func:`studies.fem_laws.fitting_formulation`).
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    names
+        Model names.
+
+    Returns
+    -------
+    list of str
+
+    Examples
+    --------
+    >>> from springfem.scene import scene_from_dict
+    >>> s = scene_from_dict({"mesh": {"generator": "box", "size": [1, 1, 1],
+    ...     "divisions": [1, 1, 1]}, "material": {"law": "neo-hookean", "E": 1.0, "nu": 0.49},
+    ...     "fem": {"formulation": "mixed", "order": 2}})
+    >>> print(formulation_notes(s, ["P1", "P2", "P1-NH", "P2-NH"])[0])
+    ... # doctest: +NORMALIZE_WHITESPACE
+    the scene's [fem] formulation "mixed" (P2/P1, hyperelastic laws) does not fit every row:
+    P1 solves "nodal-strain", P2 "displacement", P1-NH "mini" (the nearest of their order and
+    law)
+    """
+    own = FemOptions.of(scene).formulation
+    changed = []
+    for n in names:
+        m = models.get(n)
+        if m.kind != "fem" or m.law == "scene" or m.applies(scene) is not None:
+            continue
+        if m.order == 1 and scene.material.law in TISSUE_LAWS:
+            continue  # a tissue law's P1 is displacement P1 with a penalty (fem_laws.tissue_note)
+        form = FemOptions.of(m.fem_settings(scene)[0]).formulation
+        if form != own:
+            changed.append((n, form, m.order))
+    if not changed:
+        return []
+    rows = ", ".join(f'{n} "{f}"' for n, f, _ in changed)
+    what = {"mixed": " (P2/P1, hyperelastic laws)", "mini": " (P1-bubble/P1, hyperelastic laws)"}
+    return [
+        f'the scene\'s [fem] formulation "{own}"{what.get(own, " (linear tets)")} does not fit '
+        f"every row: {rows.replace(' ', ' solves ', 1)} (the nearest of their order and law)"
+    ]
+
+
+def law_versus(scene: Scene, name: str, reference_law: str) -> str:
+    """What model ``name`` solves, against the reference's law: ``same law``, ``small-strain
+    law`` (linear FEM against a hyperelastic reference), ``small-strain calibration`` or
+    ``stiffened calibration`` (a spring element calibrated to the law's small-strain
+    tangent, plain or exponentially stiffened, against a finite-strain law: only the tissue
+    element equals a tissue law at finite strain), or ``other law``.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    name
+        The model.
+    reference_law
+        The reference's ``Result.law`` (``neo-hookean/coupled/mixed-P2P1``, ``linear``, ...).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> from springfem.scene import load_scene
+    >>> beam = load_scene("land-beam")
+    >>> [law_versus(beam, n, "guccione/mixed-P2P1") for n in
+    ...  ("P1", "spring-exact", "spring-tissue")]
+    ['same law', 'small-strain calibration', 'same law']
+    """
+    ref = reference_law.split("/")[0]
+    m = models.get(name)
+    if ref in SMALL_STRAIN_LAWS or not ref:
+        return "same law"
+    if m.kind == "spring":
+        opts = m.spring_options(scene)
+        if opts.stiffening == "law" and ref in TISSUE_LAWS:
+            return "same law"
+        return "small-strain calibration" if opts.stiffening == "off" else "stiffened calibration"
+    fem_scene, _, law = m.fem_settings(scene)
+    law = (law or fem_scene.material.law).split("/")[0]
+    if law == ref:
+        return "same law"
+    return "small-strain law" if law in SMALL_STRAIN_LAWS else "other law"
