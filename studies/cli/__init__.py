@@ -115,7 +115,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    p = sub.add_parser("inspect", help="mesh, axes and intersection statistics of a scene")
+    p = sub.add_parser(
+        "inspect", help="the mesh file's regions, mesh quality, axes and calibration of a scene"
+    )
     p.add_argument("scene", help="scene TOML file or bundled scene name")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.add_argument("--modes", action="store_true",
