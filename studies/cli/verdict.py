@@ -3,17 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import json
-import sys
-from pathlib import Path
-
-from springfem.files import jsonable, output_folder
 
 from ..compare_output import printable
-from ..overrides import load_scene_with
-from ..scenes import scene_path
 from ..tables import write_table
 from ..verdict import verdict
+from .common import out_folder, print_payload, progress_log, scene_of
 
 
 def cmd_verdict(args: argparse.Namespace) -> int:
@@ -30,15 +24,12 @@ def cmd_verdict(args: argparse.Namespace) -> int:
     int
         The exit code (0; 3 when no reference could be solved).
     """
-    scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))
+    scene = scene_of(args)
     quiet = bool(args.json)
-
-    def log(line: str) -> None:
-        print(line, file=sys.stderr if quiet else sys.stdout, flush=True)
-
+    log = progress_log(quiet)
     log(f"{scene.name}: {scene.mesh.n_tets} tets, law {scene.material.law}")
     v = verdict(scene, args.tolerance, args.budget, args.models, log=log)
-    out = Path(args.out) if args.out else output_folder("verdict", scene.name)
+    out = out_folder(args, "verdict", scene.name)
     md = write_table(v.table, out / "verdict")
     if quiet:
         payload = {
@@ -52,7 +43,7 @@ def cmd_verdict(args: argparse.Namespace) -> int:
             "rows": v.table.to_dict(orient="records"),
             "files": {"csv": str(md.with_suffix(".csv")), "markdown": str(md)},
         }
-        print(json.dumps(jsonable(payload), indent=2))
+        print_payload(payload)
     else:
         print()
         print(printable(v.table.drop(columns=["message"])))
