@@ -87,3 +87,25 @@ def test_a_parser_that_gains_an_option_fails_the_check(reference):
     assert missing(parser, reference) == ["springfem verdict --brand-new"]
     # and regenerating the reference from that parser takes it in
     assert missing(parser, springfem_docs.cli_reference_rst(parser)) == []
+
+
+def test_ci_builds_the_manual_with_warnings_as_errors_after_the_tests():
+    import tomllib
+
+    run = (ROOT / ".ci" / "run").read_text(encoding="utf-8").splitlines()
+    steps = [ln.strip() for ln in run if ln.strip().startswith(("make ", "if ! make "))]
+    assert steps.index("make test") < next(i for i, s in enumerate(steps) if "make docs" in s)
+    makefile = (ROOT / "Makefile").read_text(encoding="utf-8")
+    (docs_recipe,) = re.findall(r"^docs:.*\n\t(.*)", makefile, re.M)
+    assert "sphinx -W" in docs_recipe
+    # every extension the manual loads comes with Sphinx, from docs/_ext, or from the extra
+    extra = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"][
+        "optional-dependencies"
+    ]["docs"]
+    names = {re.split(r"[<>=\[ ]", r)[0].lower() for r in extra}
+    conf = (ROOT / "docs" / "conf.py").read_text(encoding="utf-8")
+    loaded = re.findall(r'^\s+"([\w.]+)",$', conf.split("extensions = [")[1].split("]")[0], re.M)
+    for ext in loaded:
+        top = ext.split(".")[0]
+        local = (ROOT / "docs" / "_ext" / f"{top}.py").exists()
+        assert top == "sphinx" or local or top in names, ext

@@ -74,9 +74,21 @@ def _default(action: argparse.Action) -> str:
     return f"``{d}``"
 
 
+#: An option named in a help text (``--set``), shown as code, not typeset (``--`` → "–").
+_OPTION_IN_TEXT = re.compile(r"(?<![\w-])(--?[A-Za-z][\w-]*)")
+
+
 def _rst_text(text: str) -> str:
-    """Help text as reStructuredText: ``*`` and backquotes escaped, ``%%`` unformatted."""
-    return text.replace("\\", "\\\\").replace("*", "\\*").replace("`", "\\`").replace("%%", "%")
+    """Help text as reStructuredText: ``*`` and backquotes escaped, ``%%`` unformatted,
+    option names as code.
+
+    Examples
+    --------
+    >>> _rst_text("override, e.g. --set a=1 (100%% *bold*)")
+    'override, e.g. ``--set`` a=1 (100% \\\\*bold\\\\*)'
+    """
+    text = text.replace("\\", "\\\\").replace("*", "\\*").replace("`", "\\`").replace("%%", "%")
+    return _OPTION_IN_TEXT.sub(r"``\1``", text)
 
 
 def _rows(parser: argparse.ArgumentParser) -> list[list[str]]:
