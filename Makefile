@@ -57,7 +57,9 @@ lint: $(VENV)/.installed-test
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy $(TYPED)
 
-# The theory manual and API pages into docs/_build/html; any Sphinx warning fails the build.
+# The manual and API pages into docs/_build/html; any Sphinx warning fails the build. The
+# build runs the tutorial's commands (docs/tutorial.rst, in docs/_build/tutorial) and
+# generates the CLI and scene-file references from the parsers; CI runs it after the tests.
 docs: $(VENV)/.installed-docs
 	$(BIN)/python -m sphinx -W --keep-going -b html docs docs/_build/html
 

@@ -18,6 +18,8 @@ ROOT = Path(__file__).resolve().parents[1]
 # The checkout's packages win over any other installed copy (a worktree built with
 # another checkout's environment documents its own code).
 sys.path.insert(0, str(ROOT))
+# The manual's own directives (generated references, the tutorial's run): docs/_ext.
+sys.path.insert(0, str(ROOT / "docs" / "_ext"))
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -31,6 +33,7 @@ extensions = [
     "sphinx.ext.mathjax",
     "sphinx.ext.viewcode",
     "numpydoc",
+    "springfem_docs",
 ]
 if os.environ.get("SPRINGFEM_DOCS_INTERSPHINX") == "1":
     extensions.append("sphinx.ext.intersphinx")

@@ -122,8 +122,7 @@ def locking_warnings(scene: Scene, models: tuple[str, ...] = ("spring", "fem")) 
 
     if not nearly_incompressible(scene):
         return []
-    nu = getattr(scene.material, "nu", None)
-    what = f"nu = {nu:g}" if nu is not None and nu >= 0.45 else "a nearly incompressible law"
+    what = _incompressibility(scene)
     out = []
     if "fem" in models and FemOptions.of(scene).formulation == "displacement":
         out.append(
@@ -138,3 +137,31 @@ def locking_warnings(scene: Scene, models: tuple[str, ...] = ("spring", "fem")) 
             "docs/volumetric.rst#stabilised-nodal-strain)"
         )
     return out
+
+
+def _incompressibility(scene: Scene) -> str:
+    """What makes the scene nearly incompressible, in the scene's own keys: ``nu`` only when
+    the scene sets it (a tissue law's or a ``mu``/``kappa`` material's ``nu`` is derived).
+
+    Examples
+    --------
+    >>> from springfem.scene import scene_from_dict
+    >>> box = {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [1, 1, 1]}
+    >>> nh = {"law": "neo-hookean", "mu": 1.0, "kappa": 50.0}
+    >>> _incompressibility(scene_from_dict({"mesh": box, "material": nh}))
+    'kappa = 50 (50 mu)'
+    >>> lin = {"law": "linear", "E": 1.0, "nu": 0.49}
+    >>> _incompressibility(scene_from_dict({"mesh": box, "material": lin}))
+    'nu = 0.49'
+    """
+    given = scene.raw.get("material", {}) if isinstance(scene.raw, dict) else {}
+    mat = scene.material
+    if "nu" in given:
+        return f"nu = {float(given['nu']):g}"
+    if getattr(mat, "incompressible", False):
+        return "incompressible = true"
+    if "kappa" in given:
+        kappa = float(given["kappa"])
+        mu = float(getattr(mat, "mu", 0.0) or 0.0)
+        return f"kappa = {kappa:g}" + (f" ({kappa / mu:.3g} mu)" if mu > 0 else "")
+    return "a nearly incompressible law"

@@ -22,6 +22,7 @@ os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 import sys
 import traceback
 from collections.abc import Callable, Sequence
+from typing import Any
 
 from springfem.errors import SpringFemError
 from springfem.warning_count import counted_warnings
@@ -41,26 +42,29 @@ def _subcommand(module: str, func: str) -> Callable[[argparse.Namespace], int]:
     return run
 
 
-def _positive_float(text: str) -> float:
-    """An argparse type: a positive number."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
-    return value
+def _positive(kind: type, noun: str) -> Callable[[str], Any]:
+    """An argparse type: a positive ``kind`` (``float``: above 0, ``int``: at least 1).
+
+    Examples
+    --------
+    >>> _positive(int, "an integer")("3"), _positive(float, "a number")("0.5")
+    (3, 0.5)
+    """
+
+    def convert(text: str) -> Any:
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not {noun}: {text!r}") from None
+        if not value > 0:
+            raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+        return value
+
+    return convert
 
 
-def _positive_int(text: str) -> int:
-    """An argparse type: a positive integer."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
-    return value
+_positive_float = _positive(float, "a number")
+_positive_int = _positive(int, "an integer")
 
 
 def _model_list(text: str) -> list[str]:
@@ -107,6 +111,31 @@ def _first_line(doc: str | None) -> str:
     return re.sub(r"^Study ``[^`]*``:\s*", "", line)
 
 
+# -- options several commands share -----------------------------------------------------------
+
+SCENE_HELP = "scene TOML file or bundled scene name"
+
+
+def _out(p: argparse.ArgumentParser, help: str) -> None:
+    p.add_argument("--out", default=None, help=help)
+
+
+def _max_time(p: argparse.ArgumentParser, help: str) -> None:
+    p.add_argument("--max-time", type=_positive_float, default=None, metavar="SECONDS", help=help)
+
+
+def _models(p: argparse.ArgumentParser, help: str) -> None:
+    p.add_argument("--models", type=_model_list, default=None, metavar="M1,M2,...", help=help)
+
+
+def _dask(p: argparse.ArgumentParser, workers: str, scheduler: str) -> None:
+    """``--workers [N]`` or ``--scheduler ADDRESS``: where the cases run (one of them)."""
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, nargs="?", const=0, default=None, metavar="N",
+                       help=workers)  # fmt: skip
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS", help=scheduler)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="springfem",
@@ -115,8 +144,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    p = sub.add_parser("inspect", help="mesh, axes and intersection statistics of a scene")
-    p.add_argument("scene", help="scene TOML file or bundled scene name")
+    p = sub.add_parser(
+        "inspect", help="the mesh file's regions, mesh quality, axes and calibration of a scene"
+    )
+    p.add_argument("scene", help=SCENE_HELP)
     p.add_argument("--json", action="store_true", help="print JSON")
     p.add_argument("--modes", action="store_true",
                    help="count the near-zero eigenvalues of each model's tangent at rest "
@@ -124,16 +155,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_subcommand("studies.cli.inspect", "cmd_inspect"))
 
     p = sub.add_parser("solve", help="solve a scene with one model")
-    p.add_argument("scene", help="scene TOML file or bundled scene name")
+    p.add_argument("scene", help=SCENE_HELP)
     p.add_argument("--model", choices=("spring", "fem"), default="spring")
     p.add_argument("--order", type=int, choices=(1, 2), default=None, help="FEM order")
     p.add_argument("--law", default=None, help="FEM material law override")
-    p.add_argument("--out", default=None, help="output folder (default: out/<scene>-<model>)")
+    _out(p, "output folder (default: out/<scene>-<model>)")
     p.add_argument("--json", action="store_true", help="print result.json to stdout")
     p.add_argument("--verbose", "-v", action="store_true",
                    help="print solver progress (Newton and relaxation residuals)")  # fmt: skip
-    p.add_argument("--max-time", type=_positive_float, default=None, metavar="SECONDS",
-                   help="stop the solve after this wall time (exit 3)")  # fmt: skip
+    _max_time(p, "stop the solve after this wall time (exit 3)")
     p.add_argument("--max-steps", type=_positive_int, default=None, metavar="N",
                    help="stop a time-stepping solve after N steps (exit 3)")  # fmt: skip
     add_set_option(p)  # sweeps: --set key=value
@@ -141,28 +171,24 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("compare", help="spring model vs FEM (P1, P2) on the same scene")
     p.add_argument("scene", nargs="?", default=None, help="scene (default: cantilever)")
-    p.add_argument("--out", default=None, help="output folder (default: out/compare-<scene>)")
+    _out(p, "output folder (default: out/compare-<scene>)")
     p.add_argument("--json", action="store_true", help="print the table as JSON")
-    p.add_argument("--models", type=_model_list, default=None, metavar="M1,M2,...",
-                   help="models to run, e.g. spring,p1 (default: spring, P1, P2 and, at "
-                   "large strain, P1-NH, P2-NH); the reference is the finest FEM among "
-                   "them")  # fmt: skip
+    _models(p, "models to run, e.g. spring,p1 (default: spring, P1, P2 and, at large strain, "
+            "P1-NH, P2-NH); the reference is the finest FEM among them")  # fmt: skip
     p.add_argument("--verbose", "-v", action="store_true",
                    help="print each model's solver progress")  # fmt: skip
-    p.add_argument("--max-time", type=_positive_float, default=None, metavar="SECONDS",
-                   help="stop each model's solve after this wall time (a FAILED row)")  # fmt: skip
+    _max_time(p, "stop each model's solve after this wall time (a FAILED row)")
     add_set_option(p)  # sweeps: --set key=value
     p.set_defaults(func=_subcommand("studies.cli.compare", "cmd_compare"))
 
     p = sub.add_parser("verdict", help="which model is good enough for a scene, and how fast")
-    p.add_argument("scene", help="scene TOML file or bundled scene name")
+    p.add_argument("scene", help=SCENE_HELP)
     p.add_argument("--tolerance", type=_positive_float, default=0.05,
                    help="largest relative L2 error vs the reference (default 0.05)")  # fmt: skip
     p.add_argument("--budget", type=_positive_float, default=None, metavar="SECONDS",
                    help="time for the whole verdict; each solve gets the time left")  # fmt: skip
-    p.add_argument("--models", type=_model_list, default=None, metavar="M1,M2,...",
-                   help="the models to weigh (default: every one that applies)")  # fmt: skip
-    p.add_argument("--out", default=None, help="output folder (default: out/verdict-<scene>)")
+    _models(p, "the models to weigh (default: every one that applies)")
+    _out(p, "output folder (default: out/verdict-<scene>)")
     p.add_argument("--json", action="store_true", help="print the verdict as JSON")
     add_set_option(p)
     p.set_defaults(func=_subcommand("studies.cli.verdict", "cmd_verdict"))
@@ -171,48 +197,35 @@ def build_parser() -> argparse.ArgumentParser:
     p.__class__ = _StudyParser  # lists the studies in its --help
     p.add_argument("name", help="study name (listed below)")
     p.add_argument("--quick", action="store_true", help="coarser meshes, fewer points")
-    p.add_argument(
-        "--out",
-        default=None,
-        help="report folder (default reports/, quick: reports/quick/; with --scene: "
-        "out/study-<scene>/)",
-    )
+    _out(p, "report folder (default reports/, quick: reports/quick/; with --scene: "
+         "out/study-<scene>/)")  # fmt: skip
     p.add_argument(
         "--scene",
         default=None,
         metavar="FILE",
         help="run the study on this scene instead of the bundled ones (where it makes sense)",
     )
-    p.add_argument("--max-time", type=_positive_float, default=None, metavar="SECONDS",
-                   help="cap each solve (default: 120 s with --scene, none otherwise); a "
-                   "capped solve is a stopped row")  # fmt: skip
+    _max_time(p, "cap each solve (default: 120 s with --scene, none otherwise); a capped "
+              "solve is a stopped row")  # fmt: skip
     p.add_argument("--tolerance", type=_positive_float, default=None, metavar="ERROR",
                    help="the model error a variant may have to count (studies with a "
                    "tolerance: ablation, speed-accuracy)")  # fmt: skip
     add_set_option(p)
-    where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=int, nargs="?", const=0, default=None, metavar="N",
-                       help="run the cases on a local Dask cluster of N processes")  # fmt: skip
-    where.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                       help="run the cases on a Dask cluster, e.g. tcp://host:8786")  # fmt: skip
+    _dask(p, "run the cases on a local Dask cluster of N processes",
+          "run the cases on a Dask cluster, e.g. tcp://host:8786")  # fmt: skip
     p.set_defaults(func=_subcommand("studies.cli.study", "cmd_study"))
 
     p = sub.add_parser("sweep", help="a scene over a grid of values (SWEEP.toml), on Dask")
     p.add_argument("file", help="sweep TOML file (see studies/sweeps/cantilever.toml)")
-    p.add_argument("--out", default=None, help="output folder (default: out/sweep-<name>)")
-    where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=int, nargs="?", const=0, default=None, metavar="N",
-                       help="local Dask cluster of N processes (no N: one per core)")  # fmt: skip
-    where.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                       help="join a Dask cluster, e.g. tcp://host:8786")  # fmt: skip
+    _out(p, "output folder (default: out/sweep-<name>)")
+    _dask(p, "local Dask cluster of N processes (no N: one per core)",
+          "join a Dask cluster, e.g. tcp://host:8786")  # fmt: skip
     add_set_option(p)
     p.set_defaults(func=_subcommand("studies.cli.sweep", "cmd_sweep"))
 
     p = sub.add_parser("report", help="run all studies and write reports/REPORT.md")
     p.add_argument("--quick", action="store_true", help="coarser meshes, fewer points")
-    p.add_argument(
-        "--out", default=None, help="report folder (default reports/, quick: reports/quick/)"
-    )
+    _out(p, "report folder (default reports/, quick: reports/quick/)")
     p.set_defaults(func=_subcommand("studies.cli.study", "cmd_report"))
 
     p = sub.add_parser(

@@ -1,9 +1,17 @@
-"""What the command modules share: JSON on stdout."""
+"""What the command modules share: the scene of ``SCENE [--set K=V]``, the output folder,
+progress lines and JSON on stdout."""
 
 from __future__ import annotations
 
+import argparse
 import json
+import sys
+from collections.abc import Callable
+from pathlib import Path
 from typing import Any
+
+from springfem.files import jsonable, output_folder
+from springfem.scene import Scene
 
 
 def print_json(obj: Any) -> None:
@@ -26,3 +34,62 @@ def print_json(obj: Any) -> None:
     }
     """
     print(json.dumps(obj, indent=2, sort_keys=True))
+
+
+def scene_of(args: argparse.Namespace) -> Scene:
+    """The scene of ``args.scene`` (a file or a bundled name) with its ``--set`` overrides.
+
+    Parameters
+    ----------
+    args
+        Parsed arguments with ``scene`` (and ``set``, if the command takes it).
+
+    Returns
+    -------
+    Scene
+    """
+    from ..overrides import load_scene_with
+    from ..scenes import scene_path
+
+    return load_scene_with(scene_path(args.scene), getattr(args, "set", None))
+
+
+def out_folder(args: argparse.Namespace, command: str, name: str) -> Path:
+    """``--out``, or the command's default folder ``out/<command>-<name>``.
+
+    Examples
+    --------
+    >>> out_folder(argparse.Namespace(out="here"), "verdict", "sag")
+    PosixPath('here')
+    """
+    return Path(args.out) if args.out else output_folder(command, name)
+
+
+def progress_log(quiet: bool) -> Callable[[str], None]:
+    """A function printing progress lines: on stdout, or on stderr when stdout carries the
+    JSON (``--json``).
+
+    Examples
+    --------
+    >>> progress_log(False)("solving")
+    solving
+    """
+
+    def log(line: str) -> None:
+        print(line, file=sys.stderr if quiet else sys.stdout, flush=True)
+
+    return log
+
+
+def print_payload(payload: dict[str, Any]) -> None:
+    """Print a command's ``--json`` answer, in its own key order.
+
+    Examples
+    --------
+    >>> print_payload({"b": 1, "a": None})
+    {
+      "b": 1,
+      "a": null
+    }
+    """
+    print(json.dumps(jsonable(payload), indent=2))

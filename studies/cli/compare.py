@@ -3,20 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-from pathlib import Path
 
-from springfem.files import jsonable, output_folder
 from springfem.mechanics.limits import solve_limits
 from springfem.result import write_result
 
 from ..compare import compare_scene
 from ..compare_output import printable, render_comparison, summary_lines
 from ..guards import locking_warnings, size_warning
-from ..overrides import load_scene_with
-from ..scenes import scene_path
 from ..tables import write_table
+from .common import out_folder, print_payload, progress_log, scene_of
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
@@ -33,13 +29,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
     int
         Exit code: 0, or 3 when a model failed.
     """
-    scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))  # sweeps: --set
+    scene = scene_of(args)  # sweeps: --set
     quiet = bool(getattr(args, "json", False))
-    out = Path(args.out) if args.out else output_folder("compare", scene.name)
-
-    def log(msg: str) -> None:
-        print(msg, file=sys.stderr if quiet else sys.stdout, flush=True)
-
+    out = out_folder(args, "compare", scene.name)
+    log = progress_log(quiet)
     for note in scene.mesh.notes:
         print(f"note: {note}", file=sys.stderr)
     for line in locking_warnings(scene):
@@ -87,7 +80,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
             "rows": cmp.table.to_dict(orient="records"),
             "files": files,
         }
-        print(json.dumps(jsonable(payload), indent=2))
+        print_payload(payload)
     else:
         print()
         print(printable(cmp.table))

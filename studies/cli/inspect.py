@@ -1,8 +1,10 @@
-"""``springfem inspect SCENE [--json]``: mesh, quality, axes, ray casting, calibration."""
+"""``springfem inspect SCENE [--json]``: the mesh file's regions, mesh quality, axes, ray
+casting, calibration."""
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 
 from .. import guards
@@ -11,7 +13,9 @@ from .common import print_json
 
 
 def cmd_inspect(args: argparse.Namespace) -> int:
-    """Print the spring model's statistics of a scene (:func:`springmodel.inspect`).
+    """Print the mesh file's named regions with their sizes
+    (:func:`springfem.regions.named_sets`) and the spring model's statistics of a scene
+    (:func:`springmodel.inspect`).
 
     Parameters
     ----------
@@ -24,11 +28,17 @@ def cmd_inspect(args: argparse.Namespace) -> int:
     int
         The exit code (0).
     """
+    from springfem.regions import named_sets
     from springfem.scene import load_scene
     from springmodel.inspect import inspect_scene
 
     scene = load_scene(scene_path(args.scene))
     report = inspect_scene(scene)
+    regions = named_sets(scene.mesh)
+    # the regions right after the mesh's own numbers
+    at = list(report).index("bounding_box") + 1
+    items = list(report.items())
+    report = dict([*items[:at], ("regions", [dataclasses.asdict(r) for r in regions]), *items[at:]])
     for note in scene.mesh.notes:
         print(f"note: {note}", file=sys.stderr)
     for line in guards.locking_warnings(scene):
@@ -47,7 +57,11 @@ def cmd_inspect(args: argparse.Namespace) -> int:
     else:
         width = max(len(k) for k in report if k != "modes")
         for key, value in report.items():
-            if key != "modes":
+            if key == "regions":
+                lines = [r.line for r in regions] or ["none named in the mesh file"]
+                for n, line in enumerate(lines):
+                    print(f"{'regions' if n == 0 else '':<{width}}  {line}")
+            elif key != "modes":
                 print(f"{key:<{width}}  {value}")
         for c in counts:
             print(c.line)

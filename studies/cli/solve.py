@@ -15,10 +15,8 @@ from springfem.result import write_result
 from springfem.scene import OutputOptions
 
 from .. import guards
-from ..overrides import load_scene_with
-from ..scenes import scene_path
 from ..solve import default_out, model_label, solve_scene, warn, write_last_good_state
-from .common import print_json
+from .common import print_json, scene_of
 
 
 def _write(out: Path, *args, **kw) -> tuple[Path, Path]:
@@ -30,7 +28,7 @@ def _write(out: Path, *args, **kw) -> tuple[Path, Path]:
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
-    scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))  # sweeps: --set
+    scene = scene_of(args)  # sweeps: --set
     for note in scene.mesh.notes:
         print(f"note: {note}", file=sys.stderr)
     if (w := guards.modulus_warning(scene.material, scene.units)) is not None:

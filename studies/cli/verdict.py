@@ -3,18 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-from pathlib import Path
-
-from springfem.files import jsonable, output_folder
 
 from ..compare_output import printable
 from ..guards import size_warning
-from ..overrides import load_scene_with
-from ..scenes import scene_path
 from ..tables import write_table
 from ..verdict import verdict, write_verdict_markdown
+from .common import out_folder, print_payload, progress_log, scene_of
 
 
 def cmd_verdict(args: argparse.Namespace) -> int:
@@ -31,18 +26,15 @@ def cmd_verdict(args: argparse.Namespace) -> int:
     int
         The exit code (0; 3 when no reference could be solved).
     """
-    scene = load_scene_with(scene_path(args.scene), getattr(args, "set", None))
+    scene = scene_of(args)
     quiet = bool(args.json)
-
-    def log(line: str) -> None:
-        print(line, file=sys.stderr if quiet else sys.stdout, flush=True)
-
+    log = progress_log(quiet)
     warning = size_warning(scene)
     if warning is not None:
         print(f"warning: {warning}", file=sys.stderr)
     log(f"{scene.name}: {scene.mesh.n_tets} tets, law {scene.material.law}")
     v = verdict(scene, args.tolerance, args.budget, args.models, log=log)
-    out = Path(args.out) if args.out else output_folder("verdict", scene.name)
+    out = out_folder(args, "verdict", scene.name)
     md = write_verdict_markdown(v, write_table(v.table, out / "verdict"))
     if quiet:
         payload = {
@@ -57,7 +49,7 @@ def cmd_verdict(args: argparse.Namespace) -> int:
             "rows": v.table.to_dict(orient="records"),
             "files": {"csv": str(md.with_suffix(".csv")), "markdown": str(md)},
         }
-        print(json.dumps(jsonable(payload), indent=2))
+        print_payload(payload)
     else:
         print()
         print(printable(v.table.drop(columns=["message"])))

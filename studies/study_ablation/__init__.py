@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from ..registry import StudyContext, StudyOutput, study
+from ..registry import StudyContext, StudyOutput, study_run
 from ..scenes import StudyScene
 from .cases import (
     ALL_VARIANTS,
@@ -66,24 +66,14 @@ from .tables import ablation_table, result_rows, winners_frame, winners_table
 __all__ = ["Settings", "bundled_scenes", "run"]
 
 
-@study("ablation", Settings, bundled_scenes)
+@study_run(
+    "ablation",
+    Settings,
+    bundled_scenes,
+    settings_doc="Meshes and step budget.",
+    returns="Findings, the ablation and winners tables, the error-vs-cost figure, headline.",
+)
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
-    """Run the ablation study (see the module docstring).
-
-    Parameters
-    ----------
-    ctx
-        Output folder, cache and preset.
-    scenes
-        The scenes.
-    settings
-        Meshes and step budget.
-
-    Returns
-    -------
-    StudyOutput
-        Findings, the ablation and winners tables, the error-vs-cost figure, headline.
-    """
     rows, fem_times, notes = [], {}, []
     for s in scenes:
         name = s.label

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 from springfem.errors import InputError
 
-from ..registry import StudyContext, StudyOutput, study
+from ..registry import StudyContext, StudyOutput, study_run
 from ..scenes import StudyScene, require
 from .cases import (
     Settings,
@@ -53,30 +53,20 @@ from .tables import frames, modulus_table, ratio_frame, ratio_table, split_table
 __all__ = ["Settings", "bundled_scenes", "run"]
 
 
-@study("anisotropy", Settings, bundled_scenes)
+@study_run(
+    "anisotropy",
+    Settings,
+    bundled_scenes,
+    scenes_doc="The scenes (each needs a law with a fibre and ``[axes]``).",
+    settings_doc="Angles and mesh of the bundled blocks (unused for other scenes).",
+    returns=(
+        "Findings, the error-split table (and on the blocks with a closed form "
+        "the modulus and ratio tables and the modulus figure), headline errors. "
+        "Raises ------ InputError If a scene has no fibre (one line, before any "
+        "solve)."
+    ),
+)
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
-    """Run the anisotropy study (see the module docstring).
-
-    Parameters
-    ----------
-    ctx
-        Output folder, cache and preset.
-    scenes
-        The scenes (each needs a law with a fibre and ``[axes]``).
-    settings
-        Angles and mesh of the bundled blocks (unused for other scenes).
-
-    Returns
-    -------
-    StudyOutput
-        Findings, the error-split table (and on the blocks with a closed form the modulus
-        and ratio tables and the modulus figure), headline errors.
-
-    Raises
-    ------
-    InputError
-        If a scene has no fibre (one line, before any solve).
-    """
     require(scenes, ctx.name)
     for s in scenes:
         why = refusal(s)

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 from springfem.files import safe_filename
 
-from ..registry import StudyContext, StudyOutput, study
+from ..registry import StudyContext, StudyOutput, study_run
 from ..scenes import StudyScene, require
 from .cases import Settings, bundled_scenes, plan, richardson_limit, work
 from .figures import rate_figure, tip_figure
@@ -48,25 +48,19 @@ from .tables import analyse, write_tables
 __all__ = ["Settings", "bundled_scenes", "richardson_limit", "run", "work"]
 
 
-@study("convergence", Settings, bundled_scenes)
+@study_run(
+    "convergence",
+    Settings,
+    bundled_scenes,
+    scenes_doc=(
+        "The scenes to refine (one table pair, two figures and the headline "
+        "each; with several scenes, files and headline keys end in the scene's "
+        "label)."
+    ),
+    settings_doc="Refinement levels.",
+    returns="Findings, level and rate tables, two figures, headline rates and gaps.",
+)
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
-    """Run the convergence study (see the module docstring).
-
-    Parameters
-    ----------
-    ctx
-        Output folder, cache and preset.
-    scenes
-        The scenes to refine (one table pair, two figures and the headline each; with
-        several scenes, files and headline keys end in the scene's label).
-    settings
-        Refinement levels.
-
-    Returns
-    -------
-    StudyOutput
-        Findings, level and rate tables, two figures, headline rates and gaps.
-    """
     require(scenes, "convergence")
     out = StudyOutput(ctx.name, "")
     for s in scenes:

@@ -34,7 +34,7 @@ Examples
 
 from __future__ import annotations
 
-from ..registry import StudyContext, StudyOutput, study
+from ..registry import StudyContext, StudyOutput, study_run
 from ..scenes import StudyScene, require
 from .cases import Settings, bundled_scenes, cases, locking_case
 from .figures import deflection_figure, error_cost_figure
@@ -51,25 +51,17 @@ from .tables import (
 __all__ = ["Settings", "bundled_scenes", "run"]
 
 
-@study("locking", Settings, bundled_scenes)
+@study_run(
+    "locking",
+    Settings,
+    bundled_scenes,
+    settings_doc="Poisson ratios, levels, methods, the solve cap.",
+    returns=(
+        "Findings, the table of every case, the references, the cheapest method "
+        "per ν, the two figures, headline errors."
+    ),
+)
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
-    """Run the locking study (see the module docstring).
-
-    Parameters
-    ----------
-    ctx
-        Output folder, cache and preset.
-    scenes
-        The scenes.
-    settings
-        Poisson ratios, levels, methods, the solve cap.
-
-    Returns
-    -------
-    StudyOutput
-        Findings, the table of every case, the references, the cheapest method per ν, the
-        two figures, headline errors.
-    """
     require(scenes, ctx.name)
     all_cases, all_results, laws = [], [], {}
     for sc in scenes:

@@ -26,7 +26,7 @@ Examples
 
 from __future__ import annotations
 
-from ..registry import StudyContext, StudyOutput, study
+from ..registry import StudyContext, StudyOutput, study_run
 from ..scenes import StudyScene
 from .cases import (
     Settings,
@@ -49,24 +49,16 @@ NO_USER_SCENES = (
 )
 
 
-@study("scaling", Settings, bundled_scenes, user_scenes=NO_USER_SCENES)
+@study_run(
+    "scaling",
+    Settings,
+    bundled_scenes,
+    scenes_doc="The benchmark blocks (roles ``step`` and ``static``).",
+    settings_doc="Tet counts.",
+    returns="Findings, step/solve/slope tables, the scaling figure, headline slopes.",
+    user_scenes=NO_USER_SCENES,
+)
 def run(ctx: StudyContext, scenes: list[StudyScene], p: Settings) -> StudyOutput:
-    """Run the scaling study (see the module docstring).
-
-    Parameters
-    ----------
-    ctx
-        Output folder, cache and preset.
-    scenes
-        The benchmark blocks (roles ``step`` and ``static``).
-    p
-        Tet counts.
-
-    Returns
-    -------
-    StudyOutput
-        Findings, step/solve/slope tables, the scaling figure, headline slopes.
-    """
     step_cases, static_cases = grids(scenes, p)
     steps = ctx.cache.run(step_cases, step_case, ctx.progress, "explicit steps")
     static = ctx.cache.run(static_cases, static_case, ctx.progress, "static solves")

@@ -40,7 +40,7 @@ from __future__ import annotations
 from springfem.errors import SolverError
 from springfem.files import safe_filename
 
-from ..registry import StudyContext, StudyOutput, study
+from ..registry import StudyContext, StudyOutput, study_run
 from ..scenes import StudyScene, require
 from ..study_convergence.levels import level_label, select_levels
 from .cases import (
@@ -62,24 +62,15 @@ from .tables import measure, pareto_front, points_frame, step_frame, write_table
 __all__ = ["Settings", "bundled_scenes", "pareto_front", "point_work", "run"]
 
 
-@study("speed_accuracy", Settings, bundled_scenes)
+@study_run(
+    "speed_accuracy",
+    Settings,
+    bundled_scenes,
+    scenes_doc="The scenes (with several, files and headline keys end in the scene's label).",
+    settings_doc="Levels and solver settings.",
+    returns="Findings, points and step-cost tables, the Pareto figure, headline numbers.",
+)
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
-    """Run the speed-accuracy study (see the module docstring).
-
-    Parameters
-    ----------
-    ctx
-        Output folder, cache and preset.
-    scenes
-        The scenes (with several, files and headline keys end in the scene's label).
-    settings
-        Levels and solver settings.
-
-    Returns
-    -------
-    StudyOutput
-        Findings, points and step-cost tables, the Pareto figure, headline numbers.
-    """
     require(scenes, "speed-accuracy")
     out = StudyOutput(ctx.name, "")
     for s in scenes:

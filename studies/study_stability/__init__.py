@@ -28,7 +28,7 @@ Examples
 
 from __future__ import annotations
 
-from ..registry import StudyContext, StudyOutput, study
+from ..registry import StudyContext, StudyOutput, study_run
 from ..scenes import StudyScene
 from .cases import WORK, Settings, bundled_scenes, grids
 from .figures import failure_map_figure, locking_figure
@@ -38,25 +38,18 @@ from .tables import frames, write_tables
 __all__ = ["Settings", "bundled_scenes", "run"]
 
 
-@study("stability", Settings, bundled_scenes)
+@study_run(
+    "stability",
+    Settings,
+    bundled_scenes,
+    scenes_doc="The scenes (each serves the series its ``roles`` name; a user's serves all).",
+    settings_doc="Grids of the four series.",
+    returns=(
+        "Findings, tables (critical step, largest load, locking, failure map), "
+        "figures and headline numbers."
+    ),
+)
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
-    """Run the stability study (see the module docstring).
-
-    Parameters
-    ----------
-    ctx
-        Output folder, cache and preset.
-    scenes
-        The scenes (each serves the series its ``roles`` name; a user's serves all).
-    settings
-        Grids of the four series.
-
-    Returns
-    -------
-    StudyOutput
-        Findings, tables (critical step, largest load, locking, failure map), figures and
-        headline numbers.
-    """
     cases = grids(scenes, settings)
     results = {
         k: ctx.cache.run(cases[k], fn, ctx.progress, label) for k, (fn, label) in WORK.items()
