@@ -160,6 +160,8 @@ def _staged(
     with_ref = REFERENCE in methods
     ref_cases = [case_of(sc, s, REFERENCE, nu, finest) for nu in s.nus] if with_ref else []
     ref_res = ctx.cache.run(ref_cases, locking_case, desc=f"{sc.label} reference", **run)
+    ref_res = [{**r, "tets": estimate(c)[2]} if r.get("status") == "skipped" else r
+               for c, r in zip(ref_cases, ref_res, strict=True)]  # fmt: skip
     refs = {c["nu"]: r for c, r in zip(ref_cases, ref_res, strict=True)}
     axis = _axis(sc, ref_res)
     done: set[tuple[str, float]] = set()  # (method, nu) within the tolerance
@@ -181,6 +183,8 @@ def _staged(
                     todo.append(c)
         res = ctx.cache.run(todo, locking_case, desc=f"{sc.label} level x{f}", **run)
         for c, r in [*zip(todo, res, strict=True), *skipped]:
+            if r.get("status") == "skipped":
+                r = {**r, "tets": estimate(c)[2]}  # the size it would have had
             out_c.append(c)
             out_r.append(r)
             ref = refs.get(c["nu"], {})

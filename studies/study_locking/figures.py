@@ -90,6 +90,7 @@ def error_cost_figure(ctx: StudyContext, df: pd.DataFrame) -> Figure:
         for j, nu in enumerate(nus):
             ax = axes[i][j]
             g = df[(df.scene == scene) & (df.nu == nu) & (df.status == "ok") & ~df.reference]
+            g = g[(g.seconds > 0) & np.isfinite(g.error)]  # what a log axis can show
             if not g.error.notna().any():
                 ax.text(0.5, 0.5, f"no reference\n({REFERENCE} did not solve)",
                         ha="center", va="center", transform=ax.transAxes, fontsize=8)  # fmt: skip
@@ -104,7 +105,8 @@ def error_cost_figure(ctx: StudyContext, df: pd.DataFrame) -> Figure:
             handles.setdefault(f"{TOLERANCE:.0%} tolerance", line)
             ax.set_title(f"{scene}, ν = {nu:g}", fontsize=9)
             ax.grid(alpha=0.3, which="major")
-            ax.xaxis.set_major_locator(LogLocator(numticks=4))
+            if ax.get_xscale() == "log":  # a panel with nothing solved stays linear
+                ax.xaxis.set_major_locator(LogLocator(numticks=4))
             for axis in (ax.xaxis, ax.yaxis):
                 axis.set_minor_formatter(NullFormatter())
             if i == len(scenes) - 1:

@@ -78,6 +78,8 @@ def locking_sentence(df: pd.DataFrame) -> list[str]:
     for scene, g in df.groupby("scene", sort=False):
         nu = g.nu.max()
         top = g[(g.nu == nu) & (g.factor == g.factor.max())]
+        if not (top.status == "ok").any():
+            continue  # nothing solved there (skipped by the budget)
         shares = []
         for _, r in top.iterrows():
             if r.status == "ok":
