@@ -57,7 +57,9 @@ def deflection_figure(ctx: StudyContext, df: pd.DataFrame) -> Figure:
         ax.invert_xaxis()  # nu grows to the right
         ax.set_xlabel("Poisson ratio ν (log scale in 0.5 − ν)")
         ax.set_title(f"{scene} (finest level: {tets} tets)", fontsize=10)
-        ax.set_ylim(0.0, max(1.3, float(np.nanmax((g.deflection / g.ref_value).clip(0, 2)))))
+        shares = (g.deflection / g.ref_value).clip(0, 2).to_numpy(float)
+        top = float(np.nanmax(shares)) if np.isfinite(shares).any() else 1.0
+        ax.set_ylim(0.0, max(1.3, top))
         ax.grid(alpha=0.3)
     axes[0][0].set_ylabel(f"deflection / reference ({REFERENCE}, finest level)")
     keys = _ordered(handles)
