@@ -202,4 +202,4 @@ def test_a_budget_bounds_the_whole_study_and_it_still_writes_its_tables(
     # the skipped cases (and any the budget cut short) were not cached: a rerun with more
     # time computes them
     cached = len(list((out / ".cache" / "locking").glob("*.json")))
-    assert 1 <= cached <= int((df.status != "skipped").sum())
+    assert cached <= int((df.status != "skipped").sum())
