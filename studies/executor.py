@@ -21,6 +21,8 @@ Examples
 
 from __future__ import annotations
 
+import atexit
+import contextlib
 import logging
 import os
 from collections.abc import Callable, Sequence
@@ -36,6 +38,22 @@ WORKER_ENV = {
     "OMP_WAIT_POLICY": "passive",
 }
 """Environment of the local worker processes: one thread each (a process per core)."""
+
+
+def worker_count(workers: int | None, scheduler: str | None) -> int:
+    """How many processes run the cases: 1 in-process, ``workers`` (0: one per core) on a
+    local cluster, or 0 when an existing cluster (``scheduler``) decides.
+
+    Examples
+    --------
+    >>> worker_count(None, None), worker_count(3, None)
+    (1, 3)
+    """
+    if scheduler is not None:
+        return 0
+    if workers is None:
+        return 1
+    return workers or os.cpu_count() or 1
 
 
 def run_tasks(
@@ -100,8 +118,26 @@ def run_tasks(
             fut.release()
 
 
+#: The local cluster of this process, by its number of workers: started by the first study
+#: that asks for it and kept for the next (a report's studies share it), closed at exit.
+_LOCAL: dict[int, tuple[Any, Any]] = {}
+
+
+def close_local_clusters() -> None:
+    """Close the local clusters this process started (at exit, or after a test)."""
+    while _LOCAL:
+        _, (client, cluster) = _LOCAL.popitem()
+        with contextlib.suppress(Exception):
+            client.close()
+            cluster.close()
+
+
+atexit.register(close_local_clusters)
+
+
 class _client:
-    """A distributed Client on a new LocalCluster or an existing scheduler (context manager)."""
+    """A distributed Client on the process's LocalCluster or an existing scheduler (context
+    manager; the local cluster stays up for the next study, :data:`_LOCAL`)."""
 
     def __init__(self, workers: int | None, scheduler: str | None):
         self.workers, self.scheduler, self.cluster, self.client = workers, scheduler, None, None
@@ -120,8 +156,13 @@ class _client:
         n = self.workers or os.cpu_count() or 1
         if n < 0:
             raise InputError(f"--workers must be at least 1, got {n}")
+        if n in _LOCAL:
+            client, _ = _LOCAL[n]
+            if client.status == "running":
+                return client
+            close_local_clusters()
         # the spawned workers (and any respawned after a crash) inherit these too; the
-        # caller's own values come back on exit: numba rereads NUMBA_NUM_THREADS at every
+        # caller's own values come back once it is up: numba rereads NUMBA_NUM_THREADS at every
         # compile and raises if it changed after its threads started
         self.saved_env = {k: os.environ.get(k) for k in WORKER_ENV}
         for k, v in WORKER_ENV.items():
@@ -135,13 +176,15 @@ class _client:
             silence_logs=logging.ERROR,
         )
         self.client = Client(self.cluster)
+        self._restore_env()
+        _LOCAL[n] = (self.client, self.cluster)
         return self.client
 
     def __exit__(self, *exc) -> None:
-        if self.client is not None:
-            self.client.close()
-        if self.cluster is not None:
-            self.cluster.close()
+        if self.scheduler is not None and self.client is not None:
+            self.client.close()  # a remote cluster: only our connection
+
+    def _restore_env(self) -> None:
         for k, v in getattr(self, "saved_env", {}).items():
             if v is None:
                 os.environ.pop(k, None)

@@ -41,7 +41,8 @@ body { font-family: system-ui, sans-serif; max-width: 72rem; margin: 2rem auto;
 h1 { font-size: 1.6rem; } h2 { font-size: 1.25rem; border-bottom: 1px solid #ccc;
      margin-top: 2.5rem; }
 code { background: #f4f4f4; padding: 0 .25rem; }
-nav ul { columns: 2; } .caption { font-size: .9rem; color: #444; margin: .3rem 0 1.2rem; }
+nav ul { columns: 2; margin: .3rem 0; } nav h2 { margin-top: 1rem; }
+.summary li { margin: .1rem 0; } .caption { font-size: .9rem; color: #444; margin: .3rem 0 1.2rem; }
 table { border-collapse: collapse; font-size: .8rem; margin: .5rem 0; display: block;
         overflow-x: auto; max-width: 100%; }
 th, td { border: 1px solid #ddd; padding: .15rem .4rem; text-align: right;
@@ -151,6 +152,46 @@ def _headline_html(studies: list[tuple[Path, dict]]) -> str:
     return "<details><summary>Headline numbers</summary>" + table + "</details>"
 
 
+#: Lines of the page's summary (one per study; the rest of the studies share the last).
+SUMMARY_LINES = 10
+#: Characters of a study's first finding shown in the summary.
+SUMMARY_CHARS = 180
+
+
+def shorten(text: str, n: int = SUMMARY_CHARS) -> str:
+    """``text`` cut at a word boundary to at most ``n`` characters, with an ellipsis.
+
+    Examples
+    --------
+    >>> shorten("one two three", 9)
+    'one two…'
+    """
+    if len(text) <= n:
+        return text
+    return text[: n - 1].rsplit(" ", 1)[0].rstrip(",;:") + "…"
+
+
+def summary_html(studies: list[tuple[Path, dict]], lines: int = SUMMARY_LINES) -> str:
+    """The summary under the contents: at most ``lines`` lines, each a study's first
+    finding (shortened) linking to its section; the full findings stay in the sections.
+    """
+    if not studies:
+        return ""
+    items = []
+    shown = studies if len(studies) <= lines else studies[: lines - 1]
+    for folder, d in shown:
+        first = shorten(d["findings"][0]) if d.get("findings") else ""
+        link = f'<a href="#{folder.name}">{html.escape(d["name"].replace("_", "-"))}</a>'
+        items.append(f"<li>{link}: {html.escape(first)}</li>")
+    rest = studies[len(shown) :]
+    if rest:
+        links = ", ".join(
+            f'<a href="#{f.name}">{html.escape(d["name"].replace("_", "-"))}</a>' for f, d in rest
+        )
+        items.append(f"<li>More in {links}.</li>")
+    return '<h2>Summary</h2><ul class="summary">' + "".join(items) + "</ul>"
+
+
 def write_index(root: Path, title: str, intro: str = "") -> Path:
     """Write ``root/index.html`` for every study summary under ``root``.
 
@@ -179,15 +220,11 @@ def write_index(root: Path, title: str, intro: str = "") -> Path:
         parts.append(f"<p>{html.escape(intro)}</p>")
     if not studies:
         parts.append("<p>No study has been run into this folder yet.</p>")
-    parts.append("<h2>Summary of findings</h2><ul>")
-    for _, d in studies:
-        for f in d["findings"][:3]:
-            parts.append(f"<li><strong>{html.escape(d['title'])}</strong>: {html.escape(f)}</li>")
-    parts.append("</ul>")
-    parts.append("<nav><ul>")
+    parts.append('<nav id="contents"><h2>Contents</h2><ul>')
     for folder, d in studies:
         parts.append(f'<li><a href="#{folder.name}">{html.escape(d["title"])}</a></li>')
     parts.append("</ul></nav>")
+    parts.append(summary_html(studies))
     parts.append(_headline_html(studies))
     for folder, d in studies:
         parts.append(f'<section id="{folder.name}"><h2>{html.escape(d["title"])}</h2>')

@@ -284,6 +284,10 @@ def grouped_bars(
                 textcoords="offset points",
             )
     ax.set_xticks(x, groups)
+    if sum(len(str(g)) for g in groups) > 40:  # long names side by side would overlap
+        ax.tick_params(axis="x", labelsize=8)
+        for label in ax.get_xticklabels():
+            label.set(rotation=30, ha="right", rotation_mode="anchor")
     ax.margins(y=0.15)
     ax.set_ylabel(ylabel)
     if log:

@@ -16,6 +16,7 @@ from pathlib import Path
 from springfem.files import atomic_write_text, folder_lock, remove_stale_temp_files
 from springfem.files import jsonable as _jsonable
 
+from .budget import Budget, skipped_finding, skipped_table
 from .cache import CaseCache, source_fingerprint
 from .html import write_index, write_output
 from .registry import REGISTRY, StudyContext, StudyOutput, get_study
@@ -47,6 +48,7 @@ def run_study(
     scheduler: str | None = None,
     scenes: list[StudyScene] | None = None,
     command: str | None = None,
+    budget: Budget | None = None,
 ) -> StudyOutput:
     """Run one study and write its tables, figures and ``headline.json`` under ``out/<name>``.
 
@@ -70,6 +72,10 @@ def run_study(
     command
         The command that regenerates the run (for the HTML page; default the bundled
         study's).
+    budget
+        The whole study's time and the cap of each case (:class:`~studies.budget.Budget`;
+        default none): the cases that do not fit are skipped and listed in
+        ``skipped.csv`` and a finding.
 
     Returns
     -------
@@ -94,14 +100,24 @@ def run_study(
         here / "scenes",
         *plugin_sources(),  # the plug-in models' packages (springfem.model_api)
     )
-    cache = CaseCache(root / ".cache", spec.name, code, workers, scheduler)
+    budget = budget if budget is not None else Budget()
+    budget.start = time.monotonic()
+    cache = CaseCache(root / ".cache", spec.name, code, workers, scheduler, budget,
+                      quiet=not progress)  # fmt: skip
     ctx = StudyContext(spec.name, root / spec.name, quick, cache, progress)
     remove_stale_temp_files(ctx.out)  # tables/figures of a run killed mid-write
     t0 = time.perf_counter()
     settings = settings if settings is not None else spec.settings_for(quick)
     with folder_lock(root / ".cache" / spec.name, "study"):  # one writer per case folder
-        result = spec.run(ctx, scenes if scenes is not None else spec.scenes(settings), settings)
+        try:
+            result = spec.run(ctx, scenes if scenes is not None else spec.scenes(settings),
+                              settings)  # fmt: skip
+        finally:
+            cache.print_warnings()  # each distinct line once, after the progress bars
     result.seconds = time.perf_counter() - t0
+    if cache.skipped:
+        result.tables.append(skipped_table(ctx, cache.skipped))
+        result.findings.append(skipped_finding(cache.skipped, budget))
     atomic_write_text(
         ctx.path("headline.json"), json.dumps(_jsonable(result.headline), indent=2, sort_keys=True)
     )

@@ -25,7 +25,7 @@ import scipy.sparse as sp
 
 from ..errors import SolverError
 from .fd_jacobian import ColoredJacobian
-from .limits import LIMITS, SolveStopped
+from .limits import LIMITS, SolveStopped, cap_reason
 from .system import MechanicalSystem, constrained_positions, free_dofs
 
 JacobianKind = Literal["auto", "analytic", "fd"]
@@ -78,6 +78,7 @@ class SolveContext:
         self.start = time.monotonic()
         max_time = LIMITS["max_time"]
         self.max_time = max_time
+        self.why = cap_reason(max_time)
         self.deadline = None if max_time is None else self.start + float(max_time)
         self.max_steps = LIMITS["max_steps"]
         self.step = 0  # time steps taken (set by the time-stepping loops)
@@ -116,11 +117,7 @@ class SolveContext:
         res = f"relative residual {r / self.f_ref:.3g}" if self.f_ref else f"residual {r:.3g} N"
         # the loops set ``step`` before evaluating its forces: ``step - 1`` are complete
         what = f"{self.step - 1} steps" if self.step else f"{self.n_evals} force evaluations"
-        cap = (
-            f"the --max-time cap of {self.max_time:g} s"
-            if late
-            else (f"the cap of {self.max_steps} steps")
-        )
+        cap = self.why if late else f"the cap of {self.max_steps} steps"
         raise SolveStopped(
             f"stopped after {now - self.start:.3g} s / {what} at {res} ({cap})",
             state=np.array(x, dtype=float).reshape(self.n, 3),

@@ -72,7 +72,7 @@ class SolveStopped(SpringFemError, RuntimeError):
         self.load_factor = load_factor
 
 
-LIMITS: dict[str, float | None] = {"max_time": None, "max_steps": None}
+LIMITS: dict[str, float | str | None] = {"max_time": None, "max_steps": None, "why": None}
 #: Seconds past the cap after which the watchdog interrupts the main thread.
 WATCHDOG_GRACE = 2.0
 #: Seconds between two looks of :func:`interruptible` at the cap and at Ctrl-C.
@@ -82,7 +82,9 @@ _ABANDONED: list[threading.Thread] = []  # workers of interruptible calls left r
 
 
 @contextlib.contextmanager
-def solve_limits(max_time: float | None = None, max_steps: int | None = None) -> Iterator[None]:
+def solve_limits(
+    max_time: float | None = None, max_steps: int | None = None, why: str | None = None
+) -> Iterator[None]:
     """Cap every solve started inside the block: wall time and time steps.
 
     A :class:`SolveContext` created inside takes a deadline ``max_time`` seconds after its
@@ -98,6 +100,9 @@ def solve_limits(max_time: float | None = None, max_steps: int | None = None) ->
     max_steps
         Time steps per solve (``None``: no cap; Newton iterations are capped by
         ``max_iter``).
+    why
+        What the time cap is, for the message of a stop (default ``the --max-time cap of
+        N s``; a study's runner: its budget).
 
     Yields
     ------
@@ -113,7 +118,7 @@ def solve_limits(max_time: float | None = None, max_steps: int | None = None) ->
     True
     """
     saved = dict(LIMITS)
-    LIMITS.update(max_time=max_time, max_steps=max_steps)
+    LIMITS.update(max_time=max_time, max_steps=max_steps, why=why)
     try:
         yield
     finally:
@@ -146,6 +151,7 @@ class Deadline:
 
     def __init__(self) -> None:
         self.max_time = LIMITS["max_time"]
+        self.why = cap_reason(self.max_time)
         self.start = time.monotonic()
         self.progress = "start"  # what has been done (for the message of a stop)
         self.fired = False  # the watchdog interrupted the main thread
@@ -171,7 +177,7 @@ class Deadline:
         if interrupted and not self.fired and not self.expired():
             why = "interrupted (Ctrl-C)"
         else:
-            why = f"the --max-time cap of {self.max_time:g} s"
+            why = self.why
         return SolveStopped(f"stopped after {elapsed:.3g} s / {self.progress} ({why})")
 
     @contextlib.contextmanager
@@ -226,9 +232,21 @@ class Deadline:
         if elapsed > self.max_time:
             raise SolveStopped(
                 f"stopped after {elapsed:.3g} s / {what} at relative residual {residual:.3g} "
-                f"(the --max-time cap of {self.max_time:g} s)",
+                f"({self.why})",
                 state=state,
             )
+
+
+def cap_reason(max_time: float | None) -> str:
+    """What stopped a solve at ``max_time``: :func:`solve_limits`'s ``why``, else the cap.
+
+    Examples
+    --------
+    >>> cap_reason(5.0)
+    'the --max-time cap of 5 s'
+    """
+    why = LIMITS.get("why")
+    return str(why) if why else f"the --max-time cap of {max_time or 0:g} s"
 
 
 def checkpoint() -> None:

@@ -205,8 +205,12 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FILE",
         help="run the study on this scene instead of the bundled ones (where it makes sense)",
     )
-    _max_time(p, "cap each solve (default: 120 s with --scene, none otherwise); a capped "
-              "solve is a stopped row")  # fmt: skip
+    _max_time(p, "cap each case, the reference's too (default: 120 s with --scene, none "
+              "otherwise); a capped solve is a partial or stopped row")  # fmt: skip
+    p.add_argument("--budget", type=_positive_float, default=None, metavar="SECONDS",
+                   help="time for the whole study (default: 100 s with --scene --quick, "
+                   "160 s with --scene, none otherwise): cases that do not fit are skipped "
+                   "and listed, and the tables are still written")  # fmt: skip
     p.add_argument("--tolerance", type=_positive_float, default=None, metavar="ERROR",
                    help="the model error a variant may have to count (studies with a "
                    "tolerance: ablation, speed-accuracy)")  # fmt: skip

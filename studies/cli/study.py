@@ -9,12 +9,16 @@ from springfem.errors import InputError
 from springfem.files import output_folder
 from springfem.mechanics.limits import solve_limits
 
+from ..budget import Budget
 from ..html import write_index
 from ..runner import default_out, run_report, run_study
 
 #: Default cap of each solve of a study on a user's scene (s): a scene the solvers cannot
 #: handle gives stopped (partial or failed) rows instead of a study that never ends.
 USER_SCENE_MAX_TIME = 120.0
+#: Default budget of a whole study on a user's scene (s), quick and full preset: the plan
+#: line names it, ``--budget`` changes it.
+USER_SCENE_BUDGET = {True: 100.0, False: 160.0}
 
 
 def cmd_study(args: argparse.Namespace) -> int:
@@ -29,7 +33,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     ----------
     args
         Parsed options ``name``, ``quick``, ``out``, ``scene``, ``set``, ``max_time``,
-        ``workers``, ``scheduler``.
+        ``budget``, ``workers``, ``scheduler``.
 
     Returns
     -------
@@ -79,10 +83,15 @@ def cmd_study(args: argparse.Namespace) -> int:
     cap = getattr(args, "max_time", None)
     if cap is None and scene is not None:
         cap = USER_SCENE_MAX_TIME
+    seconds = getattr(args, "budget", None)
+    if seconds is None and scene is not None:
+        seconds = USER_SCENE_BUDGET[bool(args.quick)]
+    budget = Budget(seconds=seconds, case_cap=cap)
     with solve_limits(max_time=cap):
         res = run_study(spec.name, out, args.quick, scenes=scenes, settings=settings,
                         workers=getattr(args, "workers", None),
-                        scheduler=getattr(args, "scheduler", None), command=command)  # fmt: skip
+                        scheduler=getattr(args, "scheduler", None), command=command,
+                        budget=budget)  # fmt: skip
     if scene is not None:
         write_index(out, f"springfem studies of {scenes[0].label}",
                     f"Every study run on the scene {scene} into this folder.")  # fmt: skip

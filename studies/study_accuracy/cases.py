@@ -123,6 +123,7 @@ def summarize(cmp: Comparison, fields: bool = False) -> dict[str, Any]:
         "failures": cmp.failures,
         "nodes": cmp.scene.mesh.n_points,
         "tets": cmp.scene.mesh.n_tets,
+        "units": cmp.scene.units,
         "errors": errors,
         "probes": {n: s.result.probes for n, s in cmp.solutions.items()},
         "volume": {n: s.result.volume["relative_change"] for n, s in cmp.solutions.items()},

@@ -19,10 +19,11 @@ def field_conclusion(scene: Scene, r: dict, e: dict) -> str:
     model, total, disc = (nan_float(e[k].get("rel_l2")) for k in ERROR_KINDS)
     ref = np.asarray(r["u"][r["reference"]], float)
     err = metrics.nodal_error(np.asarray(r["u"]["spring"], float), ref)
+    unit = "m" if scene.units == "SI" else "mm"
     lo, hi = scene.mesh.bounding_box()
     at = (scene.mesh.points[int(np.argmax(err))] - lo) / np.where(hi > lo, hi - lo, 1.0)
     return (
-        f"The spring model's error peaks at {err.max():.3g} m, at "
+        f"The spring model's error peaks at {err.max():.3g} {unit}, at "
         f"({at[0]:.2f}, {at[1]:.2f}, {at[2]:.2f}) of the box (fractions of its size); its "
         f"total error is {total:.1%} (L2) against {r['p1']}'s discretisation error "
         f"{disc:.1%}, its model error (vs {r['p1']}) {model:.1%}."
@@ -31,7 +32,7 @@ def field_conclusion(scene: Scene, r: dict, e: dict) -> str:
 
 def bar_figure(ctx: StudyContext, errors: pd.DataFrame, probes: pd.DataFrame) -> Figure:
     plt = pyplot()
-    fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.2))
+    fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.8), layout="constrained")
     groups = list(errors["scene"])
     grouped_bars(
         a,

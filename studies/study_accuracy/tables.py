@@ -10,6 +10,9 @@ import pandas as pd
 from ..compare import COMPONENTS
 from .cases import ERROR_KINDS, EXACT_KINDS, nan_float
 
+#: The length unit of each unit system (:data:`springfem.scene.types.UNIT_SYSTEMS`).
+LENGTH_UNIT = {"SI": "m", "mm-kPa": "mm", "mm-MPa": "mm"}
+
 
 def error_table(res: dict[str, dict]) -> pd.DataFrame:
     """Model, total and discretisation errors (L2, max) and volume changes, one row per scene
@@ -24,6 +27,7 @@ def error_table(res: dict[str, dict]) -> pd.DataFrame:
             "tets": r["tets"],
             "reference": r["reference"],
             "same-mesh P1": r["p1"],
+            "law": r.get("laws", {}).get(r["p1"], ""),
             "max strain (ref)": nan_float(r["strain_ref"]),
         }
         for kind in ERROR_KINDS:
@@ -101,4 +105,8 @@ def probe_table(
         else:
             row["lateral spring / ref − 1"] = float("nan")
         prow.append(row)
-    return pd.DataFrame(prow)
+    df = pd.DataFrame(prow)
+    units = {res[n].get("units", "SI") for n in res}
+    if len(units) == 1 and (unit := LENGTH_UNIT.get(units.pop(), "m")) != "m":
+        df.columns = [c.replace("(m)", f"({unit})") for c in df.columns]  # the scene's units
+    return df

@@ -124,11 +124,12 @@ class Plan:
         return self.scene.case("convergence", VERSION, model=model, factor=factor)
 
     def cases(self) -> list[dict[str, Any]]:
-        """Every case of the plan: levels, P2 levels, the cosine check, the reference last."""
+        """Every case of the plan: the reference first (a budget leaves out the last cases,
+        never the reference), then levels, P2 levels and the cosine check."""
         p1, p2 = self.fem
         out = [self.case(m, k) for m in (SPRING, p1, EXACT) for k in self.levels]
         out += [self.case(p2, k) for k in self.p2_levels]
-        return [*out, self.case(COSINE, self.cosine), self.case(p2, self.ref)]
+        return [self.case(p2, self.ref), *out, self.case(COSINE, self.cosine)]
 
 
 def plan(s: StudyScene, q: Settings) -> Plan:

@@ -106,19 +106,19 @@ class Analysis:
 
 
 def analyse(p: Plan, cases: list[dict], results: list[dict]) -> Analysis:
-    """Errors of every level against the reference (the last case), rates and the gap, from
+    """Errors of every level against the reference (the first case), rates and the gap, from
     :meth:`Plan.cases` and their results; a :class:`~springfem.errors.SolverError` if the
     reference solve failed.
     """
     from springfem.errors import SolverError
 
-    ref = results[-1]
+    ref = results[0]
     if ref["status"] != "ok":
         raise SolverError(f"the reference {p.fem[1]} on level {p.ref} failed: {ref['message']}")
     track, analytic = tracked(p, ref)
     w_ref, u_ref = track.value(ref), np.asarray(ref["u_coarse"], float)
     rows = []
-    for c, r in zip(cases[:-1], results[:-1], strict=True):
+    for c, r in zip(cases[1:], results[1:], strict=True):
         ok = r["status"] == "ok"
         w = track.value(r) if ok else np.nan
         rows.append(

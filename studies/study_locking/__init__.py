@@ -34,9 +34,22 @@ Examples
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..registry import StudyContext, StudyOutput, study_run
 from ..scenes import StudyScene, require
-from .cases import Settings, bundled_scenes, cases, locking_case
+from .cases import (
+    COST_PER_DOF,
+    REFERENCE,
+    TOLERANCE,
+    Settings,
+    bundled_scenes,
+    case_of,
+    cases,
+    estimate,
+    locking_case,
+    scene_methods,
+)
 from .figures import deflection_figure, error_cost_figure
 from .findings import report_findings
 from .tables import (
@@ -63,12 +76,14 @@ __all__ = ["Settings", "bundled_scenes", "run"]
 )
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
     require(scenes, ctx.name)
-    all_cases, all_results, laws = [], [], {}
+    all_cases, all_results, laws, notes = [], [], {}, []
     for sc in scenes:
         laws[sc.label] = str(sc.table.get("material", {}).get("law", "linear"))
-        cs = cases(sc, settings)
+        factors, note = affordable_levels(ctx, sc, settings)
+        notes += note
+        cs, rs = _staged(ctx, sc, settings, factors)
         all_cases += cs
-        all_results += ctx.cache.run(cs, locking_case, ctx.progress, sc.label)
+        all_results += rs
     df, refs = with_errors(result_frame(all_cases, all_results))
     answers = answer_frame(df)
     findings, headline = report_findings(df, refs, answers, laws, settings.max_time)
@@ -76,8 +91,115 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
     return StudyOutput(
         name=ctx.name,
         title=f"Locking: the cheapest method within 5 % near incompressibility ({names})",
-        findings=findings,
+        findings=notes + findings,
         tables=[answer_table(ctx, answers), cases_table(ctx, df), reference_table(ctx, refs)],
         figures=[deflection_figure(ctx, df), error_cost_figure(ctx, df)],
         headline=headline,
     )
+
+
+def affordable_levels(
+    ctx: StudyContext, sc: StudyScene, s: Settings
+) -> tuple[tuple[int, ...], list[str]]:
+    """The levels of a scene within the study's budget, and a note when some are left out.
+
+    Without a budget every level of the settings runs. With one, the levels are kept from
+    the coarsest up while the predicted time of all their cases (DOFs × each method's cost
+    per DOF, :func:`~.cases.estimate`; on the workers in parallel) fits in it; the coarsest
+    always runs, and the reference is solved on the finest level kept.
+    """
+    factors = tuple(sc.params.get("factors", s.factors))
+    budget = ctx.cache.budget
+    if budget.seconds is None or len(factors) == 1:
+        return factors, []
+    from ..executor import worker_count
+
+    workers = max(worker_count(ctx.cache.workers, ctx.cache.scheduler), 1)
+    ctx.cache.costs.priors.update(COST_PER_DOF)
+    kept, spent = [], 0.0
+    for f in factors:
+        cost = 0.0
+        for c in cases(sc, s, (f,)):
+            kind, size, _ = estimate(c)
+            got = ctx.cache.costs.predict(kind, size)
+            cost += got if got is not None else 0.0
+        cost = min(cost, len(cases(sc, s, (f,))) * s.max_time)  # each case is capped
+        if kept and spent + cost / workers > budget.seconds:
+            left = [x for x in factors if x not in kept]
+            return tuple(kept), [
+                f"{sc.label}: levels {', '.join(f'x{x}' for x in left)} left out: their "
+                f"predicted time ({cost / workers:.0f} s for x{f} alone) does not fit in the "
+                f"study's budget of {budget.seconds:g} s; the reference ({REFERENCE}) is "
+                f"solved on level x{kept[-1]}, the finest that fits."
+            ]
+        kept.append(f)
+        spent += cost / workers
+    return tuple(kept), []
+
+
+def _staged(
+    ctx: StudyContext, sc: StudyScene, s: Settings, factors: tuple[int, ...]
+) -> tuple[list[dict], list[dict]]:
+    """The cases and results of one scene: the references first (the finest level), then
+    each level from the coarsest, leaving out a method's level whose predicted time is over
+    the cap (a ``skipped`` row) and, with ``s.prune``, the finer levels of a method that is
+    within :data:`~.cases.TOLERANCE` at that ν already."""
+    from ..budget import skipped_result
+
+    methods = scene_methods(sc, s)
+    finest = factors[-1]
+    run = dict(progress=ctx.progress, estimate=estimate, skippable=True, priors=COST_PER_DOF)
+    with_ref = REFERENCE in methods
+    ref_cases = [case_of(sc, s, REFERENCE, nu, finest) for nu in s.nus] if with_ref else []
+    ref_res = ctx.cache.run(ref_cases, locking_case, desc=f"{sc.label} reference", **run)
+    ref_res = [{**r, "tets": estimate(c)[2]} if r.get("status") == "skipped" else r
+               for c, r in zip(ref_cases, ref_res, strict=True)]  # fmt: skip
+    refs = {c["nu"]: r for c, r in zip(ref_cases, ref_res, strict=True)}
+    axis = _axis(sc, ref_res)
+    done: set[tuple[str, float]] = set()  # (method, nu) within the tolerance
+    out_c, out_r = [], []
+    for f in factors:
+        todo, skipped = [], []
+        for nu in s.nus:
+            for m in methods:
+                if m == REFERENCE and f == finest or (m, nu) in done:
+                    continue
+                c = case_of(sc, s, m, nu, f)
+                kind, size, _ = estimate(c)
+                guess = ctx.cache.costs.predict(kind, size) if f != factors[0] else None
+                if m != REFERENCE and guess is not None and guess > 1.5 * s.max_time:
+                    skipped.append((c, skipped_result(
+                        f"not run: predicted {guess:.3g} s, over the {s.max_time:g} s cap "
+                        "of a solve")))  # fmt: skip
+                else:
+                    todo.append(c)
+        res = ctx.cache.run(todo, locking_case, desc=f"{sc.label} level x{f}", **run)
+        for c, r in [*zip(todo, res, strict=True), *skipped]:
+            if r.get("status") == "skipped":
+                r = {**r, "tets": estimate(c)[2]}  # the size it would have had
+            out_c.append(c)
+            out_r.append(r)
+            ref = refs.get(c["nu"], {})
+            if s.prune and _within(r, ref, axis):
+                done.add((c["method"], c["nu"]))
+    for c, r in zip(ref_cases, ref_res, strict=True):
+        out_c.append(c)
+        out_r.append(r)
+    return out_c, out_r
+
+
+def _axis(sc: StudyScene, ref_results: list[dict]) -> int | None:
+    """The compared component: the bundled scene's, else the reference's largest mean
+    ``|u|`` (``None``: no reference solved)."""
+    if sc.params.get("component") is not None:
+        return int(sc.params["component"])
+    us = [np.abs(r["u"]) for r in ref_results if r.get("status") == "ok" and "u" in r]
+    return int(np.argmax(np.mean(us, axis=0))) if us else None
+
+
+def _within(r: dict, ref: dict, axis: int | None) -> bool:
+    """Whether a result is within the tolerance of its reference."""
+    if axis is None or r.get("status") != "ok" or ref.get("status") != "ok":
+        return False
+    value = ref["u"][axis]
+    return bool(value and abs(r["u"][axis] / value - 1.0) <= TOLERANCE)

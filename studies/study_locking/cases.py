@@ -26,7 +26,7 @@ import numpy as np
 from reference_fem.options import FemOptions
 from springfem.errors import InputError
 from springfem.materials.tissue import TISSUE_LAWS
-from springfem.mechanics.limits import solve_limits
+from springfem.mechanics.limits import LIMITS, solve_limits
 
 from .. import models
 from ..scenes import StudyScene
@@ -122,25 +122,31 @@ class Settings:
     methods
         Names of :data:`METHODS` to run.
     max_time
-        Cap of one solve (s): a method that needs longer is recorded as stopped (the
-        reference, :data:`REFERENCE`, is not capped).
+        Cap of one solve (s): a method that needs longer is recorded as stopped, and a
+        finer level whose predicted time (:func:`estimate`) is over the cap is not run (the
+        reference, :data:`REFERENCE`, is capped only by the user's ``--max-time``).
     timed
         Time fairly (an untimed warm-up solve per method, the median of three under
         :data:`REPEAT_BELOW` s); ``False``: one solve each (tests).
+    prune
+        Do not run a method's finer levels at a Poisson ratio once a coarser level is
+        within :data:`TOLERANCE` (they cannot be cheaper, and the method is not locked).
     """
 
-    nus: tuple[float, ...] = NUS
+    nus: tuple[float, ...] = (0.3, 0.49, 0.4999)
     cook: tuple[int, int, int] | None = (4, 4, 1)
     beam: tuple[int, int, int] | None = (10, 1, 1)
     factors: tuple[int, ...] = (1, 2, 4)
     beam_factors: tuple[int, ...] = (1, 2, 3)
     methods: tuple[str, ...] = field(default_factory=lambda: tuple(METHODS))
-    max_time: float = 120.0
+    max_time: float = 30.0
     timed: bool = True
+    prune: bool = True
 
     @classmethod
     def full(cls) -> Settings:
-        """Cook 4x4x1 refined x2, x4 (96 to 6,144 tets); the beam 10x1x1 to Land's 30x3x3."""
+        """Cook 4x4x1 refined x2, x4 (96 to 6,144 tets); the beam 10x1x1 to Land's 30x3x3;
+        ν = 0.3, 0.49, 0.4999 (:data:`NUS` has two more), a 30 s cap of each solve."""
         return cls()
 
     @classmethod
@@ -148,7 +154,7 @@ class Settings:
         """Three Poisson ratios; Cook 2x2x1 refined x2, x4 (24 to 1,536 tets); the beam
         3x1x1 to 9x3x3; a 30 s cap (nodal-strain P1 of the finest beam takes ~8 s on a
         busy 2-core machine)."""
-        return cls(nus=(0.3, 0.49, 0.4999), cook=(2, 2, 1), beam=(3, 1, 1), max_time=30.0)
+        return cls(cook=(2, 2, 1), beam=(3, 1, 1))
 
 
 def bundled_scenes(s: Settings) -> list[StudyScene]:
@@ -248,21 +254,89 @@ def deflection_probe(sc: StudyScene) -> str:
     return str(names[0])
 
 
-def cases(sc: StudyScene, s: Settings) -> list[dict[str, Any]]:
-    """The scene's cases: every level, Poisson ratio and method (coarse levels first)."""
-    probe = deflection_probe(sc)
-    factors = tuple(sc.params.get("factors", s.factors))
+def scene_methods(sc: StudyScene, s: Settings) -> list[str]:
+    """The methods of ``s`` that apply to the scene (the tissue element: a tissue law)."""
     tissue = sc.table.get("material", {}).get("law") in TISSUE_LAWS
-    methods = [m for m in s.methods if tissue or METHODS[m].changes.get("stiffening") != "law"]
-    out = []
-    for factor in factors:
-        for nu in s.nus:
-            at = with_nu(sc, nu)
-            for m in methods:
-                cap = None if m == REFERENCE else s.max_time  # the reference is never capped
-                out.append(at.case(STUDY, VERSION, method=m, nu=nu, factor=factor, probe=probe,
-                                   max_time=cap, timed=s.timed))  # fmt: skip
-    return out
+    return [m for m in s.methods if tissue or METHODS[m].changes.get("stiffening") != "law"]
+
+
+def case_of(sc: StudyScene, s: Settings, method: str, nu: float, factor: int) -> dict[str, Any]:
+    """The cache case of one method at one Poisson ratio and level."""
+    cap = None if method == REFERENCE else s.max_time  # the reference: only the user's cap
+    probe = deflection_probe(sc)
+    return with_nu(sc, nu).case(STUDY, VERSION, method=method, nu=nu, factor=factor,
+                                probe=probe, max_time=cap, timed=s.timed)  # fmt: skip
+
+
+def cases(
+    sc: StudyScene, s: Settings, factors: tuple[int, ...] | None = None
+) -> list[dict[str, Any]]:
+    """The scene's cases: every level, Poisson ratio and method (coarse levels first)."""
+    factors = tuple(factors or sc.params.get("factors", s.factors))
+    methods = scene_methods(sc, s)
+    return [case_of(sc, s, m, nu, f) for f in factors for nu in s.nus for m in methods]
+
+
+# ------------------------------------------------------------------------ predicted cost
+
+#: Measured seconds per DOF of each method's static solve (Land's beam, Guccione, on
+#: 1,620 tets, ``springfem study locking`` on the shared 2-core machine): what a plan
+#: predicts from before the study has measured a method on the scene itself.
+COST_PER_DOF = {
+    "P1": 9e-4, "P1-nodal-volume": 2.6e-3, "P1-nodal-strain": 4.1e-3, "MINI": 1.3e-3,
+    "P2": 3.0e-3, "P2-mixed": 1.4e-3, "spring-spec": 6.5e-4, "spring-exact": 4e-4,
+    "spring-nodal-volume": 1.4e-3, "spring-stabilised": 2.9e-3,
+    "spring-tissue-stabilised": 3.0e-3,
+}  # fmt: skip
+
+_COUNTS: dict[str, tuple[int, int, int]] = {}
+
+
+def mesh_counts(case: dict[str, Any]) -> tuple[int, int, int]:
+    """``(vertices, edges, tets)`` of a case's level-1 mesh (remembered per mesh)."""
+    import json
+
+    key = json.dumps([case["table"].get("mesh"), case.get("path"), case.get("mesh_digest")],
+                     sort_keys=True, default=str)  # fmt: skip
+    if key not in _COUNTS:
+        from ..study_convergence.levels import refined_scene
+
+        mesh = refined_scene(case["table"], case.get("path"), 1).mesh
+        t = np.sort(mesh.tets, axis=1)
+        pairs = np.concatenate([t[:, [a, b]] for a, b in ((0, 1), (0, 2), (0, 3), (1, 2),
+                                                          (1, 3), (2, 3))])  # fmt: skip
+        edges = len(np.unique(pairs, axis=0))
+        _COUNTS[key] = (mesh.n_points, edges, mesh.n_tets)
+    return _COUNTS[key]
+
+
+def dofs(method: str, vertices: int, edges: int, tets: int) -> int:
+    """The unknowns of ``method`` on a mesh: 3 per vertex (P1-type, spring), + 3 per edge
+    (P2), + a pressure per vertex (Taylor–Hood), + 3 per tet and a pressure per vertex
+    (MINI).
+
+    Examples
+    --------
+    >>> dofs("P1", 10, 30, 20), dofs("P2-mixed", 10, 30, 20), dofs("MINI", 10, 30, 20)
+    (30, 130, 100)
+    """
+    m = METHODS.get(method)
+    form = (m.fem or {}).get("formulation", "") if m is not None else ""
+    if m is not None and m.kind == "fem" and m.order == 2:
+        return 3 * (vertices + edges) + (vertices if form == "mixed" else 0)
+    if form == "mini":
+        return 3 * (vertices + tets) + vertices
+    return 3 * vertices
+
+
+def estimate(case: dict[str, Any]) -> tuple[str, float, int]:
+    """``(kind, DOFs, tets)`` of a case (kind: ``method@scene@nu``), for its predicted cost
+    (DOFs × the method's cost per DOF, :class:`studies.budget.CostModel`); a level ``r`` has
+    ``r³`` times the vertices, edges and tets of level 1."""
+    v, e, t = mesh_counts(case)
+    k = int(case["factor"]) ** 3
+    kind = f"{case['method']}@{case['scene']}@{case['nu']:g}"
+    return kind, float(dofs(case["method"], v * k, e * k, t * k)), t * k
 
 
 # ------------------------------------------------------------------------------ a solve
@@ -295,13 +369,15 @@ def _timed_run(model: models.Model, scene) -> models.Outcome:
 def locking_case(case: dict[str, Any]) -> dict[str, Any]:
     """Solve one case: status, the probe's displacement, the wall time, the mesh size.
 
-    A solve that reaches the cap ``max_time`` or fails is recorded with its status
-    (``partial``: the load factor it reached) and message.
+    The cap is the smaller of the case's ``max_time`` and the caller's (the user's
+    ``--max-time`` caps every case, the reference's too). A solve that reaches it or fails
+    is recorded with its status (``partial``: the load factor it reached) and message.
     """
     scene = case_level(case)
     model = METHODS[case["method"]]
     t0 = time.perf_counter()
-    with solve_limits(max_time=case["max_time"]):
+    caps = [c for c in (case["max_time"], LIMITS["max_time"]) if c is not None]
+    with solve_limits(max_time=min(caps) if caps else None, why=LIMITS.get("why")):
         got = _timed_run(model, scene) if case.get("timed", True) else models.run(scene, model)
     out: dict[str, Any] = {
         "status": got.status,

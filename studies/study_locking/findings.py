@@ -78,6 +78,8 @@ def locking_sentence(df: pd.DataFrame) -> list[str]:
     for scene, g in df.groupby("scene", sort=False):
         nu = g.nu.max()
         top = g[(g.nu == nu) & (g.factor == g.factor.max())]
+        if not (top.status == "ok").any():
+            continue  # nothing solved there (skipped by the budget)
         shares = []
         for _, r in top.iterrows():
             if r.status == "ok":
@@ -146,7 +148,16 @@ def report_findings(
             "nearly incompressible at each ν (Land's beam: κ/μ = 500 at ν = 0.499, "
             "5000 at 0.4999)."
         )
-    stopped = df[df.status != "ok"]
+    skipped = df[df.status == "skipped"]
+    if len(skipped):
+        which = ", ".join(f"{m} ({len(x)})" for m, x in skipped.groupby("method", sort=False))
+        findings.append(
+            f"Not run (count): {which}: their predicted time (DOFs × the method's measured "
+            f"cost per DOF) was over the {max_time:g} s cap of a solve or the study's "
+            "budget; a method within 5 % on a coarser level does not run its finer levels "
+            "either (they cannot be cheaper)."
+        )
+    stopped = df[~df.status.isin(["ok", "skipped"])]
     if len(stopped):
         which = ", ".join(f"{m} ({len(x)})" for m, x in stopped.groupby("method", sort=False))
         # a stopped solve could only have been the answer where no adequate method is

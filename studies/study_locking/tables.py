@@ -132,6 +132,7 @@ def answer_frame(df: pd.DataFrame, tolerance: float = TOLERANCE) -> pd.DataFrame
         win = cheapest(g, tolerance)
         ref = g[g.reference.astype(bool)]
         close = g[(g.status == "ok") & (g.error <= tolerance)].method.unique()
+        unrun = g[g.status == "skipped"].method.unique()
         lin = cheapest(g[g.method.isin(LINEAR_TETS)], tolerance)
         rows.append(
             {
@@ -146,8 +147,11 @@ def answer_frame(df: pd.DataFrame, tolerance: float = TOLERANCE) -> pd.DataFrame
                 "its error (linear)": np.nan if lin is None else lin.error,
                 "its seconds (linear)": np.nan if lin is None else lin.seconds,
                 "reference seconds": ref.seconds.iloc[0] if len(ref) else np.nan,
-                "never within tolerance": ", ".join(m for m in g.method.unique() if m not in close)
+                "never within tolerance": ", ".join(
+                    m for m in g.method.unique() if m not in close and m not in unrun
+                )
                 or "none",
+                "not run on every level": ", ".join(m for m in unrun if m not in close) or "none",
             }
         )
     return pd.DataFrame(rows)
@@ -191,5 +195,7 @@ def answer_table(ctx: StudyContext, answers: pd.DataFrame, tolerance: float = TO
         f"time) whose deflection is within {tolerance:.0%} of the reference, excluding the "
         "reference itself (``none``: no method qualifies), the same among the methods on "
         "the mesh's own vertices (linear tets: P1-type FEM and the spring elements), the "
-        f"reference's own time, and the methods more than {tolerance:.0%} off on every level.",
+        f"reference's own time, the methods more than {tolerance:.0%} off on every level, "
+        "and those not run on every level (predicted over the cap of a solve, or over the "
+        "study's budget) and not within the tolerance where they ran.",
     )

@@ -101,7 +101,6 @@ def script(tmp_path_factory) -> Path:
 @pytest.mark.parametrize(
     "moments", [pytest.param(3, id="3-moments"), pytest.param(20, id="20", marks=pytest.mark.slow)]
 )
-@pytest.mark.slow
 def test_sweep_killed_at_random_moments_loses_no_finished_case(script, tmp_path, moments):
     out, log = tmp_path / "out", tmp_path / "sweep.log"
     rng = np.random.default_rng(20261202)

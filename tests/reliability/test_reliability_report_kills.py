@@ -1,13 +1,13 @@
-"""Reliability: ``springfem report`` killed with SIGKILL at 20 random moments loses nothing.
+"""Reliability: ``springfem report`` killed with SIGKILL at random moments loses nothing.
 
 A quick report of one real study (``anisotropy``: FEM and spring solves, tables, a figure,
 ``REPORT.md``, ``index.html`` and the headline JSON) runs in a subprocess that is killed at
-20 moments drawn uniformly over an uninterrupted run's duration (seeded). After every kill
-each case-cache entry parses as JSON (none is half-written) and every report file that
-exists is whole. A final run then finishes, leaves no temporary file behind, and its
-headline numbers equal those of the uninterrupted run in a fresh folder (an independent
-run, not a stored value), and the cache entries written before it are left untouched (the
-finished cases are read, not recomputed).
+3 (the default selection) or 20 (``-m slow``) moments drawn uniformly over an
+uninterrupted run's duration (seeded). After every kill each case-cache entry parses as
+JSON (none is half-written), every report file that exists is whole, and no entry written
+before the kill was written again (a finished case is never redone). A final run then
+finishes, leaves no temporary file behind, and its headline numbers and tables equal those
+of the uninterrupted run in a fresh folder (an independent run, not a stored value).
 """
 
 from __future__ import annotations
@@ -21,13 +21,11 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 STUDY = "anisotropy"
-KILLS = 20
-
-pytestmark = pytest.mark.slow
 
 SCRIPT = f"""\
 import sys
@@ -74,13 +72,32 @@ def headline(out: Path) -> dict:
     return json.loads((out / "headline-quick.json").read_text())[STUDY]
 
 
-def test_report_killed_at_random_moments_resumes_to_the_same_headline(tmp_path):
+def entries(out: Path) -> dict[Path, int]:
+    """The case-cache entries and their modification times."""
+    cache = out / ".cache"
+    return {p: p.stat().st_mtime_ns for p in cache.rglob("*.json")} if cache.is_dir() else {}
+
+
+def tables(out: Path) -> dict[str, pd.DataFrame]:
+    """The study's CSV tables, without the columns of measured times."""
+    got = {}
+    for p in sorted((out / STUDY).glob("*.csv")):
+        df = pd.read_csv(p)
+        got[p.name] = df[[c for c in df.columns if "time" not in c and "second" not in c]]
+    return got
+
+
+@pytest.mark.parametrize(
+    "kills", [pytest.param(3, id="3-kills"), pytest.param(20, id="20", marks=pytest.mark.slow)]
+)
+def test_report_killed_at_random_moments_resumes_to_the_same_headline(tmp_path, kills):
     reference = tmp_path / "reference"
     duration = run_to_end(reference)
     out = tmp_path / "killed"
-    moments = np.random.default_rng(7).uniform(0.0, duration, KILLS)
+    moments = np.random.default_rng(7).uniform(0.0, duration, kills)
     finished_early = 0
     for t in moments:
+        before = entries(out)
         proc = start(out)
         try:
             proc.wait(timeout=t)
@@ -89,7 +106,10 @@ def test_report_killed_at_random_moments_resumes_to_the_same_headline(tmp_path):
             proc.send_signal(signal.SIGKILL)
             proc.wait(timeout=60)
         check_whole(out)
-    before = {p: p.stat().st_mtime_ns for p in (out / ".cache").rglob("*.json")}
+        after = entries(out)
+        redone = [p.name for p, m in before.items() if after.get(p) != m]
+        assert not redone, f"finished cases computed again: {redone}"
+    before = entries(out)
     run_to_end(out)
     assert not [p for p in out.rglob("*") if ".tmp" in p.name], "stale temporary files"
     # the finished cases were read, not recomputed: their entries are untouched
@@ -98,4 +118,8 @@ def test_report_killed_at_random_moments_resumes_to_the_same_headline(tmp_path):
     assert set(got) == set(ref)
     for key, value in ref.items():
         assert got[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
-    assert finished_early < KILLS  # most kills landed inside a run
+    want, have = tables(reference), tables(out)
+    assert set(want) == set(have) and want
+    for name, df in want.items():
+        pd.testing.assert_frame_equal(have[name], df, check_exact=False, rtol=1e-9)
+    assert finished_early < kills  # the kills landed inside a run

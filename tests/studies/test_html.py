@@ -8,13 +8,14 @@ the browser, its driver or Selenium is missing (``.ci/run`` installs them).
 
 from __future__ import annotations
 
+import re
 import shutil
 
 import pytest
 
 from studies.cache import CaseCache
 from studies.html import read_outputs, write_index, write_output
-from studies.registry import StudyContext
+from studies.registry import StudyContext, StudyOutput
 from studies.study_stability import run as stability
 from studies.study_stability.cases import Settings, bar
 
@@ -78,5 +79,52 @@ def test_every_figure_loads_and_every_table_has_rows_in_a_browser(page):
         for t in tables:
             assert len(t.find_elements(By.CSS_SELECTOR, "tbody tr")) > 0
         assert driver.title == "Test report"
+    finally:
+        driver.quit()
+
+
+def _many_studies(root):
+    """Eleven studies of long findings: more than the summary shows."""
+    for i in range(11):
+        findings = [f"Finding {i}: " + "word " * 80, "A second finding stays in the section."]
+        out = StudyOutput(f"study{i}", f"Study number {i}", findings=findings)
+        write_output(root / f"study{i}", out, f"springfem study study{i}")
+    return write_index(root, "Many")
+
+
+def test_the_page_opens_with_the_contents_and_a_short_summary(tmp_path):
+    """The contents come before any section and before the summary; the summary has at most
+    ten lines, each linking to a section that exists, and leaves the full findings to the
+    sections."""
+    text = _many_studies(tmp_path).read_text()
+    nav, summary = text.index('<nav id="contents">'), text.index('<ul class="summary">')
+    assert nav < summary < text.index("<section")
+    block = text[summary : text.index("</ul>", summary)]
+    assert 1 <= block.count("<li>") <= 10
+    ids = set(re.findall(r'<section id="([^"]+)"', text))
+    links = set(re.findall(r'href="#([^"]+)"', block))
+    assert links == ids and len(ids) == 11  # every study reachable from the summary
+    assert "A second finding" not in block and "word " * 80 not in block
+
+
+@pytest.mark.skipif(CHROMIUM is None or DRIVER is None, reason=NO_BROWSER)
+def test_the_first_screen_holds_the_contents_in_a_browser(tmp_path):
+    webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
+    from selenium.webdriver.chrome.service import Service
+    from selenium.webdriver.common.by import By
+
+    path = _many_studies(tmp_path)
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = CHROMIUM
+    for flag in ("--headless", "--no-sandbox", "--disable-gpu", "--window-size=1280,800"):
+        opts.add_argument(flag)
+    driver = webdriver.Chrome(service=Service(DRIVER), options=opts)
+    try:
+        driver.get(path.as_uri())
+        height = driver.execute_script("return window.innerHeight")
+        nav = driver.find_element(By.ID, "contents")
+        bottom = driver.execute_script("return arguments[0].getBoundingClientRect().bottom", nav)
+        assert 0 < bottom <= height  # the whole table of contents on the first screen
+        assert len(nav.find_elements(By.TAG_NAME, "a")) == 11
     finally:
         driver.quit()

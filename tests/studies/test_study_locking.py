@@ -164,3 +164,42 @@ def test_locking_free_methods_free_cook_at_nu_0_4999():
         assert _cook(0.4999, m, (8, 8, 1)) > share * th, m
     for m in ("P1", "spring-exact"):
         assert _cook(0.4999, m, (8, 8, 1)) < 0.3 * th, m
+
+
+def test_a_budget_bounds_the_whole_study_and_it_still_writes_its_tables(
+    gmsh_scene, tmp_path, capsys
+):
+    """``--budget`` on a user's scene: a plan line comes before the first solve, the levels
+    whose predicted cost does not fit are left out with a note, the cases that do not fit
+    are skipped (listed with the reason, not cached), every other case is a row, and the
+    tables and figures are written; the run ends near its budget (a generous cap)."""
+    import time
+
+    from studies.cli import main
+
+    out = tmp_path / "budget"
+    budget = 20.0
+    args = ["study", "locking", "--quick", "--scene", str(gmsh_scene), "--out", str(out),
+            "--budget", str(budget), "--max-time", "10"]  # fmt: skip
+    t0 = time.monotonic()
+    assert main(args) == 0
+    elapsed = time.monotonic() - t0
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert lines[0].startswith("plan: ") and "(budget 20 s)" in lines[0]  # before any solve
+    folder = out / "locking"
+    df = pd.read_csv(folder / "locking.csv")
+    skipped = pd.read_csv(folder / "skipped.csv")
+    assert len(skipped) >= 1 and skipped.reason.str.contains("budget").all()
+    assert set(df[df.status == "skipped"].method) == set(skipped.method)
+    # every method at every Poisson ratio on the level that fits is a row: run or skipped
+    methods = {m for m in Settings.quick().methods if "tissue" not in m}
+    assert set(df.method) == methods and set(df.nu) == set(Settings.quick().nus)
+    assert set(df.tets.dropna()) == {df.tets.min()}  # only level x1 fits in 20 s
+    assert (folder / "cheapest.csv").is_file() and (folder / "error_vs_cost.png").is_file()
+    # no case started once it could not finish: the study ends near its budget
+    assert elapsed < budget + 90.0
+    # the skipped cases (and any the budget cut short) were not cached: a rerun with more
+    # time computes them
+    cached = len(list((out / ".cache" / "locking").glob("*.json")))
+    assert cached <= int((df.status != "skipped").sum())
