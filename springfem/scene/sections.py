@@ -39,7 +39,14 @@ from .types import (
     Material,
     Probe,
 )
-from .ventricle import ELLIPSOID_KEYS, RULE_BASED_KEYS, parse_ellipsoid, parse_rule_based
+from .ventricle import (
+    ELLIPSOID_KEYS,
+    LAND_KEYS,
+    RULE_BASED_KEYS,
+    parse_ellipsoid,
+    parse_land,
+    parse_rule_based,
+)
 
 #: The keys valid in each core section (messages suggest the closest for a misspelt one).
 SECTION_KEYS = {
@@ -56,7 +63,7 @@ SECTION_KEYS = {
     ),
     "axes": (
         *("type", "fiber_data", "sheet_data", "fiber", "sheet", "axis", "range", "angles"),
-        *RULE_BASED_KEYS,
+        *dict.fromkeys((*RULE_BASED_KEYS, *LAND_KEYS)),
     ),
     "boundary": ("region", "fix", "displacement"),
     "load": ("type", "value", "region"),
@@ -205,7 +212,8 @@ def parse_material(r: TableReader) -> Material:
 
 def parse_axes(r: TableReader, mesh: TetMesh) -> np.ndarray:
     """The ``[axes]`` section: ``uniform``, ``helix``, ``cells`` (mesh cell data) or
-    ``rule-based`` (:func:`~springfem.scene.ventricle.parse_rule_based`) frames.
+    ``rule-based`` (:func:`~springfem.scene.ventricle.parse_rule_based`) or
+    ``land-ellipsoid`` (:func:`~springfem.scene.ventricle.parse_land`) frames.
 
     Parameters
     ----------
@@ -219,9 +227,13 @@ def parse_axes(r: TableReader, mesh: TetMesh) -> np.ndarray:
     numpy.ndarray
         ``(m, 3, 3)`` frames (rows: fiber, sheet, normal).
     """
-    kind = r.get("type", "str", default="uniform", choices=(*AXES_TYPES, "rule-based"))
+    kind = r.get(
+        "type", "str", default="uniform", choices=(*AXES_TYPES, "rule-based", "land-ellipsoid")
+    )
     if kind == "rule-based":
         return parse_rule_based(r, mesh)
+    if kind == "land-ellipsoid":
+        return parse_land(r, mesh)
     try:
         if kind == "cells":
             fkey = r.get("fiber_data", "str", default="fiber")
