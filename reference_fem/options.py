@@ -82,7 +82,10 @@ class FemOptions:
         element's own strain, in [0, 1] (1: the nodal-volume formulation).
     intorder
         Degree of the tetrahedron quadrature (scikit-fem's ``intorder``); ``None``: the
-        default of :func:`reference_fem.space.default_intorder` for the element and law.
+        default of :func:`reference_fem.space.default_intorder` (1 point for P1, 4 points
+        for P2). An exponential anisotropic law whose fibres turn inside the element
+        (``rule-based`` or ``land-ellipsoid`` axes, taken at the quadrature points) needs
+        more: Land's problem 3 takes ``intorder = 4`` (docs/verification.rst#land-problem-3-fibres).
     """
 
     order: int = 1

@@ -110,7 +110,7 @@ class FemProblem:
         """The displacement space (a subclass may enrich it, :mod:`reference_fem.mini`)."""
         if intorder is None:
             intorder = FemOptions.of(scene).intorder
-        q = default_intorder(self.order, self.nonlinear, self.law) if intorder is None else intorder
+        q = default_intorder(self.order, self.nonlinear) if intorder is None else intorder
         return Space(scene.mesh, self.order, q)
 
     # -- the NonlinearProblem protocol ------------------------------------------------------

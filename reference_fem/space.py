@@ -55,47 +55,25 @@ def p1_gradients(points: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.n
     return G, np.linalg.det(T) / 6.0
 
 
-def default_intorder(order: int, nonlinear: bool = False, law=None) -> int:
-    """Quadrature order: 1 point for P1 (constant gradients), 4 points for P2, and
-    :data:`EXPONENTIAL_INTORDER` for P2 with an exponential tissue law.
+def default_intorder(order: int, nonlinear: bool = False) -> int:
+    """Quadrature order: 1 point for P1 (constant gradients), 4 points for P2.
 
     The 4-point rule is exact for the linear P2 stiffness on straight tets; for
-    hyperelastic P2 it is the usual full integration (as in Abaqus' C3D10). An exponential
-    law (Guccione, Holzapfel–Ogden: ``law.anisotropic``) varies far faster than the
-    polynomial it is integrated against, and the anisotropic laws take their fibres at the
-    quadrature points: the 4-point rule lifts Land's problem-3 apex by about half a
-    millimetre (docs/verification.rst#land-problem-3-fibres).
+    hyperelastic P2 it is the usual full integration (as in Abaqus' C3D10).
 
     Parameters
     ----------
     order
         Element order, 1 or 2.
     nonlinear
-        Hyperelastic problem.
-    law
-        The law object (its ``anisotropic`` flag), or ``None``.
+        Hyperelastic problem (the same rule today).
 
     Returns
     -------
     int
-        scikit-fem ``intorder``: 1 for P1, 2 (4 points) or :data:`EXPONENTIAL_INTORDER`
-        for P2.
-
-    Examples
-    --------
-    >>> from reference_fem.laws import Guccione
-    >>> default_intorder(1), default_intorder(2, True), default_intorder(2, True, Guccione())
-    (1, 2, 4)
+        scikit-fem ``intorder``: 1 for P1, 2 (4 points) for P2.
     """
-    if order == 1:
-        return 1
-    if nonlinear and getattr(law, "anisotropic", False):
-        return EXPONENTIAL_INTORDER
-    return 2
-
-
-#: P2 quadrature degree of the exponential tissue laws (11 points).
-EXPONENTIAL_INTORDER = 4
+    return 1 if order == 1 else 2
 
 
 class Space:
