@@ -34,8 +34,8 @@ from springfem.result import Result, frame_cell_data, volume_summary
 from springfem.scene import Scene, model_precision
 
 from .advice import scene_warnings
-from .inert import inert_keys
 from .elements import SpringElements, build_spring_elements
+from .inert import inert_keys
 from .nodal_strain import NodalStrainPart
 from .nodal_volume import NodalPart
 from .options import GREEN_AXIAL_COEFFICIENTS, SpringOptions

@@ -30,8 +30,15 @@ import numpy as np
 from .. import ellipsoid
 from ..errors import InputError
 from ..fibres import rule_based_frames
-from ..land_fibres import LAND_ENDO, LAND_ENDO_ANGLE, LAND_EPI, LAND_EPI_ANGLE, land_frames
-from ..land_fibres import T_TOLERANCE, ellipsoid_parameter
+from ..land_fibres import (
+    LAND_ENDO,
+    LAND_ENDO_ANGLE,
+    LAND_EPI,
+    LAND_EPI_ANGLE,
+    T_TOLERANCE,
+    ellipsoid_parameter,
+    land_frames,
+)
 from ..mesh import TetMesh
 from .limits import check_mesh_size
 from .reader import TableReader
