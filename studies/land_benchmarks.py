@@ -134,13 +134,17 @@ def extrapolate(rows: list[dict]) -> dict:
 def markdown(rows: list[dict]) -> str:
     """The verification table: each level, the extrapolation, pulse's value and the band."""
     ext = extrapolate(rows)
-    lines = ["| problem | size / axis size (mm) | tets | DOFs | endo apex z | epi apex z | "
-             "Newton its / steps / cut-backs | wall (s) |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    lines = [
+        "| problem | size / axis size (mm) | tets | DOFs | endo apex z | epi apex z | "
+        "Newton its / steps / cut-backs | wall (s) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for r in rows:
         mesh = f"{r['size']:g}" + ("" if r["axis_size"] is None else f" / {r['axis_size']:g}")
         if r.get("error"):
-            lines.append(f"| {r['problem']} | {mesh} | | | stopped at load "
-                         f"{r.get('load_factor', math.nan):.3g} | | | {r['wall']:.0f} |")  # fmt: skip
+            stop = r.get("load_factor") or math.nan
+            lines.append(f"| {r['problem']} | {mesh} | | | stopped at load {stop:.3g} | | | "
+                         f"{r['wall']:.0f} |")  # fmt: skip
             continue
         lines.append(f"| {r['problem']} | {mesh} | {r['tets']:,} | {r['dofs']:,} | "
                      f"{r['endo']:.3f} | {r['epi']:.3f} | {r['iterations']} / "
