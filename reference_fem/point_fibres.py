@@ -4,9 +4,10 @@ A scene's frames are one per element; for ``[axes] type = "rule-based"`` the FEM
 the same rule (:func:`springfem.fibres.rule_based_point_frames`) at each quadrature point
 instead, and for ``type = "land-ellipsoid"`` Land's closed-form field
 (:func:`springfem.land_fibres.land_frames`) at each quadrature point's own coordinates,
-so the fibre follows the helix through a wall only one or two P2 elements thick (docs/verification.rst#land-problem-3-fibres). P1 has one point, the
-barycentre, where the rule gives the element frame, so it keeps the scene's frames; a scene whose frames no longer
-come from its ``[axes]`` table (replaced in code) keeps them too.
+so the fibre follows the helix through a wall only one or two P2 elements thick
+(docs/verification.rst#land-problem-3-fibres). P1 has one point, the barycentre, where the
+rule gives the element frame, so it keeps the scene's frames; a scene whose frames no
+longer come from its ``[axes]`` table (replaced in code) keeps them too.
 
 Examples
 --------
