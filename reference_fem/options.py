@@ -85,7 +85,8 @@ class FemOptions:
         default of :func:`reference_fem.space.default_intorder` (1 point for P1, 4 points
         for P2). An exponential anisotropic law whose fibres turn inside the element
         (``rule-based`` or ``land-ellipsoid`` axes, taken at the quadrature points) needs
-        more: Land's problem 3 takes ``intorder = 4`` (docs/verification.rst#land-problem-3-fibres).
+        more: Land's problem 3 takes ``intorder = 6`` (15 points, exact to degree 5;
+        docs/verification.rst#land-problem-3-fibres).
     """
 
     order: int = 1

@@ -1,18 +1,21 @@
-"""Land et al. 2015's ventricle benchmarks (problems 2 and 3) on a family of meshes.
+"""Land et al. 2015's benchmarks (problems 1-3) on families of meshes.
 
-Each problem is solved with the P2/P1 mixed FEM of its bundled scene on a documented family
-of gmsh meshes (the gmsh ellipsoid cannot be refined in a nested way without moving the
-boundary, so the family is one of sizes): problem 2 (``land-ventricle``) on uniform sizes
+Each problem is solved with the P2/P1 mixed FEM of its bundled scene on a family of meshes:
+problem 1 (``land-beam``) on the nested box meshes :data:`P1_LEVELS` (divisions doubled);
+the ventricles on documented families of gmsh meshes (the gmsh ellipsoid cannot be refined
+in a nested way without moving the boundary, so the family is one of sizes): problem 2 (``land-ventricle``) on uniform sizes
 :data:`P2_LEVELS`; problem 3 (``land-ventricle-active``) on :data:`P3_LEVELS`, sizes whose
 axis size (``[mesh] axis_size``) shrinks in proportion, because its fibre field is singular
 on the long axis (docs/verification.rst#land-problem-3-fibres). The observed order and the
 Richardson value of the three finest levels come from
-:func:`studies.study_tissue.convergence.observed_order`, with the gmsh size as ``h``.
+:func:`studies.study_tissue.convergence.observed_order`, with the gmsh size (the beam: its
+element length) as ``h``.
 
-Each level is one background-friendly process step: ``python -m studies.land_benchmarks
+Each level is one process (fit for a background run under ``timeout``): ``python -m studies.land_benchmarks
 --problem 3 --level 2`` solves one level and merges it into ``reports/land_benchmarks/
 problem3.json``; ``--table`` prints the Markdown table of what is there. Per level it records
-the apex z, the tets and DOFs, the wall time, Newton's iterations, load steps and cut-backs.
+the deformed z of the probes (the beam's (10, 0.5, 1) mm, the ventricles' apexes), the tets
+and DOFs, the wall time, Newton's iterations, load steps and cut-backs.
 
 Examples
 --------
@@ -37,14 +40,21 @@ from springfem.files import atomic_write_text
 from .scenes import bundled_table
 from .study_tissue.convergence import observed_order
 
+#: Problem 1: the beam's divisions (nested: each level halves the elements' edges).
+P1_LEVELS = ((10, 1, 1), (20, 2, 2), (40, 4, 4))
 #: Problem 2: uniform gmsh sizes (mm), coarse to fine.
 P2_LEVELS = ((4.0, None), (3.0, None), (2.0, None), (1.5, None))
 #: Problem 3: (size, axis size) in mm, coarse to fine, the axis size a quarter of the size.
 P3_LEVELS = ((4.0, 1.0), (3.0, 0.75), (2.0, 0.5), (1.5, 0.375))
-SCENES = {"2": "land-ventricle", "3": "land-ventricle-active"}
-LEVELS = {"2": P2_LEVELS, "3": P3_LEVELS}
+SCENES = {"1": "land-beam", "2": "land-ventricle", "3": "land-ventricle-active"}
+LEVELS = {"1": P1_LEVELS, "2": P2_LEVELS, "3": P3_LEVELS}
+#: Each problem's measured points: (probe name, its rest z, mm).
+PROBES = {"1": (("tip", 1.0),), "2": (("endo", -17.0), ("epi", -20.0)),
+          "3": (("endo", -17.0), ("epi", -20.0))}  # fmt: skip
 #: FEniCS-pulse's apex z (mm; github.com/finsberg/pulse pull request 98).
 PULSE = {"2": {"endo": -26.5328, "epi": -28.1790}, "3": {"endo": -12.00, "epi": -15.22}}
+#: Land et al. 2015's range over its 11 codes (mm; problem 1, the beam's deformed z).
+PAPER_RANGE = {"1": {"tip": (4.14, 4.20)}}
 #: Land et al. 2015: typical relative difference between the groups' fine solutions.
 BAND = 0.005
 #: One JSON file of levels per problem (two problems can run at once).
@@ -57,7 +67,7 @@ def solve_level(problem: str, level: int, load_steps: int = 10) -> dict:
     Parameters
     ----------
     problem
-        ``"2"`` or ``"3"``.
+        ``"1"``, ``"2"`` or ``"3"``.
     level
         Index into :data:`LEVELS` ``[problem]``.
     load_steps
@@ -66,20 +76,25 @@ def solve_level(problem: str, level: int, load_steps: int = 10) -> dict:
     Returns
     -------
     dict
-        ``problem``, ``size``, ``axis_size``, ``tets``, ``dofs``, ``endo``, ``epi`` (apex
-        z, mm), ``wall`` (s), ``iterations``, ``load_steps``, ``cutbacks``, ``intorder`` and
+        ``problem``, ``size`` (the beam: its element length), ``axis_size``, ``tets``,
+        ``dofs``, the deformed z of each of :data:`PROBES` (``tip``; ``endo``, ``epi``: mm),
+        ``wall`` (s), ``iterations``, ``load_steps``, ``cutbacks``, ``intorder`` and
         ``error`` (empty when the full load was reached).
     """
     import reference_fem
     from springfem.errors import SolverError
     from springfem.scene import scene_from_dict
 
-    size, axis = LEVELS[problem][level]
+    mesh, axis = _level(problem, level)
     data = bundled_table(SCENES[problem])
-    data["mesh"]["size"] = size
-    data["mesh"].pop("axis_size", None)
-    if axis is not None:
-        data["mesh"]["axis_size"] = axis
+    if problem == "1":
+        data["mesh"]["divisions"] = list(mesh)
+        size = 10.0 / mesh[0]
+    else:
+        size = data["mesh"]["size"] = mesh
+        data["mesh"].pop("axis_size", None)
+        if axis is not None:
+            data["mesh"]["axis_size"] = axis
     data["fem"]["load_steps"] = load_steps
     row: dict = {"problem": problem, "size": size, "axis_size": axis}
     t0 = time.perf_counter()
@@ -88,11 +103,18 @@ def solve_level(problem: str, level: int, load_steps: int = 10) -> dict:
     except SolverError as exc:
         return {**row, "error": str(exc), "wall": time.perf_counter() - t0,
                 "load_factor": exc.load_factor}  # fmt: skip
-    return {**row, "tets": r.counts["tets"], "dofs": r.counts["dofs"],
-            "endo": -17.0 + r.probes["endo_apex"][2], "epi": -20.0 + r.probes["epi_apex"][2],
-            "wall": r.wall_time, "iterations": r.iterations, "load_steps": r.info["load_steps"],
+    for name, z0 in PROBES[problem]:
+        row[name] = z0 + r.probes[name if problem == "1" else f"{name}_apex"][2]
+    return {**row, "tets": r.counts["tets"], "dofs": r.counts["dofs"], "wall": r.wall_time,
+            "iterations": r.iterations, "load_steps": r.info["load_steps"],
             "cutbacks": r.info["cutbacks"], "intorder": r.info["intorder"],
             "error": ""}  # fmt: skip
+
+
+def _level(problem: str, level: int):
+    """``(mesh, axis size)`` of a level: the beam's divisions, a ventricle's gmsh size."""
+    got = LEVELS[problem][level]
+    return (got, None) if problem == "1" else got
 
 
 def load_rows(folder: Path = OUT) -> list[dict]:
@@ -121,7 +143,7 @@ def extrapolate(rows: list[dict]) -> dict:
         ok = sorted((r for r in rows if r["problem"] == problem and not r.get("error")),
                     key=lambda r: -r["size"])[-3:]  # fmt: skip
         out[problem] = {}
-        for s in ("endo", "epi"):
+        for s, _ in PROBES[problem]:
             if len(ok) < 3:
                 out[problem][s] = {"order": math.nan, "extrapolated": math.nan,
                                    "note": "fewer than 3 levels"}  # fmt: skip
@@ -132,34 +154,45 @@ def extrapolate(rows: list[dict]) -> dict:
 
 
 def markdown(rows: list[dict]) -> str:
-    """The verification table: each level, the extrapolation, pulse's value and the band."""
+    """The verification table: each level, the extrapolation, pulse's value, the paper's
+    range."""
     ext = extrapolate(rows)
     lines = [
-        "| problem | size / axis size (mm) | tets | DOFs | endo apex z | epi apex z | "
+        "| problem | mesh | tets | DOFs | z (mm): tip or endo / epi apex | "
         "Newton its / steps / cut-backs | wall (s) |",
-        "|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|",
     ]
-    for r in rows:
-        mesh = f"{r['size']:g}" + ("" if r["axis_size"] is None else f" / {r['axis_size']:g}")
-        if r.get("error"):
-            stop = r.get("load_factor") or math.nan
-            lines.append(f"| {r['problem']} | {mesh} | | | stopped at load {stop:.3g} | | | "
+    for problem in sorted({r["problem"] for r in rows}):
+        names = [n for n, _ in PROBES[problem]]
+        for r in (r for r in rows if r["problem"] == problem):
+            if problem == "1":
+                mesh = f"h = {r['size']:g}"
+            else:
+                mesh = f"{r['size']:g}" + (
+                    "" if r["axis_size"] is None else f" / {r['axis_size']:g}"
+                )
+            if r.get("error"):
+                stop = r.get("load_factor") or math.nan
+                lines.append(f"| {problem} | {mesh} | | | stopped at load {stop:.3g} | | "
+                             f"{r['wall']:.0f} |")  # fmt: skip
+                continue
+            z = " / ".join(f"{r[n]:.3f}" for n in names)
+            lines.append(f"| {problem} | {mesh} | {r['tets']:,} | {r['dofs']:,} | {z} | "
+                         f"{r['iterations']} / {r['load_steps']} / {r['cutbacks']} | "
                          f"{r['wall']:.0f} |")  # fmt: skip
-            continue
-        lines.append(f"| {r['problem']} | {mesh} | {r['tets']:,} | {r['dofs']:,} | "
-                     f"{r['endo']:.3f} | {r['epi']:.3f} | {r['iterations']} / "
-                     f"{r['load_steps']} / {r['cutbacks']} | {r['wall']:.0f} |")  # fmt: skip
-    for problem, e in ext.items():
         cells = []
-        for s in ("endo", "epi"):
-            v = e[s]
+        for n in names:
+            v = ext[problem][n]
             cells.append(f"{v['extrapolated']:.3f} (p = {v['order']:.2g})"
                          if math.isfinite(v["extrapolated"]) else v["note"])  # fmt: skip
-        lines.append(f"| {problem} | Richardson | | | {cells[0]} | {cells[1]} | | |")
-        pub = PULSE[problem]
-        lines.append(f"| {problem} | FEniCS-pulse (+/- {100 * BAND:g} %) | | | "
-                     f"{pub['endo']:.2f} (+/- {abs(BAND * pub['endo']):.2f}) | "
-                     f"{pub['epi']:.2f} (+/- {abs(BAND * pub['epi']):.2f}) | | |")  # fmt: skip
+        lines.append(f"| {problem} | Richardson | | | {' / '.join(cells)} | | |")
+        if problem in PULSE:
+            pub = PULSE[problem]
+            z = " / ".join(f"{pub[n]:.2f} (+/- {abs(BAND * pub[n]):.2f})" for n in names)
+            lines.append(f"| {problem} | FEniCS-pulse (+/- {100 * BAND:g} %) | | | {z} | | |")
+        if problem in PAPER_RANGE:
+            z = " / ".join("{:.2f}-{:.2f}".format(*PAPER_RANGE[problem][n]) for n in names)
+            lines.append(f"| {problem} | Land et al. 2015, 11 codes | | | {z} | | |")
     return "\n".join(lines)
 
 

@@ -38,10 +38,10 @@ def test_active_scene_is_problem_3():
     assert (p["C"], p["b_f"], p["b_t"], p["b_fs"], p["active_tension"]) == (2, 8, 2, 4, 60)
     assert [ld.value for ld in scene.loads] == [15.0] and scene.units == "mm-kPa"
     # the paper's fibres (alpha = +90 deg on the endocardium, -90 on the epicardium) and the
-    # degree-4 rule the exponential law needs with fibres turning inside the element
+    # 15-point rule the exponential law needs with fibres turning inside the element
     axes = scene.raw["axes"]
     assert (axes["type"], axes["endo_angle"], axes["epi_angle"]) == ("land-ellipsoid", 90, -90)
-    assert scene.raw["fem"]["intorder"] == 4
+    assert scene.raw["fem"]["intorder"] == 6
 
 
 @pytest.mark.slow
