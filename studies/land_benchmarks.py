@@ -3,19 +3,21 @@
 Each problem is solved with the P2/P1 mixed FEM of its bundled scene on a family of meshes:
 problem 1 (``land-beam``) on the nested box meshes :data:`P1_LEVELS` (divisions doubled);
 the ventricles on documented families of gmsh meshes (the gmsh ellipsoid cannot be refined
-in a nested way without moving the boundary, so the family is one of sizes): problem 2 (``land-ventricle``) on uniform sizes
-:data:`P2_LEVELS`; problem 3 (``land-ventricle-active``) on :data:`P3_LEVELS`, sizes whose
-axis size (``[mesh] axis_size``) shrinks in proportion, because its fibre field is singular
-on the long axis (docs/verification.rst#land-problem-3-fibres). The observed order and the
-Richardson value of the three finest levels come from
+in a nested way without moving the boundary, so the family is one of sizes): problem 2
+(``land-ventricle``) on uniform sizes :data:`P2_LEVELS`; problem 3
+(``land-ventricle-active``) on :data:`P3_LEVELS`, sizes whose axis size (``[mesh]
+axis_size``) shrinks in proportion, because its fibre field is singular on the long axis
+(docs/verification.rst#land-problem-3-fibres). The observed order and the Richardson value
+of the three finest levels come from
 :func:`studies.study_tissue.convergence.observed_order`, with the gmsh size (the beam: its
 element length) as ``h``.
 
-Each level is one process (fit for a background run under ``timeout``): ``python -m studies.land_benchmarks
---problem 3 --level 2`` solves one level and merges it into ``reports/land_benchmarks/
-problem3.json``; ``--table`` prints the Markdown table of what is there. Per level it records
-the deformed z of the probes (the beam's (10, 0.5, 1) mm, the ventricles' apexes), the tets
-and DOFs, the wall time, Newton's iterations, load steps and cut-backs.
+Each level is one process (fit for a background run under ``timeout``):
+``python -m studies.land_benchmarks --problem 3 --level 2`` solves one level and merges it
+into ``reports/land_benchmarks/problem3.json``; ``--table`` prints the Markdown table of
+what is there. Per level it records the deformed z of the probes (the beam's (10, 0.5, 1)
+mm, the ventricles' apexes), the tets and DOFs, the wall time, Newton's iterations, load
+steps and cut-backs.
 
 Examples
 --------
