@@ -32,6 +32,8 @@ STABILISATION = 1e-4
 #: Default ``[fem] strain_stabilisation`` of ``formulation = "nodal-strain"``; its volumetric
 #: share defaults to ``strain_stabilisation * mu / kappa`` (docs/fem.rst#nodal-strain-tetrahedra).
 STRAIN_STABILISATION = 0.3
+#: The highest tetrahedron quadrature degree offered (scikit-fem's rules go further).
+MAX_INTORDER = 8
 
 
 @dataclass(frozen=True)
@@ -78,6 +80,13 @@ class FemOptions:
     strain_stabilisation
         ``nodal-strain`` only: the share of the law's element part measured on the
         element's own strain, in [0, 1] (1: the nodal-volume formulation).
+    intorder
+        Degree of the tetrahedron quadrature (scikit-fem's ``intorder``); ``None``: the
+        default of :func:`reference_fem.space.default_intorder` (1 point for P1, 4 points
+        for P2). An exponential anisotropic law whose fibres turn inside the element
+        (``rule-based`` or ``land-ellipsoid`` axes, taken at the quadrature points) needs
+        more: Land's problem 3 takes ``intorder = 6`` (15 points, exact to degree 5;
+        docs/verification.rst#land-problem-3-fibres).
     """
 
     order: int = 1
@@ -94,6 +103,7 @@ class FemOptions:
     formulation: Formulation = "displacement"
     stabilisation: float | None = None
     strain_stabilisation: float = STRAIN_STABILISATION
+    intorder: int | None = None
 
     @property
     def volumetric_share(self) -> float:
@@ -149,6 +159,10 @@ def parse_fem_options(r: TableReader) -> FemOptions:
     for key in ("max_iter", "load_steps", "steps"):
         if r.has(key):
             kw[key] = r.get(key, "int", positive=True)
+    if r.has("intorder"):
+        kw["intorder"] = r.get("intorder", "int", positive=True)
+        if kw["intorder"] > MAX_INTORDER:
+            raise r.fail("intorder", f"must be at most {MAX_INTORDER}, got {kw['intorder']}")
     for key, forms in (
         ("stabilisation", NODAL_FORMULATIONS),
         ("strain_stabilisation", ("nodal-strain",)),

@@ -2,10 +2,12 @@
 
 A scene's frames are one per element; for ``[axes] type = "rule-based"`` the FEM evaluates
 the same rule (:func:`springfem.fibres.rule_based_point_frames`) at each quadrature point
-instead, so the fibre follows the helix through a wall only one or two P2 elements thick
+instead, and for ``type = "land-ellipsoid"`` Land's closed-form field
+(:func:`springfem.land_fibres.land_frames`) at each quadrature point's own coordinates,
+so the fibre follows the helix through a wall only one or two P2 elements thick
 (docs/verification.rst#land-problem-3-fibres). P1 has one point, the barycentre, where the
-rule gives the element frame, so it keeps the scene's frames; a scene whose frames no longer
-come from its ``[axes]`` table (replaced in code) keeps them too.
+rule gives the element frame, so it keeps the scene's frames; a scene whose frames no
+longer come from its ``[axes]`` table (replaced in code) keeps them too.
 
 Examples
 --------
@@ -27,8 +29,9 @@ from __future__ import annotations
 import numpy as np
 
 from springfem.fibres import rule_based_point_frames
+from springfem.land_fibres import land_frames
 from springfem.scene import Scene
-from springfem.scene.ventricle import rule_based_settings
+from springfem.scene.ventricle import land_settings, rule_based_settings
 
 from .space import Space
 
@@ -38,7 +41,7 @@ SAME_RULE = 0.99
 
 
 def quadrature_frames(scene: Scene, space: Space) -> np.ndarray | None:
-    """The scene's rule-based frames at the quadrature points of ``space``, or ``None``.
+    """The scene's rule-based or Land frames at the quadrature points of ``space``, or ``None``.
 
     Parameters
     ----------
@@ -53,10 +56,14 @@ def quadrature_frames(scene: Scene, space: Space) -> np.ndarray | None:
         ``(m, nq, 3, 3)`` frames; ``None`` for P1, frames that are not rule-based, or frames
         that no longer match the rule.
     """
-    kw = rule_based_settings(scene.raw.get("axes"))
-    if kw is None or space.order == 1:
+    table = scene.raw.get("axes")
+    kw, land = rule_based_settings(table), land_settings(table)
+    if (kw is None and land is None) or space.order == 1:
         return None
-    q = rule_based_point_frames(scene.mesh, space.intorder, **kw)
+    if land is not None:
+        q = land_frames(space.quadrature_points(), **land)
+    else:
+        q = rule_based_point_frames(scene.mesh, space.intorder, **kw)
     mean = q[:, :, 0].mean(axis=1)
     mean /= np.maximum(np.linalg.norm(mean, axis=1, keepdims=True), 1e-300)
     if np.median(np.abs((mean * scene.frames[:, 0]).sum(axis=1))) < SAME_RULE:

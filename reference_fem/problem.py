@@ -108,6 +108,8 @@ class FemProblem:
 
     def _make_space(self, scene: Scene, intorder: int | None) -> Space:
         """The displacement space (a subclass may enrich it, :mod:`reference_fem.mini`)."""
+        if intorder is None:
+            intorder = FemOptions.of(scene).intorder
         q = default_intorder(self.order, self.nonlinear) if intorder is None else intorder
         return Space(scene.mesh, self.order, q)
 

@@ -30,6 +30,8 @@ from .mesh import TetMesh, validate_mesh
 ENDO = (7.0, 17.0)
 EPI = (10.0, 20.0)
 BASE_Z = 5.0
+#: Growth of the element size with the distance from the long axis (``axis_size``).
+AXIS_GRADING = 0.4
 
 
 def _cap_volume(r_short: float, r_long: float, base_z: float) -> float:
@@ -92,6 +94,7 @@ def ellipsoid_mesh(
     endo: tuple[float, float] = ENDO,
     epi: tuple[float, float] = EPI,
     base_z: float = BASE_Z,
+    axis_size: float | None = None,
 ) -> TetMesh:
     """Tet mesh of the truncated ellipsoidal ventricle wall.
 
@@ -103,6 +106,11 @@ def ellipsoid_mesh(
         ``(r_short, r_long)`` of the endocardial and epicardial ellipsoids.
     base_z
         Height of the base plane; it must cut both ellipsoids above their centres' apex.
+    axis_size
+        Element size on the long axis (``None``: uniform ``size``): the size grows as
+        ``min(size, axis_size + AXIS_GRADING * rho)`` with the distance ``rho`` from the
+        axis, which the wall crosses only at the apex. Land's problem-3 fibre field is
+        singular on the axis (docs/verification.rst#land-problem-3-fibres).
 
     Returns
     -------
@@ -125,6 +133,8 @@ def ellipsoid_mesh(
         raise InputError(f"ellipsoid: size must be positive, got {size}")
     if size < 1e-3 * c_out:
         raise InputError(f"ellipsoid: size {size} would give far too many tets")
+    if axis_size is not None and not (1e-3 * c_out <= axis_size <= size):
+        raise InputError(f"ellipsoid: axis_size must lie in [{1e-3 * c_out:g}, size = {size:g}]")
     import gmsh
 
     gmsh.initialize(readConfigFiles=False, interruptible=False)
@@ -142,7 +152,14 @@ def ellipsoid_mesh(
         solid, _ = occ.intersect(wall, [(3, box)])
         occ.synchronize()
         gmsh.option.setNumber("Mesh.MeshSizeMax", size)
-        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.1 * size)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.1 * min(size, axis_size or size))
+        if axis_size is not None:
+            field = gmsh.model.mesh.field
+            f = field.add("MathEval")
+            field.setString(
+                f, "F", f"min({size!r}, {axis_size!r} + {AXIS_GRADING!r} * sqrt(x * x + y * y))"
+            )
+            field.setAsBackgroundMesh(f)
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
         gmsh.model.mesh.generate(3)
         tags, coords, _ = gmsh.model.mesh.getNodes()
@@ -172,7 +189,9 @@ def ellipsoid_mesh(
         points=np.ascontiguousarray(points[used]),
         tets=renumber[tets],
         facet_sets={k: renumber[np.concatenate(v)] for k, v in facets.items() if v},
-        source=f"ellipsoid(size={size:g}, endo={tuple(endo)}, epi={tuple(epi)}, base_z={base_z})",
+        source=f"ellipsoid(size={size:g}, endo={tuple(endo)}, epi={tuple(epi)}, base_z={base_z}"
+        + ("" if axis_size is None else f", axis_size={axis_size:g}")
+        + ")",
     )
     return validate_mesh(mesh, "ellipsoid")
 

@@ -64,7 +64,8 @@ def _corpus() -> Iterator[dict]:
     yield {**base, "mesh": {"generator": "ellipsoid", "base_z": 1e9}}  # refused before meshing
     yield {**base, "mesh": {"generator": "cook", "divisions": [1, 1, 1]}}
     for axes in ({"type": "uniform"}, {"type": "helix", "range": [0, 1], "angles": [60, -60]},
-                 {"type": "cells"}, {"type": "rule-based"}):  # fmt: skip
+                 {"type": "cells"}, {"type": "rule-based"},
+                 {"type": "land-ellipsoid"}):  # fmt: skip
         yield {**base, "axes": axes}
     yield {**base, "boundary": _FIX}
     yield {**base, "boundary": [{"region": "x_min", "displacement": [0.0, 0.0, 0.1]}]}

@@ -40,7 +40,14 @@ from .types import (
     Probe,
     default_density,
 )
-from .ventricle import ELLIPSOID_KEYS, RULE_BASED_KEYS, parse_ellipsoid, parse_rule_based
+from .ventricle import (
+    ELLIPSOID_KEYS,
+    LAND_KEYS,
+    RULE_BASED_KEYS,
+    parse_ellipsoid,
+    parse_land,
+    parse_rule_based,
+)
 
 #: The keys valid in each core section (messages suggest the closest for a misspelt one).
 SECTION_KEYS = {
@@ -57,7 +64,7 @@ SECTION_KEYS = {
     ),
     "axes": (
         *("type", "fiber_data", "sheet_data", "fiber", "sheet", "axis", "range", "angles"),
-        *RULE_BASED_KEYS,
+        *dict.fromkeys((*RULE_BASED_KEYS, *LAND_KEYS)),
     ),
     "boundary": ("region", "fix", "displacement"),
     "load": ("type", "value", "region"),
@@ -215,7 +222,8 @@ def parse_material(r: TableReader, units: str = "SI") -> Material:
 
 def parse_axes(r: TableReader, mesh: TetMesh) -> np.ndarray:
     """The ``[axes]`` section: ``uniform``, ``helix``, ``cells`` (mesh cell data) or
-    ``rule-based`` (:func:`~springfem.scene.ventricle.parse_rule_based`) frames.
+    ``rule-based`` (:func:`~springfem.scene.ventricle.parse_rule_based`) or
+    ``land-ellipsoid`` (:func:`~springfem.scene.ventricle.parse_land`) frames.
 
     Parameters
     ----------
@@ -229,9 +237,13 @@ def parse_axes(r: TableReader, mesh: TetMesh) -> np.ndarray:
     numpy.ndarray
         ``(m, 3, 3)`` frames (rows: fiber, sheet, normal).
     """
-    kind = r.get("type", "str", default="uniform", choices=(*AXES_TYPES, "rule-based"))
+    kind = r.get(
+        "type", "str", default="uniform", choices=(*AXES_TYPES, "rule-based", "land-ellipsoid")
+    )
     if kind == "rule-based":
         return parse_rule_based(r, mesh)
+    if kind == "land-ellipsoid":
+        return parse_land(r, mesh)
     try:
         if kind == "cells":
             fkey = r.get("fiber_data", "str", default="fiber")

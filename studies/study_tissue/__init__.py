@@ -11,7 +11,8 @@ same mesh (the beam and the ventricle: the P2 reference and the same-mesh P1):
 - homogeneous deformations (stretch, simple shear in each frame plane, both) imposed on every
   node of a jittered cube: the nodal forces of the tissue and stiffened elements against
   their law's P1 (:mod:`.homogeneous`);
-- the Land beam (problem 1): the deformed z of (10, 0.5, 1) mm (published 4.14-4.20 mm);
+- the Land beam (problem 1): the deformed z of (10, 0.5, 1) mm (published 4.14-4.20 mm),
+  and the P2/P1 FEM's on three meshes with a Richardson value (:mod:`.beam_levels`);
 - the Land ventricle (problem 2; the quick preset: problem 3's passive inflation, which
   converges on a coarser mesh): the apex positions and the cavity's pressure-volume curve;
 - the apex positions' mesh convergence (P2/P1 mixed FEM, problems 2 and 3 passive), with a
@@ -32,6 +33,7 @@ import numpy as np
 
 from ..registry import StudyContext, StudyOutput, study
 from ..scenes import StudyScene
+from .beam_levels import beam_level_scenes, beam_levels_finding, beam_levels_frame
 from .cases import (
     FEM_MODELS,
     VARIANTS,
@@ -110,6 +112,10 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
     hdf = homogeneous_frame(hom, ctx.cache.run(hom, homogeneous_case, ctx.progress, "homogeneous"))
     more, numbers = homogeneous_findings(hdf)
     text, headline = text + more, {**headline, **numbers}
+    levels = [s.case("tissue", VERSION, model="fem")
+              for s in beam_level_scenes(settings.beam_divisions)]  # fmt: skip
+    ldf = beam_levels_frame(levels, ctx.cache.run(levels, beam_case, ctx.progress, "beam levels"))
+    text += beam_levels_finding(ldf)
     conv = cases("apex", ("fem",))
     cdf = convergence_frame(conv, ctx.cache.run(conv, ventricle_case, ctx.progress, "apex"))
     rich = richardson_frame(cdf)
@@ -117,6 +123,9 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
     for _, r in rich[np.isfinite(rich.extrapolated)].iterrows():
         headline[f"apex_{r.surface}_problem_{r.problem.split()[0]}_extrapolated"] = r.extrapolated
     apex = [
+        ctx.table(ldf, "beam_levels", "Land's beam (problem 1), P2/P1 mixed FEM on three "
+                  "meshes: tip z (mm) per mesh and the Richardson value from them, beside the "
+                  "11 codes' published range."),
         ctx.table(cdf, "apex_convergence", "Apex z (mm) of the P2/P1 mixed FEM per mesh: "
                   "gmsh size, effective h (the regular-tet edge of the mean tet volume), DOFs, "
                   "wall time (s)."),

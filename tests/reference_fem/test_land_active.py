@@ -37,6 +37,11 @@ def test_active_scene_is_problem_3():
     p = scene.material.parameters
     assert (p["C"], p["b_f"], p["b_t"], p["b_fs"], p["active_tension"]) == (2, 8, 2, 4, 60)
     assert [ld.value for ld in scene.loads] == [15.0] and scene.units == "mm-kPa"
+    # the paper's fibres (alpha = +90 deg on the endocardium, -90 on the epicardium) and the
+    # 15-point rule the exponential law needs with fibres turning inside the element
+    axes = scene.raw["axes"]
+    assert (axes["type"], axes["endo_angle"], axes["epi_angle"]) == ("land-ellipsoid", 90, -90)
+    assert scene.raw["fem"]["intorder"] == 6
 
 
 @pytest.mark.slow
@@ -53,7 +58,7 @@ def test_active_tension_lifts_the_apex_and_shrinks_the_cavity():
 def test_p2_takes_the_rule_based_fibres_at_its_quadrature_points():
     # the same rule at the 4 points of each P2 element: orthonormal frames whose mean fibre
     # is the element's; P1 (one point, the barycentre) and replaced frames keep the scene's
-    scene = _scene("land-ventricle-active")
+    scene = _scene("land-ventricle-fibres")
     q = quadrature_frames(scene, Space(scene.mesh, 2, 2))
     assert q.shape == (scene.mesh.n_tets, 4, 3, 3)
     assert np.allclose(np.einsum("eqij,eqkj->eqik", q, q), np.eye(3), atol=1e-12)

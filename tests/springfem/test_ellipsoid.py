@@ -97,6 +97,24 @@ def test_frames_follow_the_rule_on_a_spherical_shell(shell):
     assert np.allclose(np.linalg.det(frames), 1.0)
 
 
+def test_axis_size_refines_the_apex_only():
+    # element size: the edge of the regular tet of each tet's volume; near the axis (the
+    # apex wall) about axis_size, far from it the uniform mesh's
+    m = ellipsoid_mesh(size=4.0, axis_size=0.5)
+    u = ellipsoid_mesh(size=4.0)
+
+    def edge(mesh):
+        return (6.0 * np.sqrt(2.0) * mesh.volumes()) ** (1 / 3)
+
+    rho = np.hypot(*m.centers()[:, :2].T)
+    assert np.median(edge(m)[rho < 0.5]) < 1.0 < 2.0 < np.median(edge(u))
+    assert np.median(edge(m)[rho > 8.0]) == pytest.approx(np.median(edge(u)), rel=0.25)
+    assert m.points[:, 2].min() == pytest.approx(-20.0, abs=1e-6)  # the apexes stay vertices
+    assert np.abs(np.linalg.norm(m.points - [0, 0, -17.0], axis=1)).min() < 1e-6
+    with pytest.raises(InputError, match="axis_size"):
+        ellipsoid_mesh(size=2.0, axis_size=3.0)
+
+
 def test_doctests():
     import doctest
 

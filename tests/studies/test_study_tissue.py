@@ -55,6 +55,7 @@ def test_quick_outputs(output):
         "stress_stretch.md",
         "beam.md",
         "ventricle.md",
+        "beam_levels.md",
         "apex_convergence.md",
         "apex_richardson.md",
     ]

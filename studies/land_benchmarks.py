@@ -1,0 +1,219 @@
+"""Land et al. 2015's benchmarks (problems 1-3) on families of meshes.
+
+Each problem is solved with the P2/P1 mixed FEM of its bundled scene on a family of meshes:
+problem 1 (``land-beam``) on the nested box meshes :data:`P1_LEVELS` (divisions doubled);
+the ventricles on documented families of gmsh meshes (the gmsh ellipsoid cannot be refined
+in a nested way without moving the boundary, so the family is one of sizes): problem 2
+(``land-ventricle``) on uniform sizes :data:`P2_LEVELS`; problem 3
+(``land-ventricle-active``) on :data:`P3_LEVELS`, sizes whose axis size (``[mesh]
+axis_size``) shrinks in proportion, because its fibre field is singular on the long axis
+(docs/verification.rst#land-problem-3-fibres). The observed order and the Richardson value
+of the three finest levels come from
+:func:`studies.study_tissue.convergence.observed_order`, with the gmsh size (the beam: its
+element length) as ``h``.
+
+Each level is one process (fit for a background run under ``timeout``):
+``python -m studies.land_benchmarks --problem 3 --level 2`` solves one level and merges it
+into ``reports/land_benchmarks/problem3.json``; ``--table`` prints the Markdown table of
+what is there. Per level it records the deformed z of the probes (the beam's (10, 0.5, 1)
+mm, the ventricles' apexes), the tets and DOFs, the wall time, Newton's iterations, load
+steps and cut-backs.
+
+Examples
+--------
+>>> rows = [{"problem": "3", "size": h, "axis_size": h / 4, "tets": 1, "dofs": 1,
+...          "endo": -12.0 + 0.5 * h**2, "epi": -15.0 + 0.25 * h**2, "wall": 1.0,
+...          "iterations": 1, "load_steps": 1, "cutbacks": 0} for h in (4.0, 2.0, 1.0)]
+>>> ext = extrapolate(rows)["3"]
+>>> round(ext["endo"]["order"], 6), round(ext["endo"]["extrapolated"], 6)
+(2.0, -12.0)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+
+from springfem.files import atomic_write_text
+
+from .scenes import bundled_table
+from .study_tissue.convergence import observed_order
+
+#: Problem 1: the beam's divisions (nested: each level halves the elements' edges).
+P1_LEVELS = ((10, 1, 1), (20, 2, 2), (40, 4, 4))
+#: Problem 2: uniform gmsh sizes (mm), coarse to fine.
+P2_LEVELS = ((4.0, None), (3.0, None), (2.0, None), (1.5, None))
+#: Problem 3: (size, axis size) in mm, coarse to fine, the axis size a quarter of the size.
+P3_LEVELS = ((4.0, 1.0), (3.0, 0.75), (2.0, 0.5), (1.5, 0.375))
+SCENES = {"1": "land-beam", "2": "land-ventricle", "3": "land-ventricle-active"}
+LEVELS = {"1": P1_LEVELS, "2": P2_LEVELS, "3": P3_LEVELS}
+#: Each problem's measured points: (probe name, its rest z, mm).
+PROBES = {"1": (("tip", 1.0),), "2": (("endo", -17.0), ("epi", -20.0)),
+          "3": (("endo", -17.0), ("epi", -20.0))}  # fmt: skip
+#: FEniCS-pulse's apex z (mm; github.com/finsberg/pulse pull request 98).
+PULSE = {"2": {"endo": -26.5328, "epi": -28.1790}, "3": {"endo": -12.00, "epi": -15.22}}
+#: Land et al. 2015's range over its 11 codes (mm; problem 1, the beam's deformed z).
+PAPER_RANGE = {"1": {"tip": (4.14, 4.20)}}
+#: Land et al. 2015: typical relative difference between the groups' fine solutions.
+BAND = 0.005
+#: One JSON file of levels per problem (two problems can run at once).
+OUT = Path(__file__).resolve().parents[1] / "reports" / "land_benchmarks"
+
+
+def solve_level(problem: str, level: int, load_steps: int = 10) -> dict:
+    """Solve one level of one problem and return its row.
+
+    Parameters
+    ----------
+    problem
+        ``"1"``, ``"2"`` or ``"3"``.
+    level
+        Index into :data:`LEVELS` ``[problem]``.
+    load_steps
+        Initial load steps (the core's Newton adapts them).
+
+    Returns
+    -------
+    dict
+        ``problem``, ``size`` (the beam: its element length), ``axis_size``, ``tets``,
+        ``dofs``, the deformed z of each of :data:`PROBES` (``tip``; ``endo``, ``epi``: mm),
+        ``wall`` (s), ``iterations``, ``load_steps``, ``cutbacks``, ``intorder`` and
+        ``error`` (empty when the full load was reached).
+    """
+    import reference_fem
+    from springfem.errors import SolverError
+    from springfem.scene import scene_from_dict
+
+    mesh, axis = _level(problem, level)
+    data = bundled_table(SCENES[problem])
+    if problem == "1":
+        data["mesh"]["divisions"] = list(mesh)
+        size = 10.0 / mesh[0]
+    else:
+        size = data["mesh"]["size"] = mesh
+        data["mesh"].pop("axis_size", None)
+        if axis is not None:
+            data["mesh"]["axis_size"] = axis
+    data["fem"]["load_steps"] = load_steps
+    row: dict = {"problem": problem, "size": size, "axis_size": axis}
+    t0 = time.perf_counter()
+    try:
+        r = reference_fem.solve(scene_from_dict(data)).result
+    except SolverError as exc:
+        return {**row, "error": str(exc), "wall": time.perf_counter() - t0,
+                "load_factor": exc.load_factor}  # fmt: skip
+    for name, z0 in PROBES[problem]:
+        row[name] = z0 + r.probes[name if problem == "1" else f"{name}_apex"][2]
+    return {**row, "tets": r.counts["tets"], "dofs": r.counts["dofs"], "wall": r.wall_time,
+            "iterations": r.iterations, "load_steps": r.info["load_steps"],
+            "cutbacks": r.info["cutbacks"], "intorder": r.info["intorder"],
+            "error": ""}  # fmt: skip
+
+
+def _level(problem: str, level: int):
+    """``(mesh, axis size)`` of a level: the beam's divisions, a ventricle's gmsh size."""
+    got = LEVELS[problem][level]
+    return (got, None) if problem == "1" else got
+
+
+def load_rows(folder: Path = OUT) -> list[dict]:
+    """The rows recorded so far in ``folder`` (``problem<N>.json``), by problem and size."""
+    rows = [r for f in sorted(folder.glob("problem*.json")) for r in json.loads(f.read_text())]
+    return sorted(rows, key=lambda r: (r["problem"], -r["size"]))
+
+
+def merge_row(row: dict, folder: Path = OUT) -> list[dict]:
+    """Replace the row of the same (size, axis size) in its problem's file (atomically)."""
+    path = folder / f"problem{row['problem']}.json"
+    key = (row["size"], row["axis_size"])
+    old = json.loads(path.read_text()) if path.exists() else []
+    rows = sorted([*(r for r in old if (r["size"], r["axis_size"]) != key), row],
+                  key=lambda r: -r["size"])  # fmt: skip
+    folder.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(path, json.dumps(rows, indent=1) + "\n")
+    return rows
+
+
+def extrapolate(rows: list[dict]) -> dict:
+    """Per problem and surface: the observed order and Richardson value of the three finest
+    converged levels, and the note of :func:`observed_order` (why not, if not)."""
+    out: dict = {}
+    for problem in sorted({r["problem"] for r in rows}):
+        ok = sorted((r for r in rows if r["problem"] == problem and not r.get("error")),
+                    key=lambda r: -r["size"])[-3:]  # fmt: skip
+        out[problem] = {}
+        for s, _ in PROBES[problem]:
+            if len(ok) < 3:
+                out[problem][s] = {"order": math.nan, "extrapolated": math.nan,
+                                   "note": "fewer than 3 levels"}  # fmt: skip
+                continue
+            p, f0, note = observed_order([r["size"] for r in ok], [r[s] for r in ok])
+            out[problem][s] = {"order": p, "extrapolated": f0, "note": note}
+    return out
+
+
+def markdown(rows: list[dict]) -> str:
+    """The verification table: each level, the extrapolation, pulse's value, the paper's
+    range."""
+    ext = extrapolate(rows)
+    lines = [
+        "| problem | mesh | tets | DOFs | z (mm): tip or endo / epi apex | "
+        "Newton its / steps / cut-backs | wall (s) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for problem in sorted({r["problem"] for r in rows}):
+        names = [n for n, _ in PROBES[problem]]
+        for r in (r for r in rows if r["problem"] == problem):
+            if problem == "1":
+                mesh = f"h = {r['size']:g}"
+            else:
+                mesh = f"{r['size']:g}" + (
+                    "" if r["axis_size"] is None else f" / {r['axis_size']:g}"
+                )
+            if r.get("error"):
+                stop = r.get("load_factor") or math.nan
+                lines.append(f"| {problem} | {mesh} | | | stopped at load {stop:.3g} | | "
+                             f"{r['wall']:.0f} |")  # fmt: skip
+                continue
+            z = " / ".join(f"{r[n]:.3f}" for n in names)
+            lines.append(f"| {problem} | {mesh} | {r['tets']:,} | {r['dofs']:,} | {z} | "
+                         f"{r['iterations']} / {r['load_steps']} / {r['cutbacks']} | "
+                         f"{r['wall']:.0f} |")  # fmt: skip
+        cells = []
+        for n in names:
+            v = ext[problem][n]
+            cells.append(f"{v['extrapolated']:.3f} (p = {v['order']:.2g})"
+                         if math.isfinite(v["extrapolated"]) else v["note"])  # fmt: skip
+        lines.append(f"| {problem} | Richardson | | | {' / '.join(cells)} | | |")
+        if problem in PULSE:
+            pub = PULSE[problem]
+            z = " / ".join(f"{pub[n]:.2f} (+/- {abs(BAND * pub[n]):.2f})" for n in names)
+            lines.append(f"| {problem} | FEniCS-pulse (+/- {100 * BAND:g} %) | | | {z} | | |")
+        if problem in PAPER_RANGE:
+            z = " / ".join("{:.2f}-{:.2f}".format(*PAPER_RANGE[problem][n]) for n in names)
+            lines.append(f"| {problem} | Land et al. 2015, 11 codes | | | {z} | | |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line: solve one level (``--problem``, ``--level``) or print ``--table``."""
+    ap = argparse.ArgumentParser(prog="python -m studies.land_benchmarks")
+    ap.add_argument("--problem", choices=sorted(SCENES))
+    ap.add_argument("--level", type=int)
+    ap.add_argument("--table", action="store_true")
+    ap.add_argument("--out", type=Path, default=OUT)
+    a = ap.parse_args(argv)
+    if a.problem is not None and a.level is not None:
+        row = solve_level(a.problem, a.level)
+        merge_row(row, a.out)
+        print(json.dumps(row))
+    if a.table:
+        print(markdown(load_rows(a.out)))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
