@@ -39,6 +39,7 @@ import contextlib
 import threading
 import time
 from collections.abc import Callable, Iterator
+from typing import Any
 
 import numpy as np
 
@@ -72,7 +73,7 @@ class SolveStopped(SpringFemError, RuntimeError):
         self.load_factor = load_factor
 
 
-LIMITS: dict[str, float | str | None] = {"max_time": None, "max_steps": None, "why": None}
+LIMITS: dict[str, Any] = {"max_time": None, "max_steps": None, "why": None}
 #: Seconds past the cap after which the watchdog interrupts the main thread.
 WATCHDOG_GRACE = 2.0
 #: Seconds between two looks of :func:`interruptible` at the cap and at Ctrl-C.
