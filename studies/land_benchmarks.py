@@ -223,20 +223,32 @@ def markdown(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def rst(rows: list[dict]) -> str:
+    """:func:`markdown`'s table as a reStructuredText list table (for docs/verification.rst)."""
+    body = [line.strip("|").split("|") for line in markdown(rows).splitlines()]
+    out = [".. list-table::", "   :header-rows: 1", ""]
+    for cells in [body[0], *body[2:]]:
+        for i, c in enumerate(cells):
+            text = c.strip().replace("-", "\u2212") if i == 4 else c.strip()
+            out.append((("   * - " if i == 0 else "     - ") + text).rstrip())
+    return "\n".join(out)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Command line: solve one level (``--problem``, ``--level``) or print ``--table``."""
     ap = argparse.ArgumentParser(prog="python -m studies.land_benchmarks")
     ap.add_argument("--problem", choices=sorted(SCENES))
     ap.add_argument("--level", type=int)
     ap.add_argument("--table", action="store_true")
+    ap.add_argument("--rst", action="store_true", help="the table as reStructuredText")
     ap.add_argument("--out", type=Path, default=OUT)
     a = ap.parse_args(argv)
     if a.problem is not None and a.level is not None:
         row = solve_level(a.problem, a.level)
         merge_row(row, a.out)
         print(json.dumps(row))
-    if a.table:
-        print(markdown(load_rows(a.out)))
+    if a.table or a.rst:
+        print(rst(load_rows(a.out)) if a.rst else markdown(load_rows(a.out)))
     return 0
 
 
