@@ -59,8 +59,8 @@ SCENES = {"1": "land-beam", "2": "land-ventricle", "3": "land-ventricle-active",
           "3a": "land-ventricle-active"}  # fmt: skip
 LEVELS = {"1": P1_LEVELS, "2": P2_LEVELS, "3": P3_LEVELS, "3a": P3_AXIS_LEVELS}
 #: Each problem's measured points: (probe name, its rest z, mm).
-PROBES = {"1": (("tip", 1.0),), "2": (("endo", -17.0), ("epi", -20.0)),
-          "3": (("endo", -17.0), ("epi", -20.0)), "3a": (("endo", -17.0), ("epi", -20.0))}  # fmt: skip
+_APEXES = (("endo", -17.0), ("epi", -20.0))
+PROBES = {"1": (("tip", 1.0),), "2": _APEXES, "3": _APEXES, "3a": _APEXES}
 #: FEniCS-pulse's apex z (mm; github.com/finsberg/pulse pull request 98).
 PULSE = {"2": {"endo": -26.5328, "epi": -28.1790}, "3": {"endo": -12.00, "epi": -15.22},
          "3a": {"endo": -12.00, "epi": -15.22}}  # fmt: skip
