@@ -62,8 +62,7 @@ def quadrature_frames(scene: Scene, space: Space) -> np.ndarray | None:
         return None
     if land is not None:
         q = land_frames(space.quadrature_points(), **land)
-    else:
-        assert kw is not None  # one of the two is set (checked above)
+    elif kw is not None:
         q = rule_based_point_frames(scene.mesh, space.intorder, **kw)
     mean = q[:, :, 0].mean(axis=1)
     mean /= np.maximum(np.linalg.norm(mean, axis=1, keepdims=True), 1e-300)

@@ -9,8 +9,11 @@ in a nested way without moving the boundary, so the family is one of sizes): pro
 axis_size``) shrinks in proportion, because its fibre field is singular on the long axis
 (docs/verification.rst#land-problem-3-fibres). The observed order and the Richardson value
 of the three finest levels come from
-:func:`studies.study_tissue.convergence.observed_order`, with the gmsh size (the beam: its
-element length) as ``h``.
+:func:`studies.study_tissue.convergence.observed_order`; ``h`` is the beam's element length
+``10 / n`` mm, and for the ventricles the edge of the regular tet of the mean tet volume,
+``(6 sqrt(2) V_wall / n_tets)^(1/3)`` (gmsh's size is only the bound it meshes to, as in
+:mod:`studies.study_tissue.convergence`). With a fourth level, the coarser triple's order
+says whether the three finest are in the asymptotic range.
 
 Each level is one process (fit for a background run under ``timeout``):
 ``python -m studies.land_benchmarks --problem 3 --level 2`` solves one level and merges it
@@ -21,12 +24,12 @@ steps and cut-backs.
 
 Examples
 --------
->>> rows = [{"problem": "3", "size": h, "axis_size": h / 4, "tets": 1, "dofs": 1,
-...          "endo": -12.0 + 0.5 * h**2, "epi": -15.0 + 0.25 * h**2, "wall": 1.0,
-...          "iterations": 1, "load_steps": 1, "cutbacks": 0} for h in (4.0, 2.0, 1.0)]
->>> ext = extrapolate(rows)["3"]
->>> round(ext["endo"]["order"], 6), round(ext["endo"]["extrapolated"], 6)
-(2.0, -12.0)
+>>> rows = [{"problem": "1", "size": h, "axis_size": None, "tets": 1, "dofs": 1,
+...          "tip": 4.17 - 0.1 * h**2, "wall": 1.0, "iterations": 1, "load_steps": 1,
+...          "cutbacks": 0} for h in (2.0, 1.0, 0.5, 0.25)]
+>>> ext = extrapolate(rows)["1"]["tip"]
+>>> round(ext["order"], 6), round(ext["extrapolated"], 6), ext["asymptotic"]
+(2.0, 4.17, True)
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ import math
 import time
 from pathlib import Path
 
+from springfem.ellipsoid import wall_volume
 from springfem.files import atomic_write_text
 
 from .scenes import bundled_table
@@ -45,16 +49,21 @@ from .study_tissue.convergence import observed_order
 #: Problem 1: the beam's divisions (nested: each level halves the elements' edges).
 P1_LEVELS = ((10, 1, 1), (20, 2, 2), (40, 4, 4))
 #: Problem 2: uniform gmsh sizes (mm), coarse to fine.
-P2_LEVELS = ((4.0, None), (3.0, None), (2.0, None), (1.5, None))
+P2_LEVELS = ((4.0, None), (3.0, None), (2.5, None), (2.0, None))
 #: Problem 3: (size, axis size) in mm, coarse to fine, the axis size a quarter of the size.
 P3_LEVELS = ((4.0, 1.0), (3.0, 0.75), (2.0, 0.5), (1.5, 0.375))
-SCENES = {"1": "land-beam", "2": "land-ventricle", "3": "land-ventricle-active"}
-LEVELS = {"1": P1_LEVELS, "2": P2_LEVELS, "3": P3_LEVELS}
+#: Problem 3 refined along the axis only (``3a``: size 4 mm, axis size halved): where its
+#: fibre field is singular.
+P3_AXIS_LEVELS = ((4.0, 1.0), (4.0, 0.5), (4.0, 0.25))
+SCENES = {"1": "land-beam", "2": "land-ventricle", "3": "land-ventricle-active",
+          "3a": "land-ventricle-active"}  # fmt: skip
+LEVELS = {"1": P1_LEVELS, "2": P2_LEVELS, "3": P3_LEVELS, "3a": P3_AXIS_LEVELS}
 #: Each problem's measured points: (probe name, its rest z, mm).
-PROBES = {"1": (("tip", 1.0),), "2": (("endo", -17.0), ("epi", -20.0)),
-          "3": (("endo", -17.0), ("epi", -20.0))}  # fmt: skip
+_APEXES = (("endo", -17.0), ("epi", -20.0))
+PROBES = {"1": (("tip", 1.0),), "2": _APEXES, "3": _APEXES, "3a": _APEXES}
 #: FEniCS-pulse's apex z (mm; github.com/finsberg/pulse pull request 98).
-PULSE = {"2": {"endo": -26.5328, "epi": -28.1790}, "3": {"endo": -12.00, "epi": -15.22}}
+PULSE = {"2": {"endo": -26.5328, "epi": -28.1790}, "3": {"endo": -12.00, "epi": -15.22},
+         "3a": {"endo": -12.00, "epi": -15.22}}  # fmt: skip
 #: Land et al. 2015's range over its 11 codes (mm; problem 1, the beam's deformed z).
 PAPER_RANGE = {"1": {"tip": (4.14, 4.20)}}
 #: Land et al. 2015: typical relative difference between the groups' fine solutions.
@@ -122,7 +131,7 @@ def _level(problem: str, level: int):
 def load_rows(folder: Path = OUT) -> list[dict]:
     """The rows recorded so far in ``folder`` (``problem<N>.json``), by problem and size."""
     rows = [r for f in sorted(folder.glob("problem*.json")) for r in json.loads(f.read_text())]
-    return sorted(rows, key=lambda r: (r["problem"], -r["size"]))
+    return sorted(rows, key=lambda r: (r["problem"], -r["size"], -(r["axis_size"] or 0.0)))
 
 
 def merge_row(row: dict, folder: Path = OUT) -> list[dict]:
@@ -131,27 +140,45 @@ def merge_row(row: dict, folder: Path = OUT) -> list[dict]:
     key = (row["size"], row["axis_size"])
     old = json.loads(path.read_text()) if path.exists() else []
     rows = sorted([*(r for r in old if (r["size"], r["axis_size"]) != key), row],
-                  key=lambda r: -r["size"])  # fmt: skip
+                  key=lambda r: (-r["size"], -(r["axis_size"] or 0.0)))  # fmt: skip
     folder.mkdir(parents=True, exist_ok=True)
     atomic_write_text(path, json.dumps(rows, indent=1) + "\n")
     return rows
 
 
+def _h(row: dict) -> float:
+    """The element size of a level: the beam's length, the axis size of family ``3a``, a
+    ventricle's mean-volume tet edge."""
+    if row["problem"] == "1":
+        return float(row["size"])
+    if row["problem"] == "3a":
+        return float(row["axis_size"])
+    return float((6.0 * math.sqrt(2.0) * wall_volume() / row["tets"]) ** (1.0 / 3.0))
+
+
 def extrapolate(rows: list[dict]) -> dict:
-    """Per problem and surface: the observed order and Richardson value of the three finest
-    converged levels, and the note of :func:`observed_order` (why not, if not)."""
+    """Per problem and probe: the observed order and Richardson value of the three finest
+    converged levels, the coarser triple's order (``order_coarser``, with four levels),
+    ``asymptotic`` (both orders within 25 % and in 0.5-6) and :func:`observed_order`'s
+    ``note`` (why not, if not)."""
     out: dict = {}
     for problem in sorted({r["problem"] for r in rows}):
         ok = sorted((r for r in rows if r["problem"] == problem and not r.get("error")),
-                    key=lambda r: -r["size"])[-3:]  # fmt: skip
+                    key=lambda r: -_h(r))  # fmt: skip
         out[problem] = {}
         for s, _ in PROBES[problem]:
             if len(ok) < 3:
                 out[problem][s] = {"order": math.nan, "extrapolated": math.nan,
+                                   "order_coarser": math.nan, "asymptotic": False,
                                    "note": "fewer than 3 levels"}  # fmt: skip
                 continue
-            p, f0, note = observed_order([r["size"] for r in ok], [r[s] for r in ok])
-            out[problem][s] = {"order": p, "extrapolated": f0, "note": note}
+            h, f = [_h(r) for r in ok], [r[s] for r in ok]
+            p, f0, note = observed_order(h[-3:], f[-3:])
+            q = observed_order(h[-4:-1], f[-4:-1])[0] if len(ok) >= 4 else math.nan
+            sure = bool(math.isfinite(p) and math.isfinite(q) and 0.5 <= p <= 6
+                        and abs(p - q) <= 0.25 * p)  # fmt: skip
+            out[problem][s] = {"order": p, "extrapolated": f0, "order_coarser": q,
+                               "asymptotic": sure, "note": note}  # fmt: skip
     return out
 
 
@@ -185,8 +212,14 @@ def markdown(rows: list[dict]) -> str:
         cells = []
         for n in names:
             v = ext[problem][n]
-            cells.append(f"{v['extrapolated']:.3f} (p = {v['order']:.2g})"
-                         if math.isfinite(v["extrapolated"]) else v["note"])  # fmt: skip
+            if not math.isfinite(v["extrapolated"]):
+                cells.append(v["note"])
+                continue
+            coarser = (
+                f", coarser {v['order_coarser']:.2g}" if math.isfinite(v["order_coarser"]) else ""
+            )
+            sure = "" if v["asymptotic"] else ", not shown asymptotic"
+            cells.append(f"{v['extrapolated']:.3f} (p = {v['order']:.2g}{coarser}{sure})")
         lines.append(f"| {problem} | Richardson | | | {' / '.join(cells)} | | |")
         if problem in PULSE:
             pub = PULSE[problem]
@@ -198,20 +231,32 @@ def markdown(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def rst(rows: list[dict]) -> str:
+    """:func:`markdown`'s table as a reStructuredText list table (for docs/verification.rst)."""
+    body = [line.strip("|").split("|") for line in markdown(rows).splitlines()]
+    out = [".. list-table::", "   :header-rows: 1", ""]
+    for cells in [body[0], *body[2:]]:
+        for i, c in enumerate(cells):
+            text = c.strip().replace("-", "\u2212") if i == 4 else c.strip()
+            out.append((("   * - " if i == 0 else "     - ") + text).rstrip())
+    return "\n".join(out)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Command line: solve one level (``--problem``, ``--level``) or print ``--table``."""
     ap = argparse.ArgumentParser(prog="python -m studies.land_benchmarks")
-    ap.add_argument("--problem", choices=sorted(SCENES))
+    ap.add_argument("--problem", choices=sorted(SCENES), help="3a: problem 3, axis family")
     ap.add_argument("--level", type=int)
     ap.add_argument("--table", action="store_true")
+    ap.add_argument("--rst", action="store_true", help="the table as reStructuredText")
     ap.add_argument("--out", type=Path, default=OUT)
     a = ap.parse_args(argv)
     if a.problem is not None and a.level is not None:
         row = solve_level(a.problem, a.level)
         merge_row(row, a.out)
         print(json.dumps(row))
-    if a.table:
-        print(markdown(load_rows(a.out)))
+    if a.table or a.rst:
+        print(rst(load_rows(a.out)) if a.rst else markdown(load_rows(a.out)))
     return 0
 
 

@@ -5,14 +5,21 @@ the cited published values are the ones in the manual."""
 from __future__ import annotations
 
 import doctest
+import math
 
 import pytest
 
 import studies.land_benchmarks as lb
+from springfem.ellipsoid import wall_volume
+
+
+def _tets(h):
+    """The tet count whose mean-volume regular tet has the edge ``h`` (the runner's h)."""
+    return 6.0 * math.sqrt(2.0) * wall_volume() / h**3
 
 
 def _row(problem, h, **values):
-    return {"problem": problem, "size": h, "axis_size": None, "tets": 10, "dofs": 30,
+    return {"problem": problem, "size": h, "axis_size": None, "tets": _tets(h), "dofs": 30,
             "wall": 1.0, "iterations": 5, "load_steps": 2, "cutbacks": 0, "error": "",
             **values}  # fmt: skip
 
@@ -24,7 +31,11 @@ def test_extrapolation_recovers_the_limit_of_a_known_sequence():
     ext = lb.extrapolate(rows)["2"]
     assert ext["endo"]["order"] == pytest.approx(1.5, abs=1e-9)
     assert ext["epi"]["extrapolated"] == pytest.approx(-28.2, abs=1e-9)
-    assert "(p = 1.5)" in lb.markdown(rows) and "-26.53" in lb.markdown(rows)
+    assert ext["endo"]["asymptotic"] and ext["endo"]["order_coarser"] == pytest.approx(1.5)
+    assert "(p = 1.5, coarser 1.5)" in lb.markdown(rows) and "-26.53" in lb.markdown(rows)
+    # a sequence whose order changes between the triples is flagged
+    rows[0]["endo"] += 0.5
+    assert not lb.extrapolate(rows)["2"]["endo"]["asymptotic"]
 
 
 def test_rows_merge_per_problem_and_a_stopped_level_is_shown(tmp_path):
