@@ -247,7 +247,8 @@ def reference_rst() -> str:
     """
     lines = []
     for section, keys in accepted_keys().items():
-        lines += [f".. list-table:: ``{section}``", "   :header-rows: 1", "   :widths: 25 75", ""]
+        lines += [f".. list-table:: ``{section}``", "   :header-rows: 1", "   :widths: 25 75"]
+        lines += ["   :width: 100%", ""]
         lines += ["   * - key", "     - value"]
         for k, v in sorted(keys.items()):
             lines += [f"   * - ``{k}``", f"     - {_cell(v)}"]

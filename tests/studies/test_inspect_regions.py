@@ -16,6 +16,7 @@ import sys
 
 import pytest
 from support.commands import ROOT
+from support.meshes import gmsh_box
 
 from springfem.mesh import read_mesh
 from springfem.regions import named_sets
@@ -25,34 +26,8 @@ from studies.cli import main
 DIMS = (0.1, 0.02, 0.03)
 
 
-def _gmsh_box_with_faces(path, size: float = 0.01) -> None:
-    """An unstructured gmsh box ``DIMS`` with a physical volume ``body``, its face x = 0 as
-    ``clamp`` and its face x = DIMS[0] as ``tip``."""
-    gmsh = pytest.importorskip("gmsh")
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("box")
-        gmsh.model.occ.addBox(0, 0, 0, *DIMS)
-        gmsh.model.occ.synchronize()
-        faces = {}
-        for _, s in gmsh.model.getEntities(2):
-            x0, _, _, x1, _, _ = gmsh.model.getBoundingBox(2, s)
-            if x1 - x0 < 1e-5:  # OCC pads bounding boxes by its tolerance
-                faces["clamp" if x0 < DIMS[0] / 2 else "tip"] = s
-        gmsh.model.addPhysicalGroup(3, [1], name="body")
-        for name, s in faces.items():
-            gmsh.model.addPhysicalGroup(2, [s], name=name)
-        gmsh.option.setNumber("Mesh.MeshSizeMin", size)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-
-
 def _scene(tmp_path, material: str) -> str:
-    _gmsh_box_with_faces(tmp_path / "box.msh")
+    gmsh_box(tmp_path / "box.msh", 0.01, DIMS, x_faces=("clamp", "tip"))
     scene = tmp_path / "box.toml"
     scene.write_text(
         f'name = "box"\n[mesh]\nfile = "box.msh"\n[material]\n{material}\n'

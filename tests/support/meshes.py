@@ -20,9 +20,10 @@ def ventricle_mesh(size: float) -> TetMesh:
     return ellipsoid_mesh(size=size)
 
 
-def gmsh_box(path, size: float, dims=(0.1, 0.02, 0.02)) -> None:
+def gmsh_box(path, size: float, dims=(0.1, 0.02, 0.02), x_faces=None) -> None:
     """Write an unstructured gmsh box ``dims`` (element size ``size``, one physical volume
-    ``body``) to ``path``; skips the test when gmsh is missing."""
+    ``body``) to ``path``; skips the test when gmsh is missing. ``x_faces = (low, high)``
+    also names its faces x = 0 and x = dims[0] as physical surfaces."""
     import pytest
 
     gmsh = pytest.importorskip("gmsh")
@@ -35,6 +36,10 @@ def gmsh_box(path, size: float, dims=(0.1, 0.02, 0.02)) -> None:
         gmsh.option.setNumber("Mesh.MeshSizeMin", size)
         gmsh.option.setNumber("Mesh.MeshSizeMax", size)
         gmsh.model.addPhysicalGroup(3, [1], name="body")
+        for _, s in gmsh.model.getEntities(2) if x_faces else ():
+            x0, _, _, x1, _, _ = gmsh.model.getBoundingBox(2, s)
+            if x1 - x0 < 1e-5:  # a face x = const (OCC pads bounding boxes by its tolerance)
+                gmsh.model.addPhysicalGroup(2, [s], name=x_faces[x0 > dims[0] / 2])
         gmsh.model.mesh.generate(3)
         gmsh.write(str(path))
     finally:
