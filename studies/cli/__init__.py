@@ -217,6 +217,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--out", default=None, help="report folder (default reports/, quick: reports/quick/)"
     )
+    p.add_argument("--workers", type=int, nargs="?", const=0, default=None, metavar="N",
+                   help="run the cases on a local Dask cluster of N processes (no N: one "
+                   "per core), shared by the studies")  # fmt: skip
     p.set_defaults(func=_subcommand("studies.cli.study", "cmd_report"))
 
     p = sub.add_parser(

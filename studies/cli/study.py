@@ -121,7 +121,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         The exit code (0).
     """
     out = default_out(args.out, args.quick)
-    outputs = run_report(out, args.quick)
+    outputs = run_report(out, args.quick, workers=getattr(args, "workers", None))
     total = sum(o.seconds for o in outputs)
     pages = f"{out / 'REPORT.md'} and {out / 'index.html'}"
     print(f"wrote {pages} ({len(outputs)} studies, {total:.0f} s)")
