@@ -196,7 +196,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_set_option(p)
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, nargs="?", const=0, default=None, metavar="N",
-                       help="run the cases on a local Dask cluster of N processes")  # fmt: skip
+                       help="run the cases on a local Dask cluster of N processes (default: "
+                       "one per core, or $SPRINGFEM_WORKERS; 1: in this process)")  # fmt: skip
     where.add_argument("--scheduler", default=None, metavar="ADDRESS",
                        help="run the cases on a Dask cluster, e.g. tcp://host:8786")  # fmt: skip
     p.set_defaults(func=_subcommand("studies.cli.study", "cmd_study"))
@@ -218,8 +219,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--out", default=None, help="report folder (default reports/, quick: reports/quick/)"
     )
     p.add_argument("--workers", type=int, nargs="?", const=0, default=None, metavar="N",
-                   help="run the cases on a local Dask cluster of N processes (no N: one "
-                   "per core), shared by the studies")  # fmt: skip
+                   help="run the cases on a local Dask cluster of N processes shared by the "
+                   "studies (default: one per core, or $SPRINGFEM_WORKERS; 1: in this "
+                   "process)")  # fmt: skip
     p.set_defaults(func=_subcommand("studies.cli.study", "cmd_report"))
 
     p = sub.add_parser(
