@@ -137,13 +137,13 @@ class CaseRun:
     why: str | None = None
 
     def __call__(self, case: dict[str, Any]) -> tuple[dict[str, Any], float, dict[str, int]]:
-        from springfem.mechanics.limits import LIMITS, solve_limits
+        from springfem.mechanics.limits import CAP_REASON, LIMITS, solve_limits
 
         lines: Counter = Counter()
         buffer = io.StringIO()
         t0 = time.perf_counter()
         cap = self.cap if self.cap is not None else LIMITS["max_time"]
-        why = self.why if self.cap is not None else LIMITS.get("why")
+        why = self.why if self.cap is not None else CAP_REASON["why"]
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             with solve_limits(max_time=cap, why=why), contextlib.redirect_stderr(buffer):

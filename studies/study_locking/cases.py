@@ -26,7 +26,7 @@ import numpy as np
 from reference_fem.options import FemOptions
 from springfem.errors import InputError
 from springfem.materials.tissue import TISSUE_LAWS
-from springfem.mechanics.limits import LIMITS, solve_limits
+from springfem.mechanics.limits import CAP_REASON, LIMITS, solve_limits
 
 from .. import models
 from ..scenes import StudyScene
@@ -379,7 +379,7 @@ def locking_case(case: dict[str, Any]) -> dict[str, Any]:
     model = METHODS[case["method"]]
     t0 = time.perf_counter()
     caps = [c for c in (case["max_time"], LIMITS["max_time"]) if c is not None]
-    with solve_limits(max_time=min(caps) if caps else None, why=LIMITS.get("why")):
+    with solve_limits(max_time=min(caps) if caps else None, why=CAP_REASON["why"]):
         got = _timed_run(model, scene) if case.get("timed", True) else models.run(scene, model)
     out: dict[str, Any] = {
         "status": got.status,
