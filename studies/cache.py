@@ -213,7 +213,7 @@ class CaseCache:
         sizes = [guess(c) for c in cases]
         for e, (kind, size, _) in zip(entries, sizes, strict=True):
             if e is not None and "seconds" in e:
-                self.costs.add(kind, size or 1.0, e["seconds"])
+                self.costs.add(kind, size or 1.0, _solve_seconds(e["result"], e["seconds"]))
         todo = [i for i, r in enumerate(results) if r is None]
         if not todo:
             return results  # type: ignore[return-value]
@@ -242,7 +242,7 @@ class CaseCache:
                 self.skipped.append((cases[i], str(res.get("message", ""))))
             elif keep:
                 self.put(cases[i], res, seconds)  # atomically, as it arrives
-                self.costs.add(sizes[i][0], sizes[i][1] or 1.0, seconds)
+                self.costs.add(sizes[i][0], sizes[i][1] or 1.0, _solve_seconds(res, seconds))
             results[i] = res
             if bar is not None:
                 bar.update(1)
@@ -284,6 +284,15 @@ class CaseCache:
             print(line, file=sys.stderr)
         self.lines = {}
         return out
+
+
+def _solve_seconds(result: dict[str, Any], elapsed: float) -> float:
+    """The time a case's solve took: its own ``seconds`` (a study's timed solve, without
+    warm-up and compilation), else the whole case's ``elapsed``."""
+    own = result.get("seconds") if isinstance(result, dict) else None
+    if isinstance(own, int | float) and own == own and 0 < own <= elapsed:
+        return float(own)
+    return float(elapsed)
 
 
 def time_now() -> float:

@@ -25,6 +25,7 @@ import atexit
 import contextlib
 import logging
 import os
+import warnings
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -167,14 +168,16 @@ class _client:
         self.saved_env = {k: os.environ.get(k) for k in WORKER_ENV}
         for k, v in WORKER_ENV.items():
             os.environ.setdefault(k, v)
-        self.cluster = LocalCluster(
-            n_workers=n,
-            threads_per_worker=1,
-            processes=True,
-            env=dict(WORKER_ENV),
-            dashboard_address=None,
-            silence_logs=logging.ERROR,
-        )
+        with warnings.catch_warnings():  # "port 8787 is in use" of a second cluster
+            warnings.simplefilter("ignore", UserWarning)
+            self.cluster = LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                env=dict(WORKER_ENV),
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
+            )
         self.client = Client(self.cluster)
         self._restore_env()
         _LOCAL[n] = (self.client, self.cluster)

@@ -217,7 +217,10 @@ def write_report(outputs: list[StudyOutput], root: Path, quick: bool) -> Path:
 
 
 def run_report(
-    out: str | Path = "reports", quick: bool = False, names: tuple[str, ...] | None = None
+    out: str | Path = "reports",
+    quick: bool = False,
+    names: tuple[str, ...] | None = None,
+    workers: int | None = None,
 ) -> list[StudyOutput]:
     """Run the studies (default: all registered, in report order) and write ``REPORT.md``.
 
@@ -229,6 +232,9 @@ def run_report(
         The quick preset of every study.
     names
         Only these studies.
+    workers
+        Run each study's cases on a local Dask cluster of this many processes (0: one per
+        core; the studies share it); ``None``: in-process.
 
     Returns
     -------
@@ -238,6 +244,6 @@ def run_report(
     outputs = []
     for name in names or tuple(REGISTRY):
         print(f"study {name} …", flush=True)
-        outputs.append(run_study(name, out, quick))
+        outputs.append(run_study(name, out, quick, workers=workers))
     write_report(outputs, Path(out), quick)
     return outputs

@@ -10,6 +10,8 @@ os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_WAIT_POLICY", "passive")
+# the command line's studies run in this process, where a test's monkeypatches reach them
+os.environ.setdefault("SPRINGFEM_WORKERS", "1")
 
 import matplotlib  # noqa: E402
 

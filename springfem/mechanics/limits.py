@@ -39,7 +39,6 @@ import contextlib
 import threading
 import time
 from collections.abc import Callable, Iterator
-from typing import Any
 
 import numpy as np
 
@@ -73,7 +72,9 @@ class SolveStopped(SpringFemError, RuntimeError):
         self.load_factor = load_factor
 
 
-LIMITS: dict[str, Any] = {"max_time": None, "max_steps": None, "why": None}
+LIMITS: dict[str, float | None] = {"max_time": None, "max_steps": None}
+#: What the time cap of :data:`LIMITS` is (``why`` of :func:`solve_limits`).
+CAP_REASON: dict[str, str | None] = {"why": None}
 #: Seconds past the cap after which the watchdog interrupts the main thread.
 WATCHDOG_GRACE = 2.0
 #: Seconds between two looks of :func:`interruptible` at the cap and at Ctrl-C.
@@ -118,12 +119,14 @@ def solve_limits(
     >>> LIMITS["max_time"] is None
     True
     """
-    saved = dict(LIMITS)
-    LIMITS.update(max_time=max_time, max_steps=max_steps, why=why)
+    saved, saved_why = dict(LIMITS), CAP_REASON["why"]
+    LIMITS.update(max_time=max_time, max_steps=max_steps)
+    CAP_REASON["why"] = why
     try:
         yield
     finally:
         LIMITS.update(saved)
+        CAP_REASON["why"] = saved_why
 
 
 class Deadline:
@@ -246,8 +249,8 @@ def cap_reason(max_time: float | None) -> str:
     >>> cap_reason(5.0)
     'the --max-time cap of 5 s'
     """
-    why = LIMITS.get("why")
-    return str(why) if why else f"the --max-time cap of {max_time or 0:g} s"
+    why = CAP_REASON["why"]
+    return why if why else f"the --max-time cap of {max_time or 0:g} s"
 
 
 def checkpoint() -> None:

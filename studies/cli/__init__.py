@@ -215,7 +215,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the model error a variant may have to count (studies with a "
                    "tolerance: ablation, speed-accuracy)")  # fmt: skip
     add_set_option(p)
-    _dask(p, "run the cases on a local Dask cluster of N processes",
+    _dask(p, "run the cases on a local Dask cluster of N processes (default: one per core, or "
+          "$SPRINGFEM_WORKERS; 1: in this process)",
           "run the cases on a Dask cluster, e.g. tcp://host:8786")  # fmt: skip
     p.set_defaults(func=_subcommand("studies.cli.study", "cmd_study"))
 
@@ -230,6 +231,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("report", help="run all studies and write reports/REPORT.md")
     p.add_argument("--quick", action="store_true", help="coarser meshes, fewer points")
     _out(p, "report folder (default reports/, quick: reports/quick/)")
+    p.add_argument("--workers", type=int, nargs="?", const=0, default=None, metavar="N",
+                   help="run the cases on a local Dask cluster of N processes shared by the "
+                   "studies (default: one per core, or $SPRINGFEM_WORKERS; 1: in this "
+                   "process)")  # fmt: skip
     p.set_defaults(func=_subcommand("studies.cli.study", "cmd_report"))
 
     p = sub.add_parser(

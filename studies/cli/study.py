@@ -19,6 +19,27 @@ USER_SCENE_MAX_TIME = 120.0
 #: Default budget of a whole study on a user's scene (s), quick and full preset: the plan
 #: line names it, ``--budget`` changes it.
 USER_SCENE_BUDGET = {True: 100.0, False: 160.0}
+#: The environment variable of the default number of worker processes of ``study`` and
+#: ``report`` (unset: one per core; ``1``: in this process, as the tests run).
+WORKERS_ENV = "SPRINGFEM_WORKERS"
+
+
+def default_workers(given: int | None) -> int | None:
+    """The worker processes of a study's cases: ``--workers`` if given, else
+    :data:`WORKERS_ENV`, else one per core (``0``); ``1`` means in this process (``None``)
+    (docs/studies.rst: what two workers measured against one process).
+
+    Examples
+    --------
+    >>> default_workers(1) is None, default_workers(3)
+    (True, 3)
+    """
+    import os
+
+    n = given if given is not None else int(os.environ.get(WORKERS_ENV, "0") or 0)
+    if n == 0 and (os.cpu_count() or 1) < 2:
+        return None
+    return None if n == 1 else n
 
 
 def cmd_study(args: argparse.Namespace) -> int:
@@ -89,7 +110,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     budget = Budget(seconds=seconds, case_cap=cap)
     with solve_limits(max_time=cap):
         res = run_study(spec.name, out, args.quick, scenes=scenes, settings=settings,
-                        workers=getattr(args, "workers", None),
+                        workers=_workers(args),
                         scheduler=getattr(args, "scheduler", None), command=command,
                         budget=budget)  # fmt: skip
     if scene is not None:
@@ -107,6 +128,12 @@ def cmd_study(args: argparse.Namespace) -> int:
     return 0
 
 
+def _workers(args: argparse.Namespace) -> int | None:
+    if getattr(args, "scheduler", None) is not None:
+        return None
+    return default_workers(getattr(args, "workers", None))
+
+
 def cmd_report(args: argparse.Namespace) -> int:
     """``springfem report [--quick] [--out DIR]``: run every study and write the report.
 
@@ -121,7 +148,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         The exit code (0).
     """
     out = default_out(args.out, args.quick)
-    outputs = run_report(out, args.quick)
+    outputs = run_report(out, args.quick, workers=_workers(args))
     total = sum(o.seconds for o in outputs)
     pages = f"{out / 'REPORT.md'} and {out / 'index.html'}"
     print(f"wrote {pages} ({len(outputs)} studies, {total:.0f} s)")
