@@ -36,109 +36,185 @@ import numpy as np
 from numba import njit
 
 _FLAGS: dict[str, Any] = {"cache": True, "error_model": "numpy"}
-#: Jacobi sweeps at most (each sweep three rotations; 4-5 reach round-off from any F).
+#: Jacobi sweeps at most (each sweep three rotations; 3-5 reach round-off from any F).
 SWEEPS = 20
+#: Newton's polar iteration runs where ``det F > NEWTON_MIN_DET |F|^3 / 3^1.5`` (the
+#: well-conditioned, uninverted elements), at most this many iterations.
+NEWTON_MIN_DET = 1e-2
+NEWTON_ITERATIONS = 12
+
+
+@njit(**_FLAGS)
+def _jacobi(app, aqq, apq, arp, arq):  # pragma: no cover - compiled
+    """One Jacobi rotation zeroing ``a_pq`` of a symmetric 3x3 (Numerical Recipes' update):
+    the new ``a_pp, a_qq, a_rp, a_rq`` and the rotation's ``c, s``."""
+    if apq == 0.0:
+        return app, aqq, arp, arq, 1.0, 0.0
+    theta = (aqq - app) / (2.0 * apq)
+    t = 1.0 / (abs(theta) + math.sqrt(theta * theta + 1.0))
+    if theta < 0.0:
+        t = -t
+    c = 1.0 / math.sqrt(t * t + 1.0)
+    s = t * c
+    return app - t * apq, aqq + t * apq, c * arp - s * arq, s * arp + c * arq, c, s
+
+
+@njit(**_FLAGS)
+def _newton_polar(f00, f01, f02, f10, f11, f12, f20, f21, f22, R):  # pragma: no cover
+    """The polar rotation by Newton's iteration ``X <- (g X + X^-T / g) / 2`` with
+    Higham's determinant scaling ``g = |det X|^(-1/3)``, for a well-conditioned ``F`` with
+    ``det F > 0`` (then it converges quadratically to the rotation of ``F = R S``); writes
+    ``R`` and returns ``True``, or ``False`` (inverted, flat or slow: the Jacobi path)."""
+    ff = f00 * f00 + f01 * f01 + f02 * f02 + f10 * f10 + f11 * f11 + f12 * f12
+    ff += f20 * f20 + f21 * f21 + f22 * f22
+    det = (
+        f00 * (f11 * f22 - f12 * f21)
+        - f01 * (f10 * f22 - f12 * f20)
+        + f02 * (f10 * f21 - f11 * f20)
+    )
+    if not det > NEWTON_MIN_DET * (ff / 3.0) ** 1.5:
+        return False
+    x00, x01, x02, x10, x11, x12, x20, x21, x22 = f00, f01, f02, f10, f11, f12, f20, f21, f22
+    for _ in range(NEWTON_ITERATIONS):
+        c00, c01, c02 = x11 * x22 - x12 * x21, x12 * x20 - x10 * x22, x10 * x21 - x11 * x20
+        c10, c11, c12 = x02 * x21 - x01 * x22, x00 * x22 - x02 * x20, x01 * x20 - x00 * x21
+        c20, c21, c22 = x01 * x12 - x02 * x11, x02 * x10 - x00 * x12, x00 * x11 - x01 * x10
+        d = x00 * c00 + x01 * c01 + x02 * c02  # X^-T = cof(X) / det X
+        g = 1.0 if abs(d - 1.0) < 0.5 else d ** (-1.0 / 3.0)  # scale only far from J = 1
+        a, b = 0.5 * g, 0.5 / (g * d)
+        y00, y01, y02 = a * x00 + b * c00, a * x01 + b * c01, a * x02 + b * c02
+        y10, y11, y12 = a * x10 + b * c10, a * x11 + b * c11, a * x12 + b * c12
+        y20, y21, y22 = a * x20 + b * c20, a * x21 + b * c21, a * x22 + b * c22
+        change = (
+            abs(y00 - x00) + abs(y01 - x01) + abs(y02 - x02)
+            + abs(y10 - x10) + abs(y11 - x11) + abs(y12 - x12)
+            + abs(y20 - x20) + abs(y21 - x21) + abs(y22 - x22)
+        )  # fmt: skip
+        x00, x01, x02, x10, x11, x12, x20, x21, x22 = y00, y01, y02, y10, y11, y12, y20, y21, y22
+        if change < 1e-6:  # quadratic: the error is now ~1e-12, after one more step round-off
+            c00, c01, c02 = x11 * x22 - x12 * x21, x12 * x20 - x10 * x22, x10 * x21 - x11 * x20
+            c10, c11, c12 = x02 * x21 - x01 * x22, x00 * x22 - x02 * x20, x01 * x20 - x00 * x21
+            c20, c21, c22 = x01 * x12 - x02 * x11, x02 * x10 - x00 * x12, x00 * x11 - x01 * x10
+            h = 0.5 / (x00 * c00 + x01 * c01 + x02 * c02)
+            R[0, 0], R[0, 1], R[0, 2] = (
+                0.5 * x00 + h * c00,
+                0.5 * x01 + h * c01,
+                0.5 * x02 + h * c02,
+            )
+            R[1, 0], R[1, 1], R[1, 2] = (
+                0.5 * x10 + h * c10,
+                0.5 * x11 + h * c11,
+                0.5 * x12 + h * c12,
+            )
+            R[2, 0], R[2, 1], R[2, 2] = (
+                0.5 * x20 + h * c20,
+                0.5 * x21 + h * c21,
+                0.5 * x22 + h * c22,
+            )
+            return True
+    return False
 
 
 @njit(**_FLAGS)
 def polar_rotation(F: np.ndarray, R: np.ndarray, W: np.ndarray) -> None:  # pragma: no cover
     """Write the rotation of the 3x3 ``F`` into ``R`` (see the module docstring); ``W`` is
-    a ``(4, 3, 3)`` scratch array."""
-    # C = F^T F, symmetric
-    c00 = F[0, 0] * F[0, 0] + F[1, 0] * F[1, 0] + F[2, 0] * F[2, 0]
-    c11 = F[0, 1] * F[0, 1] + F[1, 1] * F[1, 1] + F[2, 1] * F[2, 1]
-    c22 = F[0, 2] * F[0, 2] + F[1, 2] * F[1, 2] + F[2, 2] * F[2, 2]
-    c01 = F[0, 0] * F[0, 1] + F[1, 0] * F[1, 1] + F[2, 0] * F[2, 1]
-    c02 = F[0, 0] * F[0, 2] + F[1, 0] * F[1, 2] + F[2, 0] * F[2, 2]
-    c12 = F[0, 1] * F[0, 2] + F[1, 1] * F[1, 2] + F[2, 1] * F[2, 2]
-    C = W[0]
-    C[0, 0], C[1, 1], C[2, 2] = c00, c11, c22
-    C[0, 1] = C[1, 0] = c01
-    C[0, 2] = C[2, 0] = c02
-    C[1, 2] = C[2, 1] = c12
-    V = W[1]
-    for i in range(3):
-        for j in range(3):
-            V[i, j] = 1.0 if i == j else 0.0
-    scale = c00 + c11 + c22
+    a ``(4, 3, 3)`` scratch array (unused: kept for the callers' signature)."""
+    f00, f01, f02 = F[0, 0], F[0, 1], F[0, 2]
+    f10, f11, f12 = F[1, 0], F[1, 1], F[1, 2]
+    f20, f21, f22 = F[2, 0], F[2, 1], F[2, 2]
+    if _newton_polar(f00, f01, f02, f10, f11, f12, f20, f21, f22, R):
+        return
+    # C = F^T F
+    a00 = f00 * f00 + f10 * f10 + f20 * f20
+    a11 = f01 * f01 + f11 * f11 + f21 * f21
+    a22 = f02 * f02 + f12 * f12 + f22 * f22
+    a01 = f00 * f01 + f10 * f11 + f20 * f21
+    a02 = f00 * f02 + f10 * f12 + f20 * f22
+    a12 = f01 * f02 + f11 * f12 + f21 * f22
+    scale = a00 + a11 + a22
     if not scale > 0.0:  # F = 0 (or NaN): no rotation to speak of
         for i in range(3):
             for j in range(3):
                 R[i, j] = 1.0 if i == j else 0.0
         return
+    v00, v01, v02 = 1.0, 0.0, 0.0
+    v10, v11, v12 = 0.0, 1.0, 0.0
+    v20, v21, v22 = 0.0, 0.0, 1.0
+    tol = 1e-32 * scale * scale
     for _ in range(SWEEPS):
-        off = C[0, 1] * C[0, 1] + C[0, 2] * C[0, 2] + C[1, 2] * C[1, 2]
-        if off <= 1e-32 * scale * scale:
+        if a01 * a01 + a02 * a02 + a12 * a12 <= tol:
             break
-        for p, q in ((0, 1), (0, 2), (1, 2)):
-            apq = C[p, q]
-            if apq == 0.0:
-                continue
-            theta = (C[q, q] - C[p, p]) / (2.0 * apq)
-            t = 1.0 / (abs(theta) + math.sqrt(theta * theta + 1.0))
-            if theta < 0.0:
-                t = -t
-            c = 1.0 / math.sqrt(t * t + 1.0)
-            s = t * c
-            for k in range(3):  # C <- C J (columns p, q)
-                ckp, ckq = C[k, p], C[k, q]
-                C[k, p] = c * ckp - s * ckq
-                C[k, q] = s * ckp + c * ckq
-            for k in range(3):  # C <- J^T C (rows p, q)
-                cpk, cqk = C[p, k], C[q, k]
-                C[p, k] = c * cpk - s * cqk
-                C[q, k] = s * cpk + c * cqk
-            for k in range(3):  # V <- V J
-                vkp, vkq = V[k, p], V[k, q]
-                V[k, p] = c * vkp - s * vkq
-                V[k, q] = s * vkp + c * vkq
-    # order by decreasing eigenvalue
-    o0, o1, o2 = 0, 1, 2
-    if C[o1, o1] > C[o0, o0]:
-        o0, o1 = o1, o0
-    if C[o2, o2] > C[o1, o1]:
-        o1, o2 = o2, o1
-    if C[o1, o1] > C[o0, o0]:
-        o0, o1 = o1, o0
-    Vs = W[2]
-    for i in range(3):
-        Vs[i, 0], Vs[i, 1], Vs[i, 2] = V[i, o0], V[i, o1], V[i, o2]
-    det_v = (
-        Vs[0, 0] * (Vs[1, 1] * Vs[2, 2] - Vs[1, 2] * Vs[2, 1])
-        - Vs[0, 1] * (Vs[1, 0] * Vs[2, 2] - Vs[1, 2] * Vs[2, 0])
-        + Vs[0, 2] * (Vs[1, 0] * Vs[2, 1] - Vs[1, 1] * Vs[2, 0])
-    )
-    if det_v < 0.0:
-        for i in range(3):
-            Vs[i, 2] = -Vs[i, 2]
-    U = W[3]
-    for i in range(3):  # F v_1, F v_2
-        U[i, 0] = F[i, 0] * Vs[0, 0] + F[i, 1] * Vs[1, 0] + F[i, 2] * Vs[2, 0]
-        U[i, 1] = F[i, 0] * Vs[0, 1] + F[i, 1] * Vs[1, 1] + F[i, 2] * Vs[2, 1]
-    n0 = math.sqrt(U[0, 0] ** 2 + U[1, 0] ** 2 + U[2, 0] ** 2)
-    for i in range(3):
-        U[i, 0] /= n0
-    d = U[0, 0] * U[0, 1] + U[1, 0] * U[1, 1] + U[2, 0] * U[2, 1]
-    for i in range(3):
-        U[i, 1] -= d * U[i, 0]
-    n1 = math.sqrt(U[0, 1] ** 2 + U[1, 1] ** 2 + U[2, 1] ** 2)
+        # (p, q, r) = (0, 1, 2)
+        a00, a11, a02, a12, c, s = _jacobi(a00, a11, a01, a02, a12)
+        a01 = 0.0
+        v00, v01 = c * v00 - s * v01, s * v00 + c * v01
+        v10, v11 = c * v10 - s * v11, s * v10 + c * v11
+        v20, v21 = c * v20 - s * v21, s * v20 + c * v21
+        # (p, q, r) = (0, 2, 1)
+        a00, a22, a01, a12, c, s = _jacobi(a00, a22, a02, a01, a12)
+        a02 = 0.0
+        v00, v02 = c * v00 - s * v02, s * v00 + c * v02
+        v10, v12 = c * v10 - s * v12, s * v10 + c * v12
+        v20, v22 = c * v20 - s * v22, s * v20 + c * v22
+        # (p, q, r) = (1, 2, 0)
+        a11, a22, a01, a02, c, s = _jacobi(a11, a22, a12, a01, a02)
+        a12 = 0.0
+        v01, v02 = c * v01 - s * v02, s * v01 + c * v02
+        v11, v12 = c * v11 - s * v12, s * v11 + c * v12
+        v21, v22 = c * v21 - s * v22, s * v21 + c * v22
+    # the eigenvectors of the largest and the middle eigenvalue
+    if a00 >= a11 and a00 >= a22:
+        x0, x1, x2 = v00, v10, v20
+        if a11 >= a22:
+            y0, y1, y2 = v01, v11, v21
+        else:
+            y0, y1, y2 = v02, v12, v22
+    elif a11 >= a22:
+        x0, x1, x2 = v01, v11, v21
+        if a00 >= a22:
+            y0, y1, y2 = v00, v10, v20
+        else:
+            y0, y1, y2 = v02, v12, v22
+    else:
+        x0, x1, x2 = v02, v12, v22
+        if a00 >= a11:
+            y0, y1, y2 = v00, v10, v20
+        else:
+            y0, y1, y2 = v01, v11, v21
+    # v_3 = v_1 x v_2: V a rotation
+    z0, z1, z2 = x1 * y2 - x2 * y1, x2 * y0 - x0 * y2, x0 * y1 - x1 * y0
+    # u_1 = F v_1 / |F v_1|, u_2 = the part of F v_2 orthogonal to u_1, u_3 = u_1 x u_2
+    p0 = f00 * x0 + f01 * x1 + f02 * x2
+    p1 = f10 * x0 + f11 * x1 + f12 * x2
+    p2 = f20 * x0 + f21 * x1 + f22 * x2
+    n0 = math.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+    p0, p1, p2 = p0 / n0, p1 / n0, p2 / n0
+    q0 = f00 * y0 + f01 * y1 + f02 * y2
+    q1 = f10 * y0 + f11 * y1 + f12 * y2
+    q2 = f20 * y0 + f21 * y1 + f22 * y2
+    d = p0 * q0 + p1 * q1 + p2 * q2
+    q0, q1, q2 = q0 - d * p0, q1 - d * p1, q2 - d * p2
+    n1 = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2)
     if n1 <= 1e-12 * n0:  # rank one: any unit vector orthogonal to u_1
-        k = 0
-        if abs(U[1, 0]) < abs(U[k, 0]):
-            k = 1
-        if abs(U[2, 0]) < abs(U[k, 0]):
-            k = 2
-        for i in range(3):
-            U[i, 1] = (1.0 if i == k else 0.0) - U[k, 0] * U[i, 0]
-        n1 = math.sqrt(U[0, 1] ** 2 + U[1, 1] ** 2 + U[2, 1] ** 2)
-    for i in range(3):
-        U[i, 1] /= n1
-    U[0, 2] = U[1, 0] * U[2, 1] - U[2, 0] * U[1, 1]
-    U[1, 2] = U[2, 0] * U[0, 1] - U[0, 0] * U[2, 1]
-    U[2, 2] = U[0, 0] * U[1, 1] - U[1, 0] * U[0, 1]
-    for i in range(3):
-        for j in range(3):
-            R[i, j] = U[i, 0] * Vs[j, 0] + U[i, 1] * Vs[j, 1] + U[i, 2] * Vs[j, 2]
+        if abs(p0) <= abs(p1) and abs(p0) <= abs(p2):
+            q0, q1, q2 = 1.0 - p0 * p0, -p0 * p1, -p0 * p2
+        elif abs(p1) <= abs(p2):
+            q0, q1, q2 = -p1 * p0, 1.0 - p1 * p1, -p1 * p2
+        else:
+            q0, q1, q2 = -p2 * p0, -p2 * p1, 1.0 - p2 * p2
+        n1 = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2)
+    q0, q1, q2 = q0 / n1, q1 / n1, q2 / n1
+    r0, r1, r2 = p1 * q2 - p2 * q1, p2 * q0 - p0 * q2, p0 * q1 - p1 * q0
+    # R = u_1 v_1^T + u_2 v_2^T + u_3 v_3^T
+    R[0, 0] = p0 * x0 + q0 * y0 + r0 * z0
+    R[0, 1] = p0 * x1 + q0 * y1 + r0 * z1
+    R[0, 2] = p0 * x2 + q0 * y2 + r0 * z2
+    R[1, 0] = p1 * x0 + q1 * y0 + r1 * z0
+    R[1, 1] = p1 * x1 + q1 * y1 + r1 * z1
+    R[1, 2] = p1 * x2 + q1 * y2 + r1 * z2
+    R[2, 0] = p2 * x0 + q2 * y0 + r2 * z0
+    R[2, 1] = p2 * x1 + q2 * y1 + r2 * z1
+    R[2, 2] = p2 * x2 + q2 * y2 + r2 * z2
 
 
 @njit(**_FLAGS)

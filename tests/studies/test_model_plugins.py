@@ -196,3 +196,23 @@ def test_a_sweep_takes_a_plugin_by_name(tmp_path):
     p1 = t[t["model"] == "P1"].set_index("mesh.divisions")["rel_l2"]
     assert len(corot) == 2
     np.testing.assert_allclose(corot.to_numpy(), p1.to_numpy(), rtol=1e-3)
+
+
+def test_the_studies_weigh_the_default_plugins_where_they_apply():
+    """Speed-accuracy gets static and explicit co-rotational points on a linear scene; the
+    dynamics study releases it on a linear scene, not on its bundled Guccione beam (no tissue
+    law in co-rotational P1); the verdict's candidates include it."""
+    from studies.scenes import StudyScene
+    from studies.study_dynamics import cases as dynamics
+    from studies.study_speed_accuracy import cases as speed
+
+    sc = StudyScene.bundled("cantilever", {"mesh.divisions": [4, 1, 1]})
+    pts = speed.points(sc, sc.build(), [1], speed.Settings.quick())
+    methods = {(p["model"], p["solution"]) for p in pts}
+    assert {("corotational", "static"), ("corotational", "explicit")} <= methods
+    assert ("corotational-warped", "static") not in methods  # not a default model
+    settings = dynamics.Settings.quick()
+    assert "corotational" in dynamics.spring_models(sc.build(), settings)
+    beam = dynamics.bundled_scenes(settings)[0].build()
+    assert "corotational" not in dynamics.spring_models(beam, settings)
+    assert "corotational" in models.candidates()
