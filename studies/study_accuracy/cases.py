@@ -132,7 +132,7 @@ def summarize(cmp: Comparison, fields: bool = False) -> dict[str, Any]:
 def work(case: dict[str, Any]) -> dict[str, Any]:
     """Run the comparison of one scene case (and the exact element where asked)."""
     scene = case_scene(case)
-    cmp = compare_scene(scene)
+    cmp = compare_scene(scene, locking_free=False)  # the spring model against P1 and P2
     if case.get("exact"):
         extra = ["spring-exact"]
         if "P1-NH" not in cmp.solutions and models.P1_NH.applies(scene) is None:
