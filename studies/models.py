@@ -30,7 +30,15 @@ Models
     ``P1`` in the displacement formulation with the scene's ``kappa`` or, for an
     incompressible material, the spring model's penalty (:func:`studies.fem_laws.p1_penalty`);
 ``P1-NH``, ``P2-NH``
-    neo-Hookean FEM (the scene's formulation); not for anisotropic laws.
+    neo-Hookean FEM (the scene's formulation); not for anisotropic laws;
+``fem-P1-nodal-strain``, ``fem-P1-nodal-volume``, ``fem-MINI``, ``fem-P2-mixed``
+    FEM of the scene's own law in that ``[fem] formulation``, and ``spring-stabilised``,
+    ``spring-tissue-stabilised``, the exact and tissue elements on nodal strain and nodal
+    volume: the locking-free methods (:data:`LOCKING_FREE`).
+
+An FEM model whose order the scene's formulation does not fit (a P1 model of a ``mixed``
+scene) solves the nearest one of its order and law
+(:func:`studies.fem_laws.fitting_formulation`).
 
 Examples
 --------
