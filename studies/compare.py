@@ -139,6 +139,7 @@ def compare_scene(
     log: Callable[[str], None] | None = None,
     allow_no_reference: bool = False,
     verbose: bool = False,
+    locking_free: bool = True,
 ) -> Comparison:
     """Solve ``scene`` with the spring model and FEM and compare them.
 
@@ -159,6 +160,10 @@ def compare_scene(
         reference (``reference = ""``, errors NaN) instead of raising.
     verbose
         Each model's solver progress on stderr.
+    locking_free
+        On a nearly incompressible scene, add the locking-free models to the default ones
+        and make P2/P1 mixed the reference of a hyperelastic law
+        (:mod:`studies.model_set`); ``False`` keeps the spring, P1 and P2 models alone.
 
     Returns
     -------
@@ -218,7 +223,7 @@ def compare_scene(
         else:
             notes.append(f"small strains (max {strain:.2%} <= {strain_limit:.0%}): linear FEM")
         models = ["spring", "P1", "P2"] + (["P1-NH", "P2-NH"] if nh else [])
-        models += [n for n in locking_free_models(scene) if n not in models]
+        models += [n for n in locking_free_models(scene) if locking_free and n not in models]
         same = same_solves(scene, models)
         models = [n for n in models if n not in same]  # e.g. P2 of a mixed tissue scene
         weighed = [n for n in locking_free_models(scene) if n in models or n in same]

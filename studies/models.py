@@ -35,6 +35,14 @@ plug-ins
     every model of the plug-in API (:mod:`springfem.model_api`: entry points of group
     ``springfem.models`` and :func:`springfem.model_api.register_model`), such as
     ``corotational``; :func:`plugins` lists those a study weighs by default.
+``fem-P1-nodal-strain``, ``fem-P1-nodal-volume``, ``fem-MINI``, ``fem-P2-mixed``
+    FEM of the scene's own law in that ``[fem] formulation``, and ``spring-stabilised``,
+    ``spring-tissue-stabilised``, the exact and tissue elements on nodal strain and nodal
+    volume: the locking-free methods (:data:`LOCKING_FREE`).
+
+An FEM model whose order the scene's formulation does not fit (a P1 model of a ``mixed``
+scene) solves the nearest one of its order and law
+(:func:`studies.fem_laws.fitting_formulation`).
 
 Examples
 --------

@@ -9,7 +9,8 @@ its best reference and measures for each
   after a first solve that gives the solution and warms up imports, compiled kernels and
   solver set-up;
 - for the models with an explicit form (the spring variants, the explicit P1 FEM), the cost
-  of one explicit step (median of interleaved rounds) and the stable step ``2 / omega_max``,
+  of one explicit step (median of interleaved rounds, each of at least
+  :data:`SAMPLE_SECONDS`) and the stable step ``2 / omega_max``,
   hence the cost of one simulated second, ``cost per step / stable step``;
 - what it solves against the reference's law (``law vs reference``:
   :func:`studies.model_set.law_versus`): the same law, or a small-strain law or calibration
@@ -60,8 +61,11 @@ from .timing import interleaved, median
 
 #: Default tolerance: the largest relative L2 error a model may have to count.
 TOLERANCE = 0.05
-#: Explicit steps per timing of the step cost.
+#: Explicit steps per timing of the step cost: at least this many, and as many as make the
+#: cheapest model's sample last SAMPLE_SECONDS (at most MAX_STEPS).
 STEPS = 20
+SAMPLE_SECONDS = 0.05
+MAX_STEPS = 2000
 #: Warm static solves per model whose median is its static time (interleaved rounds).
 SOLVES = 3
 
@@ -183,17 +187,26 @@ def _step_costs(scene: Scene, names: list[str], rounds: int) -> dict[str, tuple[
     if not systems:
         return {}
 
-    def step(s):
+    def step(s, count):
         x, v = s.x0.copy(), np.zeros_like(s.x0)
 
         def run():
-            for _ in range(STEPS):
+            for _ in range(count):
                 s.forces(x, v)
 
         return run
 
-    samples = interleaved({n: step(s) for n, s in systems.items()}, rounds=rounds)
-    return {n: (median(samples, n) / STEPS, dts[n]) for n in systems}
+    # enough steps per sample that one sample lasts SAMPLE_SECONDS: a shorter one measures
+    # the machine's scheduling more than the model
+    one = {}
+    for n, s in systems.items():
+        step(s, 1)()  # compiles
+        t = time.perf_counter()
+        step(s, 1)()
+        one[n] = time.perf_counter() - t
+    count = int(np.clip(SAMPLE_SECONDS / max(min(one.values()), 1e-9), STEPS, MAX_STEPS))
+    samples = interleaved({n: step(s, count) for n, s in systems.items()}, rounds=rounds)
+    return {n: (median(samples, n) / count, dts[n]) for n in systems}
 
 
 def _formulation(scene: Scene, m: models.Model) -> str:

@@ -144,7 +144,7 @@ def work(case: dict[str, Any]) -> dict[str, Any]:
     """Run the comparison of one scene case (the exact element where asked, and the
     case's plug-in models that apply to the scene)."""
     scene = case_scene(case)
-    cmp = compare_scene(scene)
+    cmp = compare_scene(scene, locking_free=False)  # the spring model against P1 and P2
     extra = []
     if case.get("exact"):
         extra.append("spring-exact")

@@ -149,3 +149,22 @@ def test_on_a_kidney_at_nu_0_49_the_verdict_picks_a_locking_free_method(folder, 
     assert t.at["P1", "law vs reference"] == "small-strain law"
     assert t.at["spring-exact", "law vs reference"] == "small-strain calibration"
     assert len(v["sentence"].split(". ")) <= 2
+
+
+@pytest.mark.parametrize("formulation", ["nodal-strain", "nodal-volume", "mini"])
+def test_p2_rows_of_a_linear_tet_scene_solve_a_formulation_of_their_order(formulation):
+    """A scene of linear-tet formulation (order 1) gives its P2 rows the nearest P2 one:
+    P2/P1 mixed for neo-Hookean, the displacement P2 for the small-strain law."""
+    from springfem.scene import scene_from_dict
+    from studies.models import run
+
+    scene = scene_from_dict({
+        "mesh": {"generator": "box", "size": [4.0, 1.0, 1.0], "divisions": [4, 1, 1]},
+        "material": {"law": "neo-hookean", "E": 10.0, "nu": 0.49},
+        "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+        "load": [{"type": "traction", "region": "x_max", "value": [0.0, 0.0, -0.01]}],
+        "fem": {"formulation": formulation},
+    })  # fmt: skip
+    laws = {m: run(scene, m).solution.result.law for m in ("P1-NH", "P2-NH", "P2")}
+    assert laws["P1-NH"].endswith({"mini": "mini-P1bP1"}.get(formulation, formulation))
+    assert laws["P2-NH"].endswith("mixed-P2P1") and laws["P2"] == "linear"
