@@ -2,7 +2,7 @@
 
 - :func:`locking_free_models`: on a nearly incompressible scene
   (:func:`springfem.plausibility.nearly_incompressible`: ν ≥ 0.45, κ > 10 μ or an
-  incompressible flag) the locking-free methods of :data:`studies.models.LOCKING_FREE` that
+  incompressible flag) the locking-free methods of :data:`LOCKING_FREE` that
   apply to its law: nodal-strain and nodal-volume P1, MINI, the stabilised spring elements
   and P2/P1 mixed, which is then the reference of a neo-Hookean or tissue law
   (:func:`mixed_reference`, with the one-line :func:`locking_note`).
@@ -63,7 +63,7 @@ def _applies(scene: Scene, name: str) -> bool:
 
 
 def locking_free_models(scene: Scene) -> list[str]:
-    """The models of :data:`studies.models.LOCKING_FREE` that apply to ``scene`` when it is
+    """The models of :data:`LOCKING_FREE` that apply to ``scene`` when it is
     nearly incompressible (else none).
 
     Parameters
@@ -77,7 +77,7 @@ def locking_free_models(scene: Scene) -> list[str]:
     """
     if not nearly_incompressible(scene):
         return []
-    return [n for n in models.LOCKING_FREE if _applies(scene, n)]
+    return [n for n in LOCKING_FREE if _applies(scene, n)]
 
 
 def mixed_reference(scene: Scene) -> str | None:
@@ -267,3 +267,21 @@ def law_versus(scene: Scene, name: str, reference_law: str) -> str:
     if law == ref:
         return "same law"
     return "small-strain law" if law in SMALL_STRAIN_LAWS else "other law"
+
+
+#: What a verdict, a comparison and a sweep weigh as well on a nearly incompressible scene
+#: (:func:`springfem.plausibility.nearly_incompressible`): the locking-free P1 tets, the
+#: stabilised spring elements and the P2/P1 mixed reference (docs/studies.rst#the-verdict).
+LOCKING_FREE = (
+    "fem-P1-nodal-strain",
+    "fem-P1-nodal-volume",
+    "fem-MINI",
+    "spring-stabilised",
+    "spring-tissue-stabilised",
+    "fem-P2-mixed",
+)
+
+
+def candidates() -> tuple[str, ...]:
+    """The models a verdict weighs: :data:`studies.models.PRIMARY` and the default plug-ins."""
+    return models.PRIMARY + tuple(models.plugins())

@@ -38,7 +38,7 @@ plug-ins
 ``fem-P1-nodal-strain``, ``fem-P1-nodal-volume``, ``fem-MINI``, ``fem-P2-mixed``
     FEM of the scene's own law in that ``[fem] formulation``, and ``spring-stabilised``,
     ``spring-tissue-stabilised``, the exact and tissue elements on nodal strain and nodal
-    volume: the locking-free methods (:data:`LOCKING_FREE`).
+    volume: the locking-free methods (:data:`studies.model_set.LOCKING_FREE`).
 
 An FEM model whose order the scene's formulation does not fit (a P1 model of a ``mixed``
 scene) solves the nearest one of its order and law
@@ -64,7 +64,6 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
@@ -597,45 +596,3 @@ def plugins(scene: Scene | None = None, explicit: bool = False) -> list[str]:
                 continue
         out.append(m.name)
     return out
-
-
-def candidates() -> tuple[str, ...]:
-    """The models a verdict weighs: :data:`PRIMARY` and the default plug-ins."""
-    return PRIMARY + tuple(plugins())
-
-
-def plugin_sources() -> list[Path]:
-    """The source folders of the plug-in models' packages (part of the studies' and
-    sweeps' code fingerprints, so that editing a plug-in recomputes its cases).
-
-    Returns
-    -------
-    list of Path
-    """
-    import importlib
-
-    from springfem.model_api import plugin_module
-
-    folders = set()
-    for m in sync_plugins():
-        name = plugin_module(m.plugin)
-        if name in ("springfem", "studies"):
-            continue  # in every fingerprint already
-        src = getattr(importlib.import_module(name), "__file__", None)
-        if src:
-            path = Path(src).parent if Path(src).name == "__init__.py" else Path(src)
-            folders.add(path)
-    return sorted(folders)
-
-
-#: What a verdict, a comparison and a sweep weigh as well on a nearly incompressible scene
-#: (:func:`springfem.plausibility.nearly_incompressible`): the locking-free P1 tets, the
-#: stabilised spring elements and the P2/P1 mixed reference (docs/studies.rst#the-verdict).
-LOCKING_FREE = (
-    "fem-P1-nodal-strain",
-    "fem-P1-nodal-volume",
-    "fem-MINI",
-    "spring-stabilised",
-    "spring-tissue-stabilised",
-    "fem-P2-mixed",
-)

@@ -88,7 +88,7 @@ def run_study(
     import springfem
     import springmodel
 
-    from .models import plugin_sources
+    from .plugin_sources import plugin_sources
 
     here = Path(__file__).parent
     code = source_fingerprint(

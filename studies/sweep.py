@@ -99,7 +99,7 @@ def code_fingerprint() -> str:
     import springfem
     import springmodel
 
-    from .models import plugin_sources
+    from .plugin_sources import plugin_sources
 
     here = Path(__file__).parent
     return source_fingerprint(

@@ -36,6 +36,7 @@ from typing import Any
 
 from springfem.errors import InputError, SceneError
 
+from . import model_set
 from . import models as registry
 from .overrides import apply_overrides, parse_assignment, read_scene_table, scene_with_overrides
 from .scenes import scene_path as bundled
@@ -64,7 +65,7 @@ def default_locking_free(scenes: Sequence) -> list[str]:
     found = [n for s in scenes for n in locking_free_models(s)]
     return [
         n
-        for n in registry.LOCKING_FREE
+        for n in model_set.LOCKING_FREE
         if n in found and all(registry.get(n).applies(s) is None for s in scenes)
     ]
 

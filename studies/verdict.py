@@ -107,7 +107,7 @@ class Verdict:
 
 
 def candidate_models(scene: Scene) -> list[str]:
-    """The primary models (:func:`studies.models.candidates`: :data:`~studies.models.PRIMARY`
+    """The primary models (:func:`studies.model_set.candidates`: :data:`~studies.models.PRIMARY`
     and the default plug-ins) that apply to ``scene``, and on a nearly incompressible scene
     the locking-free ones (:func:`studies.model_set.locking_free_models`).
 
@@ -121,7 +121,7 @@ def candidate_models(scene: Scene) -> list[str]:
     list of str
     """
     out = []
-    for m in map(models.get, models.candidates()):
+    for m in map(models.get, model_set.candidates()):
         if m.name == "fem" or m.applies(scene) is not None:
             continue
         if m.kind == "spring" and not _spring_builds(m, scene):
