@@ -16,8 +16,8 @@ A package registers through entry points in its distribution's metadata
 
 Examples
 --------
->>> sorted(entry_points("springfem.kernels"))[:1]
-['reference_fem']
+>>> "reference_fem" in entry_points("springfem.kernels")
+True
 """
 
 from __future__ import annotations
