@@ -32,6 +32,8 @@ from springfem.materials.tissue import TISSUE_LAWS
 from springfem.scene import Scene, TableReader, register_section
 from springfem.volumetric import VOLUMETRIC_ENERGIES, Volumetric
 
+from .locking_free import LOCKING_FREE, locking_free_switch, volume_stabilisation_default
+
 AxialLaw = Literal["linear", "quadratic", "cubic", "stress-scaled"]
 TorsionLaw = Literal["off", "angle", "cosine", "cubic", "energy", "shear", "green"]
 #: Torsion laws that are energies of the axis cosine, ``U = k phi(c)`` (conservative, with an
@@ -60,10 +62,8 @@ StrainAverage = Literal["element", "nodal"]
 #: Default share ``alpha`` of the element's own springs with ``strain_average = "nodal"``
 #: (chosen by measurement, docs/volumetric.rst#stabilised-nodal-strain).
 STRAIN_STABILISATION = 0.3
-#: Default ``volume_stabilisation`` with ``strain_average = "nodal"`` on the tissue scenes'
-#: penalty ``kappa = 1000 mu`` (chosen there by measurement,
-#: docs/volumetric.rst#stabilised-nodal-strain): the default is ``alpha mu / kappa``
-#: (:meth:`SpringOptions.volume_stabilisation_share`), which is this value there.
+#: ``volume_stabilisation`` with nodal strain where ``kappa = 1000 mu`` (measured there,
+#: docs/volumetric.rst#stabilised-nodal-strain); elsewhere ``alpha mu / kappa``.
 VOLUME_STABILISATION = 3e-4
 #: ``off``: the spec's quadratic springs; ``exponential``: :mod:`springmodel.stiffening` (with
 #: ``torsion = "green"``: :mod:`springmodel.tissue_element`); ``law``: each spring group
@@ -241,11 +241,8 @@ class SpringOptions:
         With ``volume_average = "nodal"``: ``beta``, each tet keeps ``beta kappa V0 U(J_e)`` of
         its own volume besides the nodal term (nodal volumes leave the element volume modes
         free, and a spring element does not see its own inversion; Puso & Solberg 2006).
-        Default (``None``): with ``strain_average = "nodal"``, ``alpha mu / kappa``
-        (``alpha = strain_stabilisation``), so that each tet keeps a volumetric stiffness
-        of ``alpha mu`` as it keeps ``alpha`` of its deviatoric springs, whatever the bulk
-        modulus (the FEM's nodal-strain share, docs/volumetric.rst#stabilised-nodal-strain);
-        else 0 (:meth:`volume_stabilisation_share`).
+        Default (``None``): ``alpha mu / kappa`` with ``strain_average = "nodal"``, else 0
+        (:meth:`volume_stabilisation_share`).
     strain_average
         ``element`` (default): each tet's springs measure its own deformation gradient;
         ``nodal``: the share ``1 - strain_stabilisation`` of the springs measures the
@@ -426,42 +423,13 @@ class SpringOptions:
         return self.volume == "axes"
 
     def volume_stabilisation_share(self, material=None) -> float:
-        """``beta`` in use: ``volume_stabilisation``, or its default for ``material``.
-
-        Parameters
-        ----------
-        material
-            The scene's :class:`~springfem.scene.Material` (its shear and bulk moduli
-            ``mu``, ``kappa``; for a tissue law those of its isotropic equivalent, whose
-            ``kappa`` is the law's penalty). ``None``: the tissue scenes' ``kappa = 1000
-            mu``, :data:`VOLUME_STABILISATION`.
-
-        Returns
-        -------
-        float
-            ``volume_stabilisation`` if set; else ``min(1, alpha mu / kappa)`` with
-            ``strain_average = "nodal"``, 0 without it.
-
-        Examples
-        --------
-        >>> from springfem.scene import Material
-        >>> o = SpringOptions(volume="axes", torsion="energy", volume_average="nodal",
-        ...                   strain_average="nodal")
-        >>> round(o.volume_stabilisation_share(Material("neo-hookean", E=3.0, nu=0.4999)), 8)
-        6e-05
-        >>> SpringOptions().volume_stabilisation_share()  # element strain: none
-        0.0
-        """
+        """``beta`` in use: ``volume_stabilisation``; else, with ``strain_average = "nodal"``,
+        :func:`~springmodel.locking_free.volume_stabilisation_default` for ``material``."""
         if self.volume_stabilisation is not None:
             return float(self.volume_stabilisation)
         if self.strain_average != "nodal":
             return 0.0
-        if material is None:
-            return VOLUME_STABILISATION
-        mu, kappa = float(material.mu), float(material.kappa)
-        if not (kappa > 0 and mu > 0):
-            return VOLUME_STABILISATION
-        return min(1.0, self.strain_stabilisation * mu / kappa)
+        return volume_stabilisation_default(self.strain_stabilisation, material)
 
     @property
     def nodal_volume(self) -> bool:
@@ -512,6 +480,10 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
         with the table's other keys on top.
     """
     name, base = _named_element(r)
+    named = r.t.get("element")  # "auto" by name takes parts on top; none only without them
+    auto = named == DEFAULT_ELEMENT or (named is None and not any(k in r.t for k in ELEMENT_KEYS))
+    if locking_free_switch(r, name, auto):
+        base.update(LOCKING_FREE)
     kw: dict[str, Any] = {}
     S = SpringOptions
     for key in ("torsion", "calibration", "solver", "integrator", "precision"):
