@@ -15,6 +15,18 @@ sparser, symmetric indefinite matrix, factorised as a saddle point. Only the fac
 changes; residual, tangent and Newton are those of the displacement problem
 (docs/fem.rst#nodal-volume-measurements).
 
+The augmented form can be singular where ``K`` is not. A mesh can carry more nodal
+pressures than its free displacements can see: on the five-tet box splits ``B`` restricted
+to the free DOFs has dependent rows (global checkerboard pressure modes ``q`` with
+``B^T q = 0``, three on Land's beam at 24x3x3), and only the compliance ``-D^-1``, about
+``1e-9`` of the matrix's largest entries for a nearly incompressible material, holds them.
+A symmetric indefinite factorisation perturbs those pivots and its solutions miss. Every
+solution is therefore checked against ``K`` itself (``|K dx - b| <=
+RESIDUAL_ACCEPT |b|``); a factorisation that fails or misses is detected there, and the
+solver then factorises the displacement tangent ``K`` (the penalty form, which has no
+pressure unknowns and so no pressure modes) for the rest of the solve, and says so in
+:attr:`NodalPressureSolver.note` (a solve's ``result.info["nodal_pressure"]``).
+
 Examples
 --------
 >>> import numpy as np, scipy.sparse as sp
@@ -29,10 +41,14 @@ True
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import scipy.sparse as sp
 
+from springfem.errors import SolverError
 from springfem.mechanics import LinearSolver
+from springfem.mechanics.linsolve import RESIDUAL_ACCEPT
 
 
 def with_nodal_parts(K: sp.csr_matrix, Ke, B, d: np.ndarray) -> sp.csr_matrix:
@@ -55,15 +71,39 @@ def with_nodal_parts(K: sp.csr_matrix, Ke, B, d: np.ndarray) -> sp.csr_matrix:
 
 
 class _Augmented:
-    """A factorised augmented system; ``solve(b)`` returns the displacement part."""
+    """A factorised augmented system; ``solve(b)`` returns the displacement part.
 
-    def __init__(self, factor, n: int, m: int):
-        self.factor, self.n, self.m = factor, n, m
+    Each solution is checked against the displacement tangent ``K``; one that fails or
+    misses hands the solve to ``K``'s own factorisation (:class:`NodalPressureSolver`).
+    """
+
+    def __init__(self, owner: NodalPressureSolver, factor, K, free, symmetric, where: str):
+        self.owner, self.factor, self.K, self.free = owner, factor, K, free
+        self.symmetric, self.where = symmetric, where
+        self.fallback: Any = None  # K's own factorisation, once the augmented form missed
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        return self.factor.solve(np.concatenate([np.asarray(b, dtype=float), np.zeros(self.m)]))[
-            : self.n
-        ]
+        b = np.asarray(b, dtype=float)
+        if self.fallback is None and self.factor is not None:
+            n, m = self.K.shape[0], self.K.nodal_parts[1].shape[0]
+            try:
+                x = self.factor.solve(np.concatenate([b, np.zeros(m)]))[:n]
+            except SolverError as exc:
+                self.owner.give_up(str(exc))
+            else:
+                if self._accepted(x, b):
+                    return x
+                self.owner.give_up("its solution misses the displacement tangent")
+        if self.fallback is None:
+            self.fallback = self.owner.solver.factorize(self.K, self.free, self.symmetric,
+                                                        self.where)  # fmt: skip
+        return self.fallback.solve(b)
+
+    def _accepted(self, x: np.ndarray, b: np.ndarray) -> bool:
+        keep = slice(None) if self.free is None else np.asarray(self.free, dtype=bool)
+        r, bf = (self.K @ x - b)[keep], b[keep]
+        bnorm = float(np.linalg.norm(bf))
+        return bool(np.all(np.isfinite(x)) and np.linalg.norm(r) <= RESIDUAL_ACCEPT * bnorm)
 
 
 class NodalPressureSolver:
@@ -82,22 +122,38 @@ class NodalPressureSolver:
         self.saddle = LinearSolver(
             solver.method, saddle_point=True, stats=solver.stats, direct=solver.direct
         )
+        #: Why the augmented form was given up (``None`` while it solves).
+        self.note: str | None = None
 
     def __getattr__(self, name: str):
         return getattr(self.solver, name)
+
+    def give_up(self, reason: str) -> None:
+        """Solve every later system by the displacement tangent, recording ``reason``."""
+        if self.note is None:
+            self.note = (
+                "the nodal-pressure saddle point is singular on this mesh (pressure modes the "
+                f"free displacements do not see: {reason}); solved by the displacement "
+                "tangent, the penalty form"
+            )
 
     def factorize(self, K, free=None, symmetric=None, where: str = "", reuse=None):
         """As :meth:`LinearSolver.factorize`; augmented for a direct solve of nodal parts."""
         parts = getattr(K, "nodal_parts", None)
         n_free = K.shape[0] if free is None else int(np.count_nonzero(free))
-        if parts is None or self.solver.kind(n_free) != "direct" or not (parts[2] > 0).all():
+        direct = self.solver.kind(n_free) == "direct"
+        if parts is None or not direct or not (parts[2] > 0).all() or self.note is not None:
             return self.solver.factorize(K, free, symmetric, where, reuse)
         Ke, B, d = parts
         A = sp.bmat([[Ke, B.T], [B, sp.diags(-1.0 / d)]], format="csr")
         keep = np.ones(K.shape[0], dtype=bool) if free is None else np.asarray(free, bool)
         mask = np.concatenate([keep, np.ones(B.shape[0], dtype=bool)])
-        factor = self.saddle.factorize(A, mask, symmetric, where)
-        return _Augmented(factor, K.shape[0], B.shape[0])
+        try:
+            factor = self.saddle.factorize(A, mask, symmetric, where)
+        except SolverError as exc:  # an exactly singular factor
+            self.give_up(str(exc))
+            return self.solver.factorize(K, free, symmetric, where, reuse)
+        return _Augmented(self, factor, K, free, symmetric, where)
 
     def solve(self, K, b, free=None, symmetric=None, where: str = "") -> np.ndarray:
         """As :meth:`LinearSolver.solve`."""

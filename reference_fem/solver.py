@@ -239,6 +239,9 @@ def _solve(problem: FemProblem, verbose: bool, t0: float) -> FemSolution:
         info["direct_solver"] = problem.linear_solver.direct.backend
         info["factorizations"] = stats["factorizations"]
         info["symbolic_analyses"] = stats["analyses"]
+    note = getattr(problem.linear_solver, "note", None)  # reference_fem.nodal_pressure_solve
+    if note:
+        info["nodal_pressure"] = note
     wall = time.perf_counter() - t0
     result = Result(
         scene=scene.name,

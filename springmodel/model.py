@@ -80,7 +80,9 @@ class SpringModel:
         # stiffening = "law": the law's own P1 element (no constants to miss, the law's kappa)
         self.elements = law_elements(self.elements, self.options, scene.material)
         # volume_average = "nodal": (part of) the volume term on nodal volumes, else None
-        self.nodal, kernel_elements = NodalPart.split(mesh, self.elements, self.options)
+        self.nodal, kernel_elements = NodalPart.split(
+            mesh, self.elements, self.options, scene.material
+        )
         modulus = None
         if self.options.stiffening == "exponential":
             modulus = stiffening_modulus(self.options, scene.material)
@@ -281,8 +283,8 @@ def variant_label(options: SpringOptions) -> str:
             parts.append("volume_average=nodal")
             if options.nodal_fraction < 1:
                 parts.append(f"nodal_fraction={options.nodal_fraction:g}")
-            if options.volume_stabilisation_share:
-                parts.append(f"volume_stabilisation={options.volume_stabilisation_share:g}")
+            if options.volume_stabilisation is not None:
+                parts.append(f"volume_stabilisation={options.volume_stabilisation:g}")
         if options.strain_average == "nodal":
             parts.append("strain_average=nodal")
             parts.append(f"strain_stabilisation={options.strain_stabilisation:g}")

@@ -236,7 +236,7 @@ class NodalPart:
         self._coloured = None
 
     @classmethod
-    def split(cls, mesh, elements, options) -> tuple[NodalPart | None, object]:
+    def split(cls, mesh, elements, options, material=None) -> tuple[NodalPart | None, object]:
         """The nodal part of a model (None when off) and the elements for its kernel.
 
         Parameters
@@ -248,6 +248,9 @@ class NodalPart:
         options
             :class:`~springmodel.options.SpringOptions` (``nodal_volume``,
             ``volumetric``, ``nodal_fraction``).
+        material
+            The scene's material: the default ``volume_stabilisation`` scales with its
+            ``mu / kappa`` (:meth:`~springmodel.options.SpringOptions.volume_stabilisation_share`).
 
         Returns
         -------
@@ -258,7 +261,7 @@ class NodalPart:
             return None, elements
         part = cls(
             mesh.points, mesh.tets, elements, options.volumetric, options.nodal_fraction,
-            options.volume_stabilisation_share,
+            options.volume_stabilisation_share(material),
         )  # fmt: skip
         return part, part.kernel_elements(elements)
 

@@ -26,6 +26,7 @@ from springfem.errors import SceneError
 from springfem.scene import Scene, TableReader, register_section
 from springfem.volumetric import VOLUMETRIC_ENERGIES, Volumetric
 
+from .locking_free import LOCKING_FREE, locking_free_switch, volume_stabilisation_default
 from .presets import (  # noqa: F401  (the named elements, re-exported for the section's users)
     ANISOTROPIC_LAWS,
     DEFAULT_ELEMENT,
@@ -62,8 +63,8 @@ StrainAverage = Literal["element", "nodal"]
 #: Default share ``alpha`` of the element's own springs with ``strain_average = "nodal"``
 #: (chosen by measurement, docs/volumetric.rst#stabilised-nodal-strain).
 STRAIN_STABILISATION = 0.3
-#: Default ``volume_stabilisation`` with ``strain_average = "nodal"`` (0 without it, as before;
-#: chosen by measurement, docs/volumetric.rst#stabilised-nodal-strain).
+#: ``volume_stabilisation`` with nodal strain where ``kappa = 1000 mu`` (measured there,
+#: docs/volumetric.rst#stabilised-nodal-strain); elsewhere ``alpha mu / kappa``.
 VOLUME_STABILISATION = 3e-4
 #: ``off``: the spec's quadratic springs; ``exponential``: :mod:`springmodel.stiffening` (with
 #: ``torsion = "green"``: :mod:`springmodel.tissue_element`); ``law``: each spring group
@@ -148,8 +149,8 @@ class SpringOptions:
         With ``volume_average = "nodal"``: ``beta``, each tet keeps ``beta kappa V0 U(J_e)`` of
         its own volume besides the nodal term (nodal volumes leave the element volume modes
         free, and a spring element does not see its own inversion; Puso & Solberg 2006).
-        Default (``None``): :data:`VOLUME_STABILISATION` with ``strain_average = "nodal"``,
-        else 0 (:attr:`volume_stabilisation_share`).
+        Default (``None``): ``alpha mu / kappa`` with ``strain_average = "nodal"``, else 0
+        (:meth:`volume_stabilisation_share`).
     strain_average
         ``element`` (default): each tet's springs measure its own deformation gradient;
         ``nodal``: the share ``1 - strain_stabilisation`` of the springs measures the
@@ -329,12 +330,14 @@ class SpringOptions:
         """The axis-volume spring is on (``volume = "axes"``)."""
         return self.volume == "axes"
 
-    @property
-    def volume_stabilisation_share(self) -> float:
-        """``beta`` in use: ``volume_stabilisation``, or its default (see the attribute)."""
+    def volume_stabilisation_share(self, material=None) -> float:
+        """``beta`` in use: ``volume_stabilisation``; else, with ``strain_average = "nodal"``,
+        :func:`~springmodel.locking_free.volume_stabilisation_default` for ``material``."""
         if self.volume_stabilisation is not None:
             return float(self.volume_stabilisation)
-        return VOLUME_STABILISATION if self.strain_average == "nodal" else 0.0
+        if self.strain_average != "nodal":
+            return 0.0
+        return volume_stabilisation_default(self.strain_stabilisation, material)
 
     @property
     def nodal_volume(self) -> bool:
@@ -385,6 +388,10 @@ def parse_spring_options(r: TableReader) -> SpringOptions:
         with the table's other keys on top.
     """
     name, base = named_element(r)
+    named = r.t.get("element")  # "auto" by name takes parts on top; none only without them
+    auto = named == DEFAULT_ELEMENT or (named is None and not any(k in r.t for k in ELEMENT_KEYS))
+    if locking_free_switch(r, name, auto):
+        base.update(LOCKING_FREE)
     kw: dict[str, Any] = {}
     S = SpringOptions
     for key in ("torsion", "calibration", "solver", "integrator", "precision"):

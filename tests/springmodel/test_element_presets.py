@@ -132,9 +132,19 @@ def test_a_scene_without_spring_section_is_linear_p1(tmp_path, material):
     assert error(scene_from_dict({**d, "spring": {"solver": "linear", "element": "seed"}})) > 0.02
 
 
-@pytest.mark.parametrize(
-    "name", ["cantilever", "cook-membrane", "land-beam", "land-ventricle-active"]
-)
+def test_the_bundled_tissue_scenes_take_the_default_element():
+    # Land's beam and ventricles: the tissue element with the locking-free switch
+    # (incompressible Guccione), the ventricles with their larger volume stabilisation
+    for name, beta in [("land-beam", None), ("land-ventricle", 3e-3),
+                       ("land-ventricle-fibres", 3e-3)]:  # fmt: skip
+        o = SpringOptions.of(load_scene(SCENES / f"{name}.toml"))
+        assert (o.element, o.stiffening, o.torsion) == ("tissue", "law", "green")
+        assert (o.volume_average, o.strain_average, o.volume_stabilisation) == (
+            "nodal", "nodal", beta
+        )  # fmt: skip
+
+
+@pytest.mark.parametrize("name", ["cantilever", "cook-membrane", "land-ventricle-active"])
 def test_bundled_scenes_measured_with_the_seed_name_it(name):
     # the report measured these with the specification's element: their options are
     # unchanged by the new default

@@ -148,6 +148,7 @@ def test_no_spurious_modes_at_rest(spring):
 
 def test_options_are_checked():
     from springfem.errors import SceneError
+    from springfem.scene import Material
     from springmodel.options import SpringOptions
 
     with pytest.raises(SceneError, match="volume_stabilisation"):
@@ -155,11 +156,19 @@ def test_options_are_checked():
     with pytest.raises(SceneError, match="strain_average"):
         SpringOptions.of(scene_from_dict(block({"strain_average": "nodal", "torsion": "cosine"})))
     defaults = SpringOptions()
-    assert (defaults.strain_average, defaults.volume_stabilisation_share) == ("element", 0.0)
+    assert (defaults.strain_average, defaults.volume_stabilisation_share()) == ("element", 0.0)
     nodal = SpringOptions(volume="axes", volume_average="nodal", torsion="energy")
-    assert nodal.volume_stabilisation_share == 0.0  # the plain nodal volume is unchanged
+    assert nodal.volume_stabilisation_share() == 0.0  # the plain nodal volume is unchanged
     free = SpringOptions(**{**nodal.__dict__, "strain_average": "nodal"})
-    assert free.volume_stabilisation_share == 3e-4 and free.strain_stabilisation == 0.3
+    assert free.strain_stabilisation == 0.3
+    # the default beta = alpha mu / kappa: a tet keeps a bulk stiffness alpha mu
+    for nu in (0.3, 0.49, 0.4999):
+        mat = Material("neo-hookean", E=2.0 * (1.0 + nu), nu=nu)  # mu = 1
+        beta = free.volume_stabilisation_share(mat)
+        assert beta * mat.kappa == pytest.approx(0.3 * mat.mu, rel=1e-12)
+    assert free.volume_stabilisation_share() == 3e-4  # no material: kappa = 1000 mu
+    explicit = SpringOptions(**{**free.__dict__, "volume_stabilisation": 0.01})
+    assert explicit.volume_stabilisation_share(mat) == 0.01  # the key overrides
 
 
 def land_beam(spring: dict):

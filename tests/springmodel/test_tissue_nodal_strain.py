@@ -51,7 +51,7 @@ TISSUE = {
     "volume_average": "nodal", "strain_average": "nodal",
 }  # fmt: skip
 KAPPA = 100.0
-BETA = 3e-4  # the spring's default volume_stabilisation with nodal strain
+BETA = 3e-4  # a volume_stabilisation (the spring's default where kappa = 1000 mu)
 c30, s30 = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
 FIBER = [c30, s30, 0.0]
 SHEET = [-s30 * np.cos(np.radians(20.0)), c30 * np.cos(np.radians(20.0)), np.sin(np.radians(20.0))]
@@ -91,7 +91,9 @@ def displacement(X: np.ndarray, seed: int = 5) -> np.ndarray:
 
 #: ``(spring keys, fem keys, FEM bulk modulus)`` that make the same energy (module text).
 SAME_ENERGY = {
-    "spring defaults": ({}, {"stabilisation": BETA / (1 + BETA)}, (1 + BETA) * KAPPA),
+    "spring beta": (
+        {"volume_stabilisation": BETA}, {"stabilisation": BETA / (1 + BETA)}, (1 + BETA) * KAPPA
+    ),
     # the FEM's default f = alpha mu / kappa; the spring takes nodal_fraction = 1 - f
     "FEM default share": ({"volume_stabilisation": 0.0}, {}, KAPPA),
     "all nodal, alpha 0": (
