@@ -144,6 +144,9 @@ class Study:
         The study's source (a package folder or a module): part of its cache keys.
     user_scenes
         ``None`` when it runs on a user's scene (``--scene``), else why not.
+    serial
+        Its cases are timings measured alone: they run in this process even when the
+        others run on workers.
     """
 
     name: str
@@ -152,6 +155,7 @@ class Study:
     scenes: Callable[[Any], list[StudyScene]]
     source: Path
     user_scenes: str | None = None
+    serial: bool = False
 
     def settings_for(self, quick: bool) -> Any:
         """The preset settings: ``settings.quick()`` or ``settings.full()``.
@@ -179,6 +183,7 @@ def study(
     scenes: Callable[[Any], list[StudyScene]],
     register: bool = True,
     user_scenes: str | None = None,
+    serial: bool = False,
 ) -> Callable:
     """Register ``run(ctx, scenes, settings)`` as the study ``name``.
 
@@ -194,6 +199,8 @@ def study(
         Add it to :data:`REGISTRY` (``False``: only attach the :class:`Study`).
     user_scenes
         ``None`` if it runs on a user's scene, else the reason it cannot (one line).
+    serial
+        Run its cases in this process whatever the workers (timings measured alone).
 
     Returns
     -------
@@ -204,7 +211,7 @@ def study(
     def decorate(fn: Callable) -> Callable:
         source = Path(inspect.getfile(fn))
         source = source.parent if source.name == "__init__.py" else source
-        spec = Study(name, fn, settings, scenes, source, user_scenes)
+        spec = Study(name, fn, settings, scenes, source, user_scenes, serial)
         if register:
             if name in REGISTRY and REGISTRY[name].run is not fn:
                 raise ValueError(f"study {name!r} is registered twice")

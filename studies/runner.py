@@ -97,6 +97,8 @@ def run_study(
         *sorted(here.glob("*.py")),  # the models, comparisons and metrics every study uses
         here / "scenes",
     )
+    if spec.serial and scheduler is None:
+        workers = None  # its cases are timings, measured alone
     budget = budget if budget is not None else Budget()
     budget.start = time.monotonic()
     cache = CaseCache(root / ".cache", spec.name, code, workers, scheduler, budget,

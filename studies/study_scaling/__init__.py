@@ -49,7 +49,7 @@ NO_USER_SCENES = (
 )
 
 
-@study("scaling", Settings, bundled_scenes, user_scenes=NO_USER_SCENES)
+@study("scaling", Settings, bundled_scenes, user_scenes=NO_USER_SCENES, serial=True)
 def run(ctx: StudyContext, scenes: list[StudyScene], p: Settings) -> StudyOutput:
     """Run the scaling study (see the module docstring).
 

@@ -62,7 +62,7 @@ from .tables import measure, pareto_front, points_frame, step_frame, write_table
 __all__ = ["Settings", "bundled_scenes", "pareto_front", "point_work", "run"]
 
 
-@study("speed_accuracy", Settings, bundled_scenes)
+@study("speed_accuracy", Settings, bundled_scenes, serial=True)
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
     """Run the speed-accuracy study (see the module docstring).
 
