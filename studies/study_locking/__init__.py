@@ -149,9 +149,9 @@ def _staged(
     ctx: StudyContext, sc: StudyScene, s: Settings, factors: tuple[int, ...]
 ) -> tuple[list[dict], list[dict]]:
     """The cases and results of one scene: the references first (the finest level), then
-    each level from the coarsest, leaving out a method's level whose predicted time is over
-    the cap (a ``skipped`` row) and, with ``s.prune``, the finer levels of a method that is
-    within :data:`~.cases.TOLERANCE` at that ν already."""
+    each level from the coarsest; with ``s.prune`` a method's level whose predicted time is
+    over 1.5 × the cap is left out (a ``skipped`` row), and so are the finer levels of a
+    method that is within :data:`~.cases.TOLERANCE` at that ν already."""
     from ..budget import skipped_result
 
     methods = scene_methods(sc, s)
@@ -174,7 +174,8 @@ def _staged(
                     continue
                 c = case_of(sc, s, m, nu, f)
                 kind, size, _ = estimate(c)
-                guess = ctx.cache.costs.predict(kind, size) if f != factors[0] else None
+                first = f == factors[0] or not s.prune
+                guess = None if first else ctx.cache.costs.predict(kind, size)
                 if m != REFERENCE and guess is not None and guess > 1.5 * s.max_time:
                     skipped.append((c, skipped_result(
                         f"not run: predicted {guess:.3g} s, over the {s.max_time:g} s cap "
