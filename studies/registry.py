@@ -148,6 +148,9 @@ class Study:
         The study's source (a package folder or a module): part of its cache keys.
     user_scenes
         ``None`` when it runs on a user's scene (``--scene``), else why not.
+    serial
+        Its cases are timings measured alone: they run in this process even when the
+        others run on workers.
     """
 
     name: str
@@ -156,6 +159,7 @@ class Study:
     scenes: Callable[[Any], list[StudyScene]]
     source: Path
     user_scenes: str | None = None
+    serial: bool = False
 
     def settings_for(self, quick: bool) -> Any:
         """The preset settings: ``settings.quick()`` or ``settings.full()``.
@@ -183,6 +187,7 @@ def study(
     scenes: Callable[[Any], list[StudyScene]],
     register: bool = True,
     user_scenes: str | None = None,
+    serial: bool = False,
 ) -> Callable:
     """Register ``run(ctx, scenes, settings)`` as the study ``name``.
 
@@ -198,6 +203,8 @@ def study(
         Add it to :data:`REGISTRY` (``False``: only attach the :class:`Study`).
     user_scenes
         ``None`` if it runs on a user's scene, else the reason it cannot (one line).
+    serial
+        Run its cases in this process whatever the workers (timings measured alone).
 
     Returns
     -------
@@ -208,7 +215,7 @@ def study(
     def decorate(fn: Callable) -> Callable:
         source = Path(inspect.getfile(fn))
         source = source.parent if source.name == "__init__.py" else source
-        spec = Study(name, fn, settings, scenes, source, user_scenes)
+        spec = Study(name, fn, settings, scenes, source, user_scenes, serial)
         if register:
             if name in REGISTRY and REGISTRY[name].run is not fn:
                 raise ValueError(f"study {name!r} is registered twice")
@@ -247,6 +254,7 @@ def study_run(
     returns: str,
     scenes_doc: str = "The scenes.",
     user_scenes: str | None = None,
+    serial: bool = False,
 ) -> Callable:
     """Register a study package's ``run`` (:func:`study`) and write its docstring.
 
@@ -257,7 +265,7 @@ def study_run(
 
     Parameters
     ----------
-    name, settings, scenes, user_scenes
+    name, settings, scenes, user_scenes, serial
         As for :func:`study`.
     settings_doc
         What the settings hold (the docstring's line for the third parameter, whatever
@@ -295,7 +303,7 @@ def study_run(
             settings=_wrap(settings_doc),
             returns=_wrap(returns),
         )
-        return study(name, settings, scenes, user_scenes=user_scenes)(fn)
+        return study(name, settings, scenes, user_scenes=user_scenes, serial=serial)(fn)
 
     return decorate
 

@@ -100,6 +100,8 @@ def run_study(
         here / "scenes",
         *plugin_sources(),  # the plug-in models' packages (springfem.model_api)
     )
+    if spec.serial and scheduler is None:
+        workers = None  # its cases are timings, measured alone
     budget = budget if budget is not None else Budget()
     budget.start = time.monotonic()
     cache = CaseCache(root / ".cache", spec.name, code, workers, scheduler, budget,

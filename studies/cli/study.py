@@ -24,18 +24,22 @@ USER_SCENE_BUDGET = {True: 100.0, False: 160.0}
 WORKERS_ENV = "SPRINGFEM_WORKERS"
 
 
-def default_workers(given: int | None) -> int | None:
+def default_workers(given: int | None, budgeted: bool = False) -> int | None:
     """The worker processes of a study's cases: ``--workers`` if given, else
-    :data:`WORKERS_ENV`, else one per core (``0``); ``1`` means in this process (``None``)
-    (docs/studies.rst: what two workers measured against one process).
+    :data:`WORKERS_ENV`, else one per core (``0``), but this process for a study with a
+    budget (``budgeted``: starting a cluster takes seconds of a short budget); ``1`` means
+    in this process (``None``) (docs/studies.rst: what two workers measured against one
+    process).
 
     Examples
     --------
-    >>> default_workers(1) is None, default_workers(3)
-    (True, 3)
+    >>> default_workers(1) is None, default_workers(3), default_workers(None, budgeted=True)
+    (True, 3, None)
     """
     import os
 
+    if given is None and budgeted and WORKERS_ENV not in os.environ:
+        return None
     n = given if given is not None else int(os.environ.get(WORKERS_ENV, "0") or 0)
     if n == 0 and (os.cpu_count() or 1) < 2:
         return None
@@ -110,7 +114,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     budget = Budget(seconds=seconds, case_cap=cap)
     with solve_limits(max_time=cap):
         res = run_study(spec.name, out, args.quick, scenes=scenes, settings=settings,
-                        workers=_workers(args),
+                        workers=_workers(args, budget.seconds is not None),
                         scheduler=getattr(args, "scheduler", None), command=command,
                         budget=budget)  # fmt: skip
     if scene is not None:
@@ -128,10 +132,10 @@ def cmd_study(args: argparse.Namespace) -> int:
     return 0
 
 
-def _workers(args: argparse.Namespace) -> int | None:
+def _workers(args: argparse.Namespace, budgeted: bool = False) -> int | None:
     if getattr(args, "scheduler", None) is not None:
         return None
-    return default_workers(getattr(args, "workers", None))
+    return default_workers(getattr(args, "workers", None), budgeted)
 
 
 def cmd_report(args: argparse.Namespace) -> int:

@@ -76,6 +76,12 @@ __all__ = ["Settings", "bundled_scenes", "run"]
 )
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
     require(scenes, ctx.name)
+    if ctx.cache.budget.seconds is not None and settings.timed:
+        # within a budget each solve runs once: a warm-up solve and repeats would take a
+        # first solve's time again of every method (the findings say so)
+        from dataclasses import replace
+
+        settings = replace(settings, timed=False)
     all_cases, all_results, laws, notes = [], [], {}, []
     for sc in scenes:
         laws[sc.label] = str(sc.table.get("material", {}).get("law", "linear"))
@@ -87,6 +93,9 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
     df, refs = with_errors(result_frame(all_cases, all_results))
     answers = answer_frame(df)
     findings, headline = report_findings(df, refs, answers, laws, settings.max_time)
+    if not settings.timed:
+        notes.append("Within the study's budget every solve ran once: its time includes a "
+                     "method's first-solve costs (imports, loading compiled kernels).")  # fmt: skip
     names = ", ".join(sc.label for sc in scenes)
     return StudyOutput(
         name=ctx.name,
@@ -141,9 +150,9 @@ def _staged(
     ctx: StudyContext, sc: StudyScene, s: Settings, factors: tuple[int, ...]
 ) -> tuple[list[dict], list[dict]]:
     """The cases and results of one scene: the references first (the finest level), then
-    each level from the coarsest, leaving out a method's level whose predicted time is over
-    the cap (a ``skipped`` row) and, with ``s.prune``, the finer levels of a method that is
-    within :data:`~.cases.TOLERANCE` at that ν already."""
+    each level from the coarsest; with ``s.prune`` a method's level whose predicted time is
+    over 1.5 × the cap is left out (a ``skipped`` row), and so are the finer levels of a
+    method that is within :data:`~.cases.TOLERANCE` at that ν already."""
     from ..budget import skipped_result
 
     methods = scene_methods(sc, s)
@@ -166,7 +175,8 @@ def _staged(
                     continue
                 c = case_of(sc, s, m, nu, f)
                 kind, size, _ = estimate(c)
-                guess = ctx.cache.costs.predict(kind, size) if f != factors[0] else None
+                first = f == factors[0] or not s.prune
+                guess = None if first else ctx.cache.costs.predict(kind, size)
                 if m != REFERENCE and guess is not None and guess > 1.5 * s.max_time:
                     skipped.append((c, skipped_result(
                         f"not run: predicted {guess:.3g} s, over the {s.max_time:g} s cap "

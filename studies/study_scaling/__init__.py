@@ -57,6 +57,7 @@ NO_USER_SCENES = (
     settings_doc="Tet counts.",
     returns="Findings, step/solve/slope tables, the scaling figure, headline slopes.",
     user_scenes=NO_USER_SCENES,
+    serial=True,
 )
 def run(ctx: StudyContext, scenes: list[StudyScene], p: Settings) -> StudyOutput:
     step_cases, static_cases = grids(scenes, p)

@@ -69,6 +69,7 @@ __all__ = ["Settings", "bundled_scenes", "pareto_front", "point_work", "run"]
     scenes_doc="The scenes (with several, files and headline keys end in the scene's label).",
     settings_doc="Levels and solver settings.",
     returns="Findings, points and step-cost tables, the Pareto figure, headline numbers.",
+    serial=True,
 )
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
     require(scenes, "speed-accuracy")
