@@ -151,15 +151,17 @@ def force_kernel(x, tets, G, V, D, per_element, out):  # pragma: no cover - comp
     sv = np.empty(6)
     sig = np.empty((3, 3))
     W = np.empty((4, 3, 3))
+    Ed = np.empty((3, 3))
     bad = 0
     for k in range(tets.shape[0]):
         i0 = tets[k, 0]
+        for a in range(3):  # the edge vectors x_a - x_0, gathered once
+            ia = tets[k, a + 1]
+            for r in range(3):
+                Ed[a, r] = x[ia, r] - x[i0, r]
         for r in range(3):
             for c in range(3):
-                s = 0.0
-                for a in range(3):
-                    s += (x[tets[k, a + 1], r] - x[i0, r]) * G[k, a, c]
-                F[r, c] = s
+                F[r, c] = Ed[0, r] * G[k, 0, c] + Ed[1, r] * G[k, 1, c] + Ed[2, r] * G[k, 2, c]
         det = (
             F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1])
             - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
@@ -218,14 +220,16 @@ def tangent_kernel(x, tets, G, V, D, per_element, warped, Ke):  # pragma: no cov
     dP = np.empty((3, 3))
     e = np.empty(6)
     sv = np.empty(6)
+    Ed = np.empty((3, 3))
     for k in range(tets.shape[0]):
         i0 = tets[k, 0]
+        for a in range(3):  # the edge vectors x_a - x_0, gathered once
+            ia = tets[k, a + 1]
+            for r in range(3):
+                Ed[a, r] = x[ia, r] - x[i0, r]
         for r in range(3):
             for c in range(3):
-                s = 0.0
-                for a in range(3):
-                    s += (x[tets[k, a + 1], r] - x[i0, r]) * G[k, a, c]
-                F[r, c] = s
+                F[r, c] = Ed[0, r] * G[k, 0, c] + Ed[1, r] * G[k, 1, c] + Ed[2, r] * G[k, 2, c]
         for c in range(3):
             g[0, c] = -(G[k, 0, c] + G[k, 1, c] + G[k, 2, c])
             for a in range(3):

@@ -129,7 +129,7 @@ class Corotational:
         self.fixed_dofs, self._fixed_values = scene.dirichlet()
         self._follower = has_follower_loads(scene)
         self._f_dead = None if self._follower else external_forces(scene)
-        self._rows, self._cols = self._pattern()
+        self._csr: tuple[np.ndarray, np.ndarray] | None = None  # the tangent's pattern
         self.last_inverted = 0
         self.steps = 0
         self.time = 0.0
@@ -185,15 +185,20 @@ class Corotational:
         return self.strain_energy(x) - scale * float(np.sum(self._f_dead * (x - self.x0)))
 
     # -- tangent -------------------------------------------------------------------------
-    def _pattern(self) -> tuple[np.ndarray, np.ndarray]:
+    def element_dofs(self) -> tuple[np.ndarray, np.ndarray]:
+        """Rows and columns ``(m * 144,)`` of the element tangents' entries in ``K``."""
         dofs = (3 * self.tets[:, :, None] + np.arange(3)).reshape(-1, 12)
-        rows, cols = np.repeat(dofs, 12, axis=1).ravel(), np.tile(dofs, (1, 12)).ravel()
-        n = 3 * self.n_points
-        # the CSR pattern once; each tangent sums its element entries into it (bincount)
-        keys, self._slot = np.unique(rows * n + cols, return_inverse=True)
-        indptr = np.searchsorted(keys // n, np.arange(n + 1))
-        self._csr = (keys % n, indptr)
-        return rows, cols
+        return np.repeat(dofs, 12, axis=1).ravel(), np.tile(dofs, (1, 12)).ravel()
+
+    def _pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """The CSR pattern ``(indices, indptr)``, built on first use; each tangent sums its
+        element entries into it (``bincount`` over :attr:`_slot`)."""
+        if self._csr is None:
+            rows, cols = self.element_dofs()
+            n = 3 * self.n_points
+            keys, self._slot = np.unique(rows * n + cols, return_inverse=True)
+            self._csr = (keys % n, np.searchsorted(keys // n, np.arange(n + 1)))
+        return self._csr
 
     def element_tangents(self, x: np.ndarray, tangent: Tangent | None = None) -> np.ndarray:
         """Element tangents ``-d f_e / d x_e`` ``(m, 12, 12)`` (DOFs ``3 node + component``),
@@ -270,8 +275,9 @@ class Corotational:
             return None
         Ke = self.element_tangents(x)
         n = 3 * self.n_points
-        data = np.bincount(self._slot, weights=Ke.ravel(), minlength=self._csr[0].size)
-        return sp.csr_matrix((data, *self._csr), shape=(n, n))
+        indices, indptr = self._pattern()
+        data = np.bincount(self._slot, weights=Ke.ravel(), minlength=indices.size)
+        return sp.csr_matrix((data, indices, indptr), shape=(n, n))
 
     def element_nodes(self) -> np.ndarray:
         return self.tets

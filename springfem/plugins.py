@@ -12,7 +12,11 @@ A package registers through entry points in its distribution's metadata
 ``springfem.scenes``
     ``name = "package:folder"``: a folder of named scene files inside a package, that
     :func:`springfem.scene.load_scene` finds by name (``load_scene("cantilever")``);
-    found without importing the package.
+    found without importing the package;
+``springfem.models``
+    ``name = "module:attribute"``: a model plug-in (or a list of them, or a function
+    returning either) that the comparisons and studies weigh (:mod:`springfem.model_api`,
+    docs/plugins.rst).
 
 Examples
 --------

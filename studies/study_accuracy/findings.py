@@ -110,7 +110,8 @@ def peer_findings(e: pd.DataFrame) -> list[str]:
                 continue
             nh = row.get(f"{name} vs P1-NH err L2", float("nan"))
             vs_nh = f", {nh:.2%} off P1-NH" if np.isfinite(nh) else ""
-            parts.append(f"{scene} {row[col]:.1%} (P1 {row['discretisation err L2']:.1%}{vs_nh})")
+            p1 = f"same-mesh {row['same-mesh P1']} {row['discretisation err L2']:.1%}"
+            parts.append(f"{scene} {row[col]:.1%} ({p1}{vs_nh})")
         if parts:
             out.append(
                 f"{name} (a plug-in model) against each scene's reference, relative L2: "
