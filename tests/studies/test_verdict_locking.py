@@ -168,3 +168,43 @@ def test_p2_rows_of_a_linear_tet_scene_solve_a_formulation_of_their_order(formul
     laws = {m: run(scene, m).solution.result.law for m in ("P1-NH", "P2-NH", "P2")}
     assert laws["P1-NH"].endswith({"mini": "mini-P1bP1"}.get(formulation, formulation))
     assert laws["P2-NH"].endswith("mixed-P2P1") and laws["P2"] == "linear"
+
+
+def test_a_failed_extra_locking_free_model_is_a_row_not_a_failed_compare(tmp_path, capsys,
+                                                                         monkeypatch):  # fmt: skip
+    """compare's exit code stays 0 when one of the locking-free models it adds fails (its
+    row says FAILED, a note names it); a failure of a model asked for is still exit 3."""
+    from springfem.errors import SolverError
+    from studies import compare_output
+    from studies.models import Model
+
+    real = Model.solve
+
+    def failing(self, scene, verbose=False):
+        if self.name == "fem-P1-nodal-volume":
+            raise SolverError("singular saddle-point system (made up by the test)")
+        return real(self, scene, verbose)
+
+    monkeypatch.setattr(Model, "solve", failing)
+    monkeypatch.setattr(compare_output, "render_comparison", lambda cmp, path: path)
+    scene = tmp_path / "box.toml"
+    scene.write_text(
+        '[mesh]\ngenerator = "box"\nsize = [4.0, 1.0, 1.0]\ndivisions = [4, 1, 1]\n'
+        '[material]\nlaw = "neo-hookean"\nE = 10.0\nnu = 0.49\n'
+        '[[boundary]]\nregion = "x_min"\nfix = ["x", "y", "z"]\n'
+        '[[load]]\ntype = "traction"\nregion = "x_max"\nvalue = [0.0, 0.0, -0.01]\n'
+    )
+    assert main(["compare", str(scene), "--out", str(tmp_path / "a")]) == 0
+    err = capsys.readouterr().err
+    assert "note: fem-P1-nodal-volume (a locking-free method weighed too) failed" in err
+    df = pd.read_csv(tmp_path / "a" / "compare.csv").set_index("model")
+    assert df.at["fem-P1-nodal-volume", "status"] == "FAILED"
+    args = [
+        "compare",
+        str(scene),
+        "--out",
+        str(tmp_path / "b"),
+        "--models",
+        "P1,fem-P1-nodal-volume",
+    ]
+    assert main(args) == 3  # asked for by name: a failure of the comparison
