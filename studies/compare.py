@@ -75,6 +75,9 @@ class Comparison:
         Model name -> why its solution is implausible
         (:func:`springfem.plausibility.check_solution`); it stays in ``solutions`` and
         its row's status is ``implausible``.
+    extra
+        The locking-free models added to the default ones on a nearly incompressible
+        scene (their failure is a row of the table, not a failed comparison).
     """
 
     scene: Scene
@@ -86,6 +89,7 @@ class Comparison:
     notes: list[str] = field(default_factory=list)
     partial: dict[str, Solution] = field(default_factory=dict)
     implausible: dict[str, str] = field(default_factory=dict)
+    extra: tuple[str, ...] = ()
 
     @property
     def same_mesh_p1(self) -> str | None:
@@ -223,6 +227,7 @@ def compare_scene(
         else:
             notes.append(f"small strains (max {strain:.2%} <= {strain_limit:.0%}): linear FEM")
         models = ["spring", "P1", "P2"] + (["P1-NH", "P2-NH"] if nh else [])
+        base = list(models)
         models += [n for n in locking_free_models(scene) if locking_free and n not in models]
         same = same_solves(scene, models)
         models = [n for n in models if n not in same]  # e.g. P2 of a mixed tissue scene
@@ -231,8 +236,10 @@ def compare_scene(
             ref = mixed_reference(scene)
             name = same.get(ref, ref) if ref else "P2"
             notes.append(locking_note(scene, weighed, name, mixed=ref is not None))
+        extra = tuple(n for n in models if n not in base)
     else:
         models = [get_model(n).name for n in models]  # one spelling, whatever was typed
+        extra = ()
     notes += formulation_notes(scene, models)
     for name in models:  # validate names before any expensive solve
         why = get_model(name).applies(scene)
@@ -267,6 +274,7 @@ def compare_scene(
         notes=notes,
         partial=partial,
         implausible=implausible,
+        extra=extra,
     )
     cmp.table = comparison_table(cmp, list(models))
     return cmp

@@ -134,7 +134,7 @@ def locking_note(
         else f"the reference is {reference} (P2/P1 mixed takes no {mat.law} law)"
     )
     others = ", ".join(n for n in weighed if n != MIXED)
-    return f"nearly incompressible ({why}): {others} weighed too; {ref}"
+    return f"nearly incompressible ({why}): " + (f"{others} weighed too; " if others else "") + ref
 
 
 def _solve_key(scene: Scene, name: str) -> Any:

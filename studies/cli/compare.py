@@ -27,7 +27,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     Returns
     -------
     int
-        Exit code: 0, or 3 when a model failed.
+        Exit code: 0, or 3 when a model failed (one of the locking-free models the defaults
+        add on a nearly incompressible scene fails with a note only).
     """
     scene = scene_of(args)  # sweeps: --set
     quiet = bool(getattr(args, "json", False))
@@ -91,6 +92,11 @@ def cmd_compare(args: argparse.Namespace) -> int:
         for line in summary_lines(cmp):
             print(line)
         print("wrote " + ", ".join(files.values()) + f" and {out}/<model>/result.json + .vtu")
+    failed = {n: m for n, m in cmp.failures.items() if n not in cmp.extra}
     for name, msg in cmp.failures.items():
-        print(f"springfem: solver failure: {name}: {msg}", file=sys.stderr)
-    return 3 if cmp.failures else 0
+        if name in failed:
+            print(f"springfem: solver failure: {name}: {msg}", file=sys.stderr)
+        else:  # a locking-free method added to the defaults: its row says it failed
+            print(f"note: {name} (a locking-free method weighed too) failed: {msg}",
+                  file=sys.stderr)  # fmt: skip
+    return 3 if failed else 0
