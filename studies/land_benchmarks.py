@@ -237,7 +237,8 @@ def rst(rows: list[dict]) -> str:
     out = [".. list-table::", "   :header-rows: 1", ""]
     for cells in [body[0], *body[2:]]:
         for i, c in enumerate(cells):
-            text = c.strip().replace("-", "\u2212") if i == 4 else c.strip()
+            text = c.strip().replace("+/- ", "\u00b1 ")
+            text = text.replace("-", "\u2212") if i == 4 else text
             out.append((("   * - " if i == 0 else "     - ") + text).rstrip())
     return "\n".join(out)
 
