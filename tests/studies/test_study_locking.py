@@ -178,7 +178,7 @@ def test_a_budget_bounds_the_whole_study_and_it_still_writes_its_tables(
     from studies.cli import main
 
     out = tmp_path / "budget"
-    budget = 20.0
+    budget = 4.0  # well below the ~15 s the cases take on an idle machine: some must skip
     args = ["study", "locking", "--quick", "--scene", str(gmsh_scene), "--out", str(out),
             "--budget", str(budget), "--max-time", "10"]  # fmt: skip
     t0 = time.monotonic()
@@ -186,7 +186,7 @@ def test_a_budget_bounds_the_whole_study_and_it_still_writes_its_tables(
     elapsed = time.monotonic() - t0
     err = capsys.readouterr().err
     lines = [line for line in err.splitlines() if line.strip()]
-    assert lines[0].startswith("plan: ") and "(budget 20 s)" in lines[0]  # before any solve
+    assert lines[0].startswith("plan: ") and "(budget 4 s)" in lines[0]  # before any solve
     folder = out / "locking"
     df = pd.read_csv(folder / "locking.csv")
     skipped = pd.read_csv(folder / "skipped.csv")
@@ -195,7 +195,7 @@ def test_a_budget_bounds_the_whole_study_and_it_still_writes_its_tables(
     # every method at every Poisson ratio on the level that fits is a row: run or skipped
     methods = {m for m in Settings.quick().methods if "tissue" not in m}
     assert set(df.method) == methods and set(df.nu) == set(Settings.quick().nus)
-    assert set(df.tets.dropna()) == {df.tets.min()}  # only level x1 fits in 20 s
+    assert set(df.tets.dropna()) == {df.tets.min()}  # only level x1 fits in 4 s
     assert (folder / "cheapest.csv").is_file() and (folder / "error_vs_cost.png").is_file()
     # no case started once it could not finish: the study ends near its budget
     assert elapsed < budget + 90.0
