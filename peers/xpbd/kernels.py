@@ -20,7 +20,10 @@ corrections cancel exactly, where the sequential solve moves it by ``O(h^2)`` pe
 Gauss–Seidel visits the elements colour by colour (:func:`springfem.mesh.element_colouring`:
 elements of one colour share no node, so a colour could run in parallel and gives the same
 answer as this serial sweep); Jacobi computes every correction from the same ``p`` and adds
-them averaged over the node's constraints, times a relaxation ``omega``.
+them all, each (its ``d_lambda`` and its ``d p`` alike, so that ``p - x~ = M^-1 grad C^T
+lambda`` still holds) times a relaxation ``omega``. Averaging the position corrections over
+a node's constraints instead (Macklin et al. 2014) would scale the forces at rest and
+change the rest state; it is not done.
 
 Damping: the velocities are multiplied by ``damp`` after each substep; with ``kinetic``
 they are zeroed when the kinetic energy falls (at its peak), as dynamic relaxation does.
@@ -51,7 +54,7 @@ _FLAGS = {"cache": True, "error_model": "numpy", "fastmath": {"contract"}}
 @njit(**_FLAGS)
 def _project(k, c, p, w, tets, G, alpha, gamma, lam, out, scale):  # pragma: no cover
     """Constraint ``c`` (0: deviatoric, 1: hydrostatic) of element ``k`` at ``p``: adds
-    ``scale`` times its position correction to ``out`` and updates ``lam[k]``."""
+    ``scale`` times its correction to ``out`` and to ``lam[k]``."""
     i0 = tets[k, 0]
     F = np.empty((3, 3))
     for r in range(3):
@@ -92,12 +95,12 @@ def _project(k, c, p, w, tets, G, alpha, gamma, lam, out, scale):  # pragma: no 
             denom += w[node, r] * g[a, r] * g[a, r]
     if denom <= 0.0:
         return
-    dl = (-C - alpha * lam[k]) / denom
+    dl = scale * (-C - alpha * lam[k]) / denom
     lam[k] += dl
     for a in range(4):
         node = tets[k, a]
         for r in range(3):
-            out[node, r] += scale * w[node, r] * g[a, r] * dl
+            out[node, r] += w[node, r] * g[a, r] * dl
 
 
 @njit(**_FLAGS)
@@ -140,9 +143,9 @@ def _gradients(k, c, p, tets, G, gamma, g):  # pragma: no cover - compiled
 
 
 @njit(**_FLAGS)
-def _project_pair(k, p, w, tets, G, ad, ah, gamma, lam_d, lam_h, out):  # pragma: no cover
-    """Both constraints of element ``k`` at once (a 2 x 2 solve): adds the position
-    correction to ``out`` and updates ``lam_d[k], lam_h[k]``."""
+def _project_pair(k, p, w, tets, G, ad, ah, gamma, lam_d, lam_h, out, scale):  # pragma: no cover
+    """Both constraints of element ``k`` at once (a 2 x 2 solve): adds ``scale`` times the
+    correction to ``out`` and to ``lam_d[k], lam_h[k]``."""
     gd = np.empty((4, 3))
     gh = np.empty((4, 3))
     cd = _gradients(k, 0, p, tets, G, gamma, gd)
@@ -160,8 +163,8 @@ def _project_pair(k, p, w, tets, G, ad, ah, gamma, lam_d, lam_h, out):  # pragma
     det = a11 * a22 - a12 * a12
     if not det > 0.0:
         return
-    d1 = (a22 * b1 - a12 * b2) / det
-    d2 = (a11 * b2 - a12 * b1) / det
+    d1 = scale * (a22 * b1 - a12 * b2) / det
+    d2 = scale * (a11 * b2 - a12 * b1) / det
     lam_d[k] += d1
     lam_h[k] += d2
     for a in range(4):
@@ -182,7 +185,7 @@ def frame(
     ``order`` lists the elements by colour (Gauss–Seidel); ``coupled`` solves an element's
     two constraints together (a 2 x 2 system), else one after the other; ``jacobi`` selects
     Jacobi with relaxation ``omega`` and per-node ``inv_count = 1 / (constraints at the
-    node)``; ``alpha_d, alpha_h`` are the compliances ``1 / (mu' V), 1 / (lam' V)`` per
+    node)``, unused; ``alpha_d, alpha_h`` are the compliances ``1 / (mu' V), 1 / (lam' V)`` per
     element; ``lam_d, lam_h`` ``(m,)`` and ``dp`` ``(n, 3)`` are work arrays.
     """
     n = x.shape[0]
@@ -210,19 +213,19 @@ def frame(
                 for k in range(m):
                     if coupled:
                         _project_pair(k, p, w, tets, G, alpha_d[k] / h2, alpha_h[k] / h2,
-                                      gamma, lam_d, lam_h, dp)
+                                      gamma, lam_d, lam_h, dp, omega)
                     else:
-                        _project(k, 0, p, w, tets, G, alpha_d[k] / h2, gamma, lam_d, dp, 1.0)
-                        _project(k, 1, p, w, tets, G, alpha_h[k] / h2, gamma, lam_h, dp, 1.0)
+                        _project(k, 0, p, w, tets, G, alpha_d[k] / h2, gamma, lam_d, dp, omega)
+                        _project(k, 1, p, w, tets, G, alpha_h[k] / h2, gamma, lam_h, dp, omega)
                 for r in range(n):
                     for c in range(3):
-                        p[r, c] += omega * inv_count[r] * dp[r, c]
+                        p[r, c] += dp[r, c]
             else:
                 for q in range(order.shape[0]):
                     k = order[q]
                     if coupled:
                         _project_pair(k, p, w, tets, G, alpha_d[k] / h2, alpha_h[k] / h2,
-                                      gamma, lam_d, lam_h, p)
+                                      gamma, lam_d, lam_h, p, 1.0)
                     else:
                         _project(k, 0, p, w, tets, G, alpha_d[k] / h2, gamma, lam_d, p, 1.0)
                         _project(k, 1, p, w, tets, G, alpha_h[k] / h2, gamma, lam_h, p, 1.0)
