@@ -30,7 +30,11 @@ Models
     ``P1`` in the displacement formulation with the scene's ``kappa`` or, for an
     incompressible material, the spring model's penalty (:func:`studies.fem_laws.p1_penalty`);
 ``P1-NH``, ``P2-NH``
-    neo-Hookean FEM (the scene's formulation); not for anisotropic laws.
+    neo-Hookean FEM (the scene's formulation); not for anisotropic laws;
+plug-ins
+    every model of the plug-in API (:mod:`springfem.model_api`: entry points of group
+    ``springfem.models`` and :func:`springfem.model_api.register_model`), such as
+    ``corotational``; :func:`plugins` lists those a study weighs by default.
 
 Examples
 --------
@@ -52,6 +56,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
@@ -92,7 +97,7 @@ class Model:
     label
         A longer human name for tables and figures.
     kind
-        ``spring`` or ``fem``.
+        ``spring``, ``fem`` or ``plugin`` (a model of :mod:`springfem.model_api`).
     changes
         Spring models: changes to the scene's ``[spring]`` options (values of
         :class:`springmodel.options.SpringOptions`; ``lms`` may be a rule name and
@@ -112,17 +117,20 @@ class Model:
     fem
         FEM models: ``[fem]`` options (fields of :class:`reference_fem.options.FemOptions`,
         such as ``formulation``) that replace the scene's before the solve.
+    plugin
+        Plug-in models: the :class:`~springfem.model_api.ModelPlugin`.
     """
 
     name: str
     label: str
-    kind: Literal["spring", "fem"]
+    kind: Literal["spring", "fem", "plugin"]
     changes: Mapping[str, Any] = field(default_factory=dict)
     coupling: bool = False
     element: bool = False
     order: int | None = None
     law: Literal["small-strain", "neo-hookean", "scene"] = "small-strain"
     fem: Mapping[str, Any] = field(default_factory=dict)
+    plugin: Any = None
 
     # -- what the model solves ---------------------------------------------------------------
     def applies(self, scene: Scene) -> str | None:
@@ -137,6 +145,8 @@ class Model:
         -------
         str or None
         """
+        if self.kind == "plugin":
+            return self.plugin.applies(scene)
         if self.kind == "fem" and self.law == "neo-hookean":
             law = scene.material.law
             if law == "transverse-linear":
@@ -230,6 +240,9 @@ class Model:
         why = self.applies(scene)
         if why is not None:
             raise InputError(why)
+        if self.kind == "plugin":
+            got = self.plugin.solve(scene, verbose)
+            return Solution(got.result, got.u, dict(got.cell_data))
         if self.kind == "spring":
             from springmodel.model import solve_spring
 
@@ -257,8 +270,15 @@ class Model:
         Raises
         ------
         InputError
-            For a P2 model (no explicit P2 FEM) or a law the explicit FEM lacks.
+            For a P2 model (no explicit P2 FEM), a law the explicit FEM lacks, or a plug-in
+            without an explicit form.
         """
+        if self.kind == "plugin":
+            why = self.applies(scene)
+            system = self.plugin.system(scene) if why is None else None
+            if system is None:
+                raise InputError(why or f"model {self.name}: no explicit form")
+            return system
         if self.kind == "spring":
             from springmodel.model import SpringModel
 
@@ -345,6 +365,7 @@ def get(name: str | Model) -> Model:
     """
     if isinstance(name, Model):
         return name
+    sync_plugins()
     for m in REGISTRY.values():
         if m.name.lower() == str(name).lower():
             return m
@@ -493,3 +514,77 @@ PRIMARY = (
     "P1-NH",
     "P2-NH",
 )
+
+
+def sync_plugins() -> list[Model]:
+    """Register the plug-in models (:func:`springfem.model_api.plugin_models`) not yet in
+    :data:`REGISTRY`; the plug-in models, in registration order.
+
+    Returns
+    -------
+    list of Model
+    """
+    from springfem.model_api import plugin_models
+
+    for p in plugin_models().values():
+        if p.name not in REGISTRY:
+            register(Model(p.name, p.label, "plugin", plugin=p))
+    return [m for m in REGISTRY.values() if m.kind == "plugin"]
+
+
+def plugins(scene: Scene | None = None, explicit: bool = False) -> list[str]:
+    """The plug-in models a study weighs by default (``default``) on ``scene``.
+
+    Parameters
+    ----------
+    scene
+        Only those that apply to it (``None``: all).
+    explicit
+        Only those with an explicit form on ``scene`` (a mechanical system).
+
+    Returns
+    -------
+    list of str
+    """
+    out = []
+    for m in sync_plugins():
+        if not m.plugin.default:
+            continue
+        if scene is not None and m.applies(scene) is not None:
+            continue
+        if explicit and scene is not None:
+            try:
+                m.system(scene)
+            except Exception:  # noqa: BLE001 - no explicit form on this scene
+                continue
+        out.append(m.name)
+    return out
+
+
+def candidates() -> tuple[str, ...]:
+    """The models a verdict weighs: :data:`PRIMARY` and the default plug-ins."""
+    return PRIMARY + tuple(plugins())
+
+
+def plugin_sources() -> list[Path]:
+    """The source folders of the plug-in models' packages (part of the studies' and
+    sweeps' code fingerprints, so that editing a plug-in recomputes its cases).
+
+    Returns
+    -------
+    list of Path
+    """
+    import importlib
+
+    from springfem.model_api import plugin_module
+
+    folders = set()
+    for m in sync_plugins():
+        name = plugin_module(m.plugin)
+        if name in ("springfem", "studies"):
+            continue  # in every fingerprint already
+        src = getattr(importlib.import_module(name), "__file__", None)
+        if src:
+            path = Path(src).parent if Path(src).name == "__init__.py" else Path(src)
+            folders.add(path)
+    return sorted(folders)

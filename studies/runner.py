@@ -82,6 +82,8 @@ def run_study(
     import springfem
     import springmodel
 
+    from .models import plugin_sources
+
     here = Path(__file__).parent
     code = source_fingerprint(
         Path(springfem.__file__).parent,  # the core's solvers, meshes and loads shape results
@@ -90,6 +92,7 @@ def run_study(
         spec.source,
         *sorted(here.glob("*.py")),  # the models, comparisons and metrics every study uses
         here / "scenes",
+        *plugin_sources(),  # the plug-in models' packages (springfem.model_api)
     )
     cache = CaseCache(root / ".cache", spec.name, code, workers, scheduler)
     ctx = StudyContext(spec.name, root / spec.name, quick, cache, progress)

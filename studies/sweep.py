@@ -99,10 +99,13 @@ def code_fingerprint() -> str:
     import springfem
     import springmodel
 
+    from .models import plugin_sources
+
     here = Path(__file__).parent
     return source_fingerprint(
         *(Path(list(m.__path__)[0]) for m in (springfem, springmodel, reference_fem)),
         *(here / f for f in ("sweep_case.py", "overrides.py", "compare.py", "metrics.py")),
+        *plugin_sources(),  # the plug-in models' packages (springfem.model_api)
     )
 
 

@@ -95,7 +95,8 @@ class Verdict:
 
 
 def candidate_models(scene: Scene) -> list[str]:
-    """The primary models (:data:`studies.models.PRIMARY`) that apply to ``scene``.
+    """The primary models (:func:`studies.models.candidates`: :data:`~studies.models.PRIMARY`
+    and the default plug-ins) that apply to ``scene``.
 
     Parameters
     ----------
@@ -107,7 +108,7 @@ def candidate_models(scene: Scene) -> list[str]:
     list of str
     """
     out = []
-    for m in map(models.get, models.PRIMARY):
+    for m in map(models.get, models.candidates()):
         if m.name == "fem" or m.applies(scene) is not None:
             continue
         if m.kind == "spring" and not _spring_builds(m, scene):

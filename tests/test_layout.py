@@ -1,8 +1,9 @@
 """The layout's rules, checked on the source: who may import whom, no import cycles, the
 core names no client, and a generous module-size ceiling.
 
-``springfem`` (the core) imports none of the other packages; ``springmodel`` and
-``reference_fem`` import only the core and never each other; ``studies`` may import all.
+``springfem`` (the core) imports none of the other packages; ``springmodel``,
+``reference_fem`` and the model plug-in ``corotational`` import only the core and never each
+other; ``studies`` may import all.
 Imports count wherever they are: at module level, inside functions, and in the doctests of
 docstrings (a doctest is code the module's documentation runs).
 """
@@ -16,11 +17,13 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("springfem", "springmodel", "reference_fem", "studies")
+PACKAGES = ("springfem", "springmodel", "reference_fem", "corotational", "peers", "studies")
 ALLOWED = {
     "springfem": {"springfem"},
     "springmodel": {"springfem", "springmodel"},
     "reference_fem": {"springfem", "reference_fem"},
+    "corotational": {"springfem", "corotational"},
+    "peers": {"springfem", "peers"},
     "studies": set(PACKAGES),
 }
 #: A module this long is a smell worth a look (one idea per module), not a target.
@@ -169,7 +172,7 @@ def test_nothing_imports_the_command_line():
 def test_the_core_names_no_client():
     """The core's code (not its prose) never names the packages built on it: models register
     their scene sections and kernel packages themselves (entry points in pyproject.toml)."""
-    clients = ("springmodel", "reference_fem", "studies")
+    clients = ("springmodel", "reference_fem", "corotational", "studies")
     named = []
     for p in _modules("springfem"):
         tree = ast.parse(p.read_text(encoding="utf-8"))

@@ -126,6 +126,10 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
             if kind in EXACT_KINDS and not np.isfinite(value):
                 continue  # no finite-strain P1 for an anisotropic material
             headline[f"{kind}_l2_{key}"] = value
+        for kind_name, e in res[name]["errors"].items():  # the plug-in models
+            kind, _, peer = kind_name.partition(":")
+            if peer:
+                headline[f"{peer.replace('-', '_')}_{kind}_l2_{key}"] = nan_float(e.get("rel_l2"))
     return StudyOutput(
         name=ctx.name,
         title="Accuracy: spring model vs FEM per scene (model, total, discretisation error)"

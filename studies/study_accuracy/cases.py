@@ -90,8 +90,9 @@ def bundled_scenes(settings: Settings) -> list[StudyScene]:
 def scene_case(scene: StudyScene, settings: Settings) -> dict[str, Any]:
     """The JSON-able cache case of one scene: its table decides the result."""
     return scene.case(
-        "accuracy", VERSION, fields=scene.serves("figure"), exact=bool(settings.exact)
-    )
+        "accuracy", VERSION, fields=scene.serves("figure"), exact=bool(settings.exact),
+        peers=models.plugins(),  # the plug-in models (springfem.model_api) it weighs too
+    )  # fmt: skip
 
 
 def summarize(cmp: Comparison, fields: bool = False) -> dict[str, Any]:
@@ -109,6 +110,10 @@ def summarize(cmp: Comparison, fields: bool = False) -> dict[str, Any]:
         errors["exact_model_nh"] = cmp.errors("spring-exact", "P1-NH")
         errors["exact_total"] = cmp.errors("spring-exact")
         errors["model_nh"] = cmp.errors("spring", "P1-NH")
+    for name in peer_names(cmp):  # the plug-in models: against the reference and P1-NH
+        errors[f"peer_total:{name}"] = cmp.errors(name)
+        if "P1-NH" in cmp.solutions:
+            errors[f"peer_model_nh:{name}"] = cmp.errors(name, "P1-NH")
     out: dict[str, Any] = {
         "reference": cmp.reference,
         "p1": p1,
@@ -129,14 +134,24 @@ def summarize(cmp: Comparison, fields: bool = False) -> dict[str, Any]:
     return out
 
 
+def peer_names(cmp: Comparison) -> list[str]:
+    """The plug-in models a comparison solved."""
+    return [n for n in cmp.solutions if models.get(n).kind == "plugin"]
+
+
 def work(case: dict[str, Any]) -> dict[str, Any]:
-    """Run the comparison of one scene case (and the exact element where asked)."""
+    """Run the comparison of one scene case (the exact element where asked, and the
+    case's plug-in models that apply to the scene)."""
     scene = case_scene(case)
     cmp = compare_scene(scene)
+    extra = []
     if case.get("exact"):
-        extra = ["spring-exact"]
+        extra.append("spring-exact")
+    if case.get("exact") or case.get("peers"):
         if "P1-NH" not in cmp.solutions and models.P1_NH.applies(scene) is None:
             extra.append("P1-NH")  # the finite-strain P1: the exact element's model error
+    extra += [n for n in case.get("peers", ()) if models.get(n).applies(scene) is None]
+    if extra:
         for name in extra:
             got = models.run(scene, name)
             if got.ok:

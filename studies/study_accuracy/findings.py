@@ -26,7 +26,7 @@ def report_findings(
             f"error {e.at[lo, 'total err L2']:.1%}, the same-mesh P1's discretisation error "
             f"{e.at[lo, 'discretisation err L2']:.1%}."
         )
-        return f + exact_findings(e)
+        return f + exact_findings(e) + peer_findings(e)
     f.append(
         f"The spring element's model error (spring vs P1 on the same mesh, relative L2 over "
         f"vertices) ranges from {e.at[lo, 'model err L2']:.1%} ({lo}) to "
@@ -89,7 +89,33 @@ def report_findings(
             )
         f.append(text)
     f += exact_findings(e)
-    return f
+    return f + peer_findings(e)
+
+
+def peer_findings(e: pd.DataFrame) -> list[str]:
+    """One sentence per plug-in model (``<name> total err L2`` columns): its total error
+    per scene beside the same-mesh P1's (and against P1-NH, the finite-strain P1)."""
+    from .. import models
+
+    out = []
+    for name in [m.name for m in models.sync_plugins()]:
+        col = f"{name} total err L2"
+        if col not in e.columns:
+            continue
+        parts = []
+        for scene, row in e.iterrows():
+            if not np.isfinite(row[col]):
+                continue
+            nh = row.get(f"{name} vs P1-NH err L2", float("nan"))
+            vs_nh = f", {nh:.2%} off P1-NH" if np.isfinite(nh) else ""
+            parts.append(f"{scene} {row[col]:.1%} (P1 {row['discretisation err L2']:.1%}{vs_nh})")
+        if parts:
+            out.append(
+                f"{name} (a plug-in model) against each scene's reference, relative L2: "
+                + "; ".join(parts)
+                + "."
+            )
+    return out
 
 
 def shape_sentence(e: pd.DataFrame) -> str:

@@ -33,6 +33,12 @@ def error_table(res: dict[str, dict]) -> pd.DataFrame:
         for kind in EXACT_KINDS:
             if kind in r["errors"]:
                 row[f"{kind.replace('_', ' ')} err L2"] = nan_float(r["errors"][kind].get("rel_l2"))
+        for key, e in r["errors"].items():  # the plug-in models (springfem.model_api)
+            kind, _, peer = key.partition(":")
+            if kind == "peer_total":
+                row[f"{peer} total err L2"] = nan_float(e.get("rel_l2"))
+            elif kind == "peer_model_nh":
+                row[f"{peer} vs P1-NH err L2"] = nan_float(e.get("rel_l2"))
         row["spring volume change"] = nan_float(r["volume"].get("spring"))
         if "spring-exact" in r["volume"]:
             row["exact volume change"] = nan_float(r["volume"]["spring-exact"])
@@ -77,6 +83,11 @@ def probe_table(
         if "spring-exact" in r["probes"]:
             row["exact / ref − 1"] = row["exact (m)"] / row["reference (m)"] - 1
         row["P1 / ref − 1"] = row["P1 (m)"] / row["reference (m)"] - 1
+        for key in r["errors"]:  # the plug-in models
+            kind, _, peer = key.partition(":")
+            if kind == "peer_total":
+                row[f"{peer} (m)"] = value(peer)
+                row[f"{peer} / ref − 1"] = row[f"{peer} (m)"] / row["reference (m)"] - 1
         row["ref / analytic − 1"] = (
             row["reference (m)"] / row["analytic (m)"] - 1 if an else float("nan")
         )

@@ -27,7 +27,8 @@ STUDY, VERSION = "dynamics", 1
 SPRINGS = ("spring-tissue", "spring-stiffened", "spring-exact")
 #: Line colours of the models (the reference is black).
 COLORS = {"spring-tissue": "tab:orange", "spring-stiffened": "tab:blue",
-          "spring-exact": "tab:green", "spring-spec": "tab:purple"}  # fmt: skip
+          "spring-exact": "tab:green", "spring-spec": "tab:purple",
+          "corotational": "goldenrod"}  # fmt: skip
 #: Land's beam, made compressible: ``kappa`` = this × ``C`` (as the explicit kernels' test).
 KAPPA_PER_C = 50.0
 #: Density of the bundled beam: 1000 kg/m³ in the scene's mm-kPa units (kg/mm³; forces in
@@ -150,8 +151,10 @@ def check_scene(sc: StudyScene) -> Scene:
 
 def spring_models(scene: Scene, s: Settings) -> list[str]:
     """The settings' spring models that apply to the scene (the tissue element needs a tissue
-    law)."""
-    return [m for m in s.models if models.get(m).applies(scene) is None]
+    law), then the plug-in models with an explicit form on it (:func:`studies.models.plugins`:
+    ``corotational`` on a linear or neo-Hookean scene)."""
+    own = [m for m in s.models if models.get(m).applies(scene) is None]
+    return own + [m for m in models.plugins(scene, explicit=True) if m not in own]
 
 
 def period_case(sc: StudyScene) -> dict[str, Any]:

@@ -12,6 +12,10 @@ A method is a model of :mod:`studies.models` and a solution method, named
   kinetic damping) of the model's mechanical system (a spring model, or the explicit P1
   FEM of ``P1-NH``).
 
+The plug-in models (:func:`studies.models.plugins`, e.g. ``corotational``) that apply to
+the scene get their own ``static`` points and, with an explicit form, ``explicit`` points
+at the last explicit setting.
+
 Every case is a :meth:`~studies.scenes.StudyScene.case` of the scene with ``model``,
 ``solution``, ``factor`` (the refinement level, :mod:`studies.study_convergence.levels`)
 and ``setting``.
@@ -124,6 +128,7 @@ def points(s: StudyScene, scene: Scene, levels: list[int], q: Settings) -> list[
     """Every (method, level, setting) point of a scene (``scene``: it built, level 1)."""
     fem = [m for m in FEM_STATIC if models.get(m).applies(scene) is None]
     explicit_fem = explicit_fem_refusal(scene) is None
+    peers, peers_explicit = models.plugins(scene), models.plugins(scene, explicit=True)
     out = []
     for k in levels:
 
@@ -143,6 +148,10 @@ def points(s: StudyScene, scene: Scene, levels: list[int], q: Settings) -> list[
                 add(EXPLICIT_FEM, "explicit", tol=tol, dt_safety=safety)
         tol, safety = q.explicit[-1]  # the exact element: the last explicit setting only
         add(EXACT, "explicit", tol=tol, dt_safety=safety)
+        for m in peers:  # the plug-in models
+            add(m, "static")
+        for m in peers_explicit:
+            add(m, "explicit", tol=tol, dt_safety=safety)
     return out
 
 
@@ -179,7 +188,7 @@ def solver(solution: str, setting: dict):
     from springfem.mechanics import explicit_static, implicit, stable_time_step
 
     def static(m: models.Model, scene: Scene) -> Solution:
-        if m.kind == "fem":
+        if m.kind in ("fem", "plugin"):
             return m.solve(scene)
         from springmodel.model import solve_spring
 

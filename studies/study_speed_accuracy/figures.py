@@ -10,7 +10,7 @@ from ..tables import pyplot
 
 #: Marker per model, colour per solution method (by model for the static FEM).
 MARKERS = {"spring-energy": "o", "spring-exact": "*", "P1": "s", "P1-NH": "s", "P2": "D",
-           "P2-NH": "D"}  # fmt: skip
+           "P2-NH": "D", "corotational": "^"}  # fmt: skip
 COLOURS = {
     "spring-energy static": "tab:red",
     "spring-energy implicit": "tab:orange",
@@ -22,6 +22,8 @@ COLOURS = {
     "P1-NH static": "tab:cyan",
     "P2 static": "tab:green",
     "P2-NH static": "tab:olive",
+    "corotational static": "gold",
+    "corotational explicit": "darkgoldenrod",
 }
 
 

@@ -97,6 +97,7 @@ def report_findings(
         findings.append(
             f"{r['method']} on {r['mesh']} ({r['setting']}) {r['status']}: {r['message'][:140]}"
         )
+    findings += peer_findings(good, best, put, pct, finest, sp, p1)
     exact = df["method"].str.startswith(f"{EXACT} ")
     headline["n_points"] = float((~exact).sum())
     headline["n_failed"] = float((~ok & ~exact).sum())
@@ -116,6 +117,31 @@ def report_findings(
                 "the specification's element does not.",
             )
     return findings, headline, front_text
+
+
+def peer_findings(good, best, put, pct, finest: str, sp, p1) -> list[str]:
+    """A sentence per plug-in model (``studies.models.plugins``) on the finest level: its
+    error and time, static and explicit, beside the spring model's and P1's."""
+    from .. import models
+
+    out = []
+    names = {m.split()[0] for m in good["method"]}
+    for name in [n for n in names if models.get(n).kind == "plugin"]:
+        st, ex = best(name, "static"), best(name, "explicit")
+        if st is None:
+            continue
+        put(name, "static", st)
+        text = f"{name} on {finest}: {pct(st)} off the reference (static, {st['seconds']:.2f} s"
+        if ex is not None:
+            put(name, "explicit", ex)
+            text += f"; to rest explicitly {pct(ex)}, {ex['seconds']:.2f} s"
+        text += ")"
+        if p1 is not None:
+            text += f"; P1 {pct(p1)} ({p1['seconds']:.2f} s)"
+        if sp is not None:
+            text += f", {SPRING} {pct(sp)} ({sp['seconds']:.2f} s)"
+        out.append(text + ".")
+    return out
 
 
 def cheapest_sentence(good: pd.DataFrame, column: str, tolerance: float) -> str:

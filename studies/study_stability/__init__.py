@@ -30,7 +30,7 @@ from __future__ import annotations
 
 from ..registry import StudyContext, StudyOutput, study
 from ..scenes import StudyScene
-from .cases import WORK, Settings, bundled_scenes, grids, series_methods
+from .cases import WORK, Settings, bundled_scenes, grids
 from .figures import failure_map_figure, locking_figure
 from .findings import report_findings
 from .tables import frames, write_tables
@@ -63,8 +63,7 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
     }
     f = frames(cases, results)
     names = ", ".join(s.label for s in scenes)
-    map_scene = next((s for s in scenes if s.serves("map")), None)
-    methods = series_methods(map_scene.build().material.law)["map"] if map_scene else ()
+    methods = tuple(dict.fromkeys(f["map"]["method"])) if len(f["map"]) else ()
     figures = [failure_map_figure(ctx, f["map"], settings, methods)] if len(f["map"]) else []
     if len(f["lock"]):
         figures.insert(0, locking_figure(ctx, f["lock"], settings))

@@ -138,7 +138,12 @@ def grids(scenes: list[StudyScene], q: Settings) -> dict[str, list[dict]]:
     """
     out: dict[str, list[dict]] = {"dt": [], "load": [], "lock": [], "map": []}
     for s in scenes:
-        m = series_methods(s.build().material.law)
+        built = s.build()
+        m = dict(series_methods(built.material.law))
+        # the plug-in models (studies.models.plugins): static series where they apply,
+        # explicit series where they have an explicit form
+        peers, peers_x = models.plugins(built), models.plugins(built, explicit=True)
+        m = {"dt": (*m["dt"], *peers_x), "load": (*m["load"], *peers), "map": (*m["map"], *peers_x)}
 
         def case(kind: str, **kw) -> dict:
             return s.case("stability", VERSION, kind=kind, **kw)  # noqa: B023

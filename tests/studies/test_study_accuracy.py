@@ -50,10 +50,26 @@ def test_outputs(output):
     n = len(sa.SCENES) + len(EXTRA)
     # model + total per scene, discretisation on two, exact model/total and the specification's vs
     # P1-NH on every scene, the exact vs P1-NH on the isotropic ones (4 of 6)
-    assert len(out.headline) == 2 * n + len(sa.DISCRETISATION_HEADLINE) + 2 * n + 2 * (n - 2)
+    own = {k: v for k, v in out.headline.items() if not k.startswith("corotational_")}
+    assert len(own) == 2 * n + len(sa.DISCRETISATION_HEADLINE) + 2 * n + 2 * (n - 2)
+    # the plug-in model co-rotational P1 (docs/plugins.rst): against the reference on every
+    # scene, against P1-NH on the isotropic ones
+    assert len(out.headline) - len(own) == n + (n - 2)
     assert all(np.isfinite(v) for v in out.headline.values())
     json.dumps(out.headline)
-    assert len(out.findings) == 7
+    assert len(out.findings) == 7 + 1  # one sentence on the plug-in
+    assert out.findings[-1].startswith("corotational (a plug-in model)")
+
+
+def test_corotational_is_p1_at_small_strain(output):
+    """At these strains (<= 1 %) co-rotational P1 is linear P1 on the same mesh to O(strain):
+    its total error is the same-mesh P1's discretisation error to 2 % of it (the linear-law
+    scenes: sag's same-mesh P1 is neo-Hookean at nu = 0.45)."""
+    _, errors, _ = output
+    for name in errors.index.drop("sag"):
+        p1 = errors.at[name, "discretisation err L2"]
+        corot = errors.at[name, "corotational total err L2"]
+        assert abs(corot - p1) < 0.02 * max(p1, 1e-2), name
 
 
 def test_p1_is_exact_for_uniaxial_stretch(output):

@@ -3,6 +3,7 @@ linearity of small-strain FEM and beam theory."""
 
 import pytest
 
+from studies import models
 from studies.study_stability.cases import (
     VERSION,
     bar,
@@ -67,7 +68,12 @@ def test_series_follow_the_scene_roles_and_the_law():
     b = bar(10, 1, ("load",))
     g = grids([b], q)
     assert not g["dt"] and not g["lock"] and not g["map"]
-    assert len(g["load"]) == len(series_methods("linear")["load"]) * len(q.load_factors)
+    # the series' own methods and the default plug-in models (co-rotational P1)
+    peers = models.plugins(b.build())
+    assert "corotational" in peers
+    assert len(g["load"]) == (len(series_methods("linear")["load"]) + len(peers)) * len(
+        q.load_factors
+    )
     user = type(b)("user", b.table)  # no roles, no closed-form reference
     g = grids([user], q)
     assert g["dt"] and g["load"] and g["map"] and not g["lock"]
