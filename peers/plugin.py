@@ -124,7 +124,9 @@ class XPBDModel:
         return ModelSolution(result, np.asarray(u))
 
 
-def build_mass_spring(scene: Scene, calibration: str = "van-gelder", damping: float = 0.0) -> MassSpring:
+def build_mass_spring(
+    scene: Scene, calibration: str = "van-gelder", damping: float = 0.0
+) -> MassSpring:
     """The network of ``scene`` (what :class:`~springfem.model_api.SystemModel` builds)."""
     return MassSpring(scene, calibration=calibration, damping=damping)
 

@@ -52,7 +52,10 @@ def why_not(scene: Scene) -> str | None:
     """
     law = scene.material.law
     if law not in LAWS:
-        return f"model mass-spring: springs calibrated from E have no {law} law; it takes {', '.join(LAWS)}"
+        return (
+            f"model mass-spring: springs calibrated from E have no {law} law; "
+            f"it takes {', '.join(LAWS)}"
+        )
     return None
 
 
@@ -153,7 +156,9 @@ class MassSpring:
         t = self.k * (L - self.rest_length)
         if v is not None and self.damping > 0:
             v = np.asarray(v, dtype=float).reshape(self.n_points, 3)
-            t = t + self.damping * self.k * np.einsum("ei,ei->e", v[self.edges[:, 1]] - v[self.edges[:, 0]], n)
+            t = t + self.damping * self.k * np.einsum(
+                "ei,ei->e", v[self.edges[:, 1]] - v[self.edges[:, 0]], n
+            )
         f = np.zeros((self.n_points, 3))
         np.add.at(f, self.edges[:, 0], t[:, None] * n)
         np.add.at(f, self.edges[:, 1], -t[:, None] * n)
@@ -190,7 +195,9 @@ class MassSpring:
         d, L = self._geometry(x)
         n = d / L[:, None]
         nn = np.einsum("ei,ej->eij", n, n)
-        Ks = self.k[:, None, None] * (nn + (1.0 - self.rest_length / L)[:, None, None] * (np.eye(3) - nn))
+        Ks = self.k[:, None, None] * (
+            nn + (1.0 - self.rest_length / L)[:, None, None] * (np.eye(3) - nn)
+        )
         Ke = np.empty((Ks.shape[0], 2, 3, 2, 3))
         Ke[:, 0, :, 0], Ke[:, 1, :, 1], Ke[:, 0, :, 1], Ke[:, 1, :, 0] = Ks, Ks, -Ks, -Ks
         size = 3 * self.n_points

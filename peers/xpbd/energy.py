@@ -112,9 +112,12 @@ class StableNeoHookean:
         return A + (self.lam * (J - self.gamma))[:, None, None, None, None] * dcof
 
     def stiffness(self, x: np.ndarray, scale: float = 1.0) -> sp.csr_matrix | None:
-        """The consistent tangent ``-d forces/dx`` (``None`` with follower loads)."""
-        if self._follower:
-            return None
+        """The consistent tangent ``-d forces/dx`` (``None`` with follower loads: the
+        solvers then take a finite-difference Jacobian)."""
+        return None if self._follower else self.internal_stiffness(x)
+
+    def internal_stiffness(self, x: np.ndarray) -> sp.csr_matrix:
+        """``-d internal/dx``: the tangent of the strain energy alone."""
         F = deformation_gradients(x, self.tets, self.G)
         A = self.tangent_moduli(F)
         g = self._g()

@@ -6,7 +6,8 @@ Per substep of length ``h``::
 
     v += h a_ext;  p = x + h v;  lambda = 0
     repeat `iterations` times, for each element, for C in (C_D, C_H):
-        d_lambda = (-C(p) - alpha~ lambda) / (sum_a w_a |grad_a C|^2 + alpha~),  alpha~ = alpha / h^2
+        d_lambda = (-C(p) - alpha~ lambda) / (sum_a w_a |grad_a C|^2 + alpha~)
+                   with alpha~ = alpha / h^2
         p_a += w_a grad_a C d_lambda;  lambda += d_lambda
     v = (p - x) / h;  x = p;  then damping
 
@@ -45,78 +46,26 @@ Examples
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit
 
-_FLAGS = {"cache": True, "error_model": "numpy", "fastmath": {"contract"}}
+_FLAGS: dict[str, Any] = {"cache": True, "error_model": "numpy", "fastmath": {"contract"}}
 
 
 @njit(**_FLAGS)
-def _project(k, c, p, w, tets, G, alpha, gamma, lam, out, scale):  # pragma: no cover
-    """Constraint ``c`` (0: deviatoric, 1: hydrostatic) of element ``k`` at ``p``: adds
-    ``scale`` times its correction to ``out`` and to ``lam[k]``."""
-    i0 = tets[k, 0]
-    F = np.empty((3, 3))
-    for r in range(3):
-        for d in range(3):
-            s = 0.0
-            for a in range(3):
-                s += (p[tets[k, a + 1], r] - p[i0, r]) * G[k, a, d]
-            F[r, d] = s
-    D = np.empty((3, 3))  # dC/dF
-    if c == 0:
-        C = 0.0
-        for r in range(3):
-            for d in range(3):
-                C += F[r, d] * F[r, d]
-        C = np.sqrt(C)
-        if C == 0.0:
-            return
-        for r in range(3):
-            for d in range(3):
-                D[r, d] = F[r, d] / C
-    else:
-        for j in range(3):  # columns of cof F: f_{j+1} x f_{j+2}
-            j1, j2 = (j + 1) % 3, (j + 2) % 3
-            D[0, j] = F[1, j1] * F[2, j2] - F[2, j1] * F[1, j2]
-            D[1, j] = F[2, j1] * F[0, j2] - F[0, j1] * F[2, j2]
-            D[2, j] = F[0, j1] * F[1, j2] - F[1, j1] * F[0, j2]
-        C = F[0, 0] * D[0, 0] + F[1, 0] * D[1, 0] + F[2, 0] * D[2, 0] - gamma
-    g = np.zeros((4, 3))
-    for a in range(3):
-        for r in range(3):
-            s = D[r, 0] * G[k, a, 0] + D[r, 1] * G[k, a, 1] + D[r, 2] * G[k, a, 2]
-            g[a + 1, r] = s
-            g[0, r] -= s
-    denom = alpha
-    for a in range(4):
-        node = tets[k, a]
-        for r in range(3):
-            denom += w[node, r] * g[a, r] * g[a, r]
-    if denom <= 0.0:
-        return
-    dl = scale * (-C - alpha * lam[k]) / denom
-    lam[k] += dl
-    for a in range(4):
-        node = tets[k, a]
-        for r in range(3):
-            out[node, r] += w[node, r] * g[a, r] * dl
-
-
-@njit(**_FLAGS)
-def _gradients(k, c, p, tets, G, gamma, g):  # pragma: no cover - compiled
+def _gradients(k, c, p, tets, G, gamma, g, F, D):  # pragma: no cover - compiled
     """Constraint ``c`` (0: deviatoric, 1: hydrostatic) of element ``k`` at ``p``: its value,
-    and its node gradients written into ``g (4, 3)``."""
+    with its node gradients written into ``g (4, 3)`` (``F``, ``D``: 3 x 3 scratch)."""
     i0 = tets[k, 0]
-    F = np.empty((3, 3))
     for r in range(3):
         for d in range(3):
             s = 0.0
             for a in range(3):
                 s += (p[tets[k, a + 1], r] - p[i0, r]) * G[k, a, d]
             F[r, d] = s
-    D = np.empty((3, 3))  # dC/dF
-    if c == 0:
+    if c == 0:  # dC/dF = F / C
         C = 0.0
         for r in range(3):
             for d in range(3):
@@ -125,8 +74,8 @@ def _gradients(k, c, p, tets, G, gamma, g):  # pragma: no cover - compiled
         for r in range(3):
             for d in range(3):
                 D[r, d] = F[r, d] / C if C > 0.0 else 0.0
-    else:
-        for j in range(3):  # columns of cof F: f_{j+1} x f_{j+2}
+    else:  # dC/dF = cof F, columns f_{j+1} x f_{j+2}
+        for j in range(3):
             j1, j2 = (j + 1) % 3, (j + 2) % 3
             D[0, j] = F[1, j1] * F[2, j2] - F[2, j1] * F[1, j2]
             D[1, j] = F[2, j1] * F[0, j2] - F[0, j1] * F[2, j2]
@@ -143,13 +92,33 @@ def _gradients(k, c, p, tets, G, gamma, g):  # pragma: no cover - compiled
 
 
 @njit(**_FLAGS)
-def _project_pair(k, p, w, tets, G, ad, ah, gamma, lam_d, lam_h, out, scale):  # pragma: no cover
+def _project(k, c, p, w, tets, G, alpha, gamma, lam, out, scale, g, F, D):  # pragma: no cover
+    """Constraint ``c`` of element ``k`` alone: adds ``scale`` times its correction to
+    ``out`` and to ``lam[k]``."""
+    C = _gradients(k, c, p, tets, G, gamma, g, F, D)
+    denom = alpha
+    for a in range(4):
+        node = tets[k, a]
+        for r in range(3):
+            denom += w[node, r] * g[a, r] * g[a, r]
+    if not denom > 0.0:
+        return
+    dl = scale * (-C - alpha * lam[k]) / denom
+    lam[k] += dl
+    for a in range(4):
+        node = tets[k, a]
+        for r in range(3):
+            out[node, r] += w[node, r] * g[a, r] * dl
+
+
+@njit(**_FLAGS)
+def _project_pair(
+    k, p, w, tets, G, ad, ah, gamma, lam_d, lam_h, out, scale, gd, gh, F, D
+):  # pragma: no cover
     """Both constraints of element ``k`` at once (a 2 x 2 solve): adds ``scale`` times the
     correction to ``out`` and to ``lam_d[k], lam_h[k]``."""
-    gd = np.empty((4, 3))
-    gh = np.empty((4, 3))
-    cd = _gradients(k, 0, p, tets, G, gamma, gd)
-    ch = _gradients(k, 1, p, tets, G, gamma, gh)
+    cd = _gradients(k, 0, p, tets, G, gamma, gd, F, D)
+    ch = _gradients(k, 1, p, tets, G, gamma, gh, F, D)
     a11, a12, a22 = ad, 0.0, ah
     for a in range(4):
         node = tets[k, a]
@@ -175,8 +144,29 @@ def _project_pair(k, p, w, tets, G, ad, ah, gamma, lam_d, lam_h, out, scale):  #
 
 @njit(**_FLAGS)
 def frame(
-    x, v, w, masses, a_ext, tets, G, alpha_d, alpha_h, gamma, h, substeps, iterations,
-    order, jacobi, coupled, omega, inv_count, damp, kinetic, lam_d, lam_h, dp,
+    x,
+    v,
+    w,
+    masses,
+    a_ext,
+    tets,
+    G,
+    alpha_d,
+    alpha_h,
+    gamma,
+    h,
+    substeps,
+    iterations,
+    order,
+    jacobi,
+    coupled,
+    omega,
+    inv_count,
+    damp,
+    kinetic,
+    lam_d,
+    lam_h,
+    dp,
 ):  # pragma: no cover - compiled
     """Advance ``x, v`` (overwritten) by ``substeps`` substeps; return ``substeps`` times
     the largest nodal motion ``max |p - x|`` of any one substep: how far the body would move
@@ -191,6 +181,10 @@ def frame(
     n = x.shape[0]
     m = tets.shape[0]
     p = np.empty_like(x)
+    F = np.empty((3, 3))
+    D = np.empty((3, 3))
+    gd = np.empty((4, 3))
+    gh = np.empty((4, 3))
     h2 = h * h
     ke_prev = 0.0
     for r in range(n):
@@ -212,11 +206,31 @@ def frame(
                 dp[:, :] = 0.0
                 for k in range(m):
                     if coupled:
-                        _project_pair(k, p, w, tets, G, alpha_d[k] / h2, alpha_h[k] / h2,
-                                      gamma, lam_d, lam_h, dp, omega)
+                        _project_pair(
+                            k,
+                            p,
+                            w,
+                            tets,
+                            G,
+                            alpha_d[k] / h2,
+                            alpha_h[k] / h2,
+                            gamma,
+                            lam_d,
+                            lam_h,
+                            dp,
+                            omega,
+                            gd,
+                            gh,
+                            F,
+                            D,
+                        )
                     else:
-                        _project(k, 0, p, w, tets, G, alpha_d[k] / h2, gamma, lam_d, dp, omega)
-                        _project(k, 1, p, w, tets, G, alpha_h[k] / h2, gamma, lam_h, dp, omega)
+                        _project(
+                            k, 0, p, w, tets, G, alpha_d[k] / h2, gamma, lam_d, dp, omega, gd, F, D
+                        )
+                        _project(
+                            k, 1, p, w, tets, G, alpha_h[k] / h2, gamma, lam_h, dp, omega, gd, F, D
+                        )
                 for r in range(n):
                     for c in range(3):
                         p[r, c] += dp[r, c]
@@ -224,11 +238,31 @@ def frame(
                 for q in range(order.shape[0]):
                     k = order[q]
                     if coupled:
-                        _project_pair(k, p, w, tets, G, alpha_d[k] / h2, alpha_h[k] / h2,
-                                      gamma, lam_d, lam_h, p, 1.0)
+                        _project_pair(
+                            k,
+                            p,
+                            w,
+                            tets,
+                            G,
+                            alpha_d[k] / h2,
+                            alpha_h[k] / h2,
+                            gamma,
+                            lam_d,
+                            lam_h,
+                            p,
+                            1.0,
+                            gd,
+                            gh,
+                            F,
+                            D,
+                        )
                     else:
-                        _project(k, 0, p, w, tets, G, alpha_d[k] / h2, gamma, lam_d, p, 1.0)
-                        _project(k, 1, p, w, tets, G, alpha_h[k] / h2, gamma, lam_h, p, 1.0)
+                        _project(
+                            k, 0, p, w, tets, G, alpha_d[k] / h2, gamma, lam_d, p, 1.0, gd, F, D
+                        )
+                        _project(
+                            k, 1, p, w, tets, G, alpha_h[k] / h2, gamma, lam_h, p, 1.0, gd, F, D
+                        )
         ke = 0.0
         for r in range(n):
             for c in range(3):

@@ -6,12 +6,19 @@ the body is at rest. **Rest** is judged per frame: ``substeps`` times the larges
 motion in any one substep of the frame (how far a node would go in a frame at the frame's
 top speed) is at most ``rest_tol`` times the largest displacement from the rest shape, in
 ``rest_frames`` consecutive frames. Speeds, not frame-end positions, so that motion that
-returns within a frame is not taken for rest. Damping only sets how fast rest comes (at rest the
-velocity is zero whatever the damping): ``kinetic`` (the default) zeroes the velocities at
-each kinetic-energy peak; a number ``c`` (1/s) multiplies them by ``exp(-c h)`` per
-substep. With converged iterations a substep is an implicit Euler step of the energy of
-:mod:`.constraints`, whose rest state is the static equilibrium; with few iterations or
-long substeps the rest state is not, and that error is what docs/peers.rst#xpbd measures.
+returns within a frame is not taken for rest.
+
+Damping only sets how fast rest comes (at rest the velocity is zero whatever the damping):
+``auto`` (the default) is viscous at twice the Rayleigh estimate ``omega_R`` of the lowest
+frequency (critical damping of the lowest mode; ``omega_R^2 = u K u / u M u`` for the
+linear static answer ``u`` of the stable neo-Hookean tangent at rest, one sparse solve); a
+number ``c`` (1/s) multiplies the velocities by ``exp(-c h)`` per substep; ``kinetic``
+zeroes them at each kinetic-energy peak (dynamic relaxation's choice, which on slender
+bodies stalls: the resets come every few substeps and the lowest mode never gets going).
+
+With converged iterations a substep would be an implicit Euler step of the energy of
+:mod:`.constraints`, whose rest state is the static equilibrium; XPBD's rest state is not
+quite that, and the error is what docs/peers.rst#xpbd-bias measures.
 
 Supports (the scene's Dirichlet DOFs) have zero inverse mass and their prescribed position
 from the first frame. Dead loads enter as accelerations ``f / m``; a follower pressure is
@@ -25,7 +32,7 @@ Examples
 ...     "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
 ...     "load": [{"type": "gravity", "value": [0.0, 0.0, -9.81]}]})
 >>> out = XPBD(scene, XPBDSettings(substeps=20, iterations=4)).solve()
-
+>>> out.converged, bool(out.u[:, 2].min() < 0)
 (True, True)
 """
 
@@ -74,7 +81,7 @@ class XPBDSettings:
     omega
         Jacobi's relaxation of the averaged corrections.
     damping
-        ``kinetic`` or a viscous rate ``c >= 0`` (1/s).
+        ``auto``, ``kinetic`` or a viscous rate ``c >= 0`` (1/s).
     rest_tol, rest_frames
         Rest: ``substeps`` times the largest nodal motion in a substep ``<= rest_tol *``
         the largest displacement, in ``rest_frames`` frames running.
@@ -88,7 +95,7 @@ class XPBDSettings:
     iteration: Iteration = "gauss-seidel"
     coupling: Coupling = "coupled"
     omega: float = 1.0
-    damping: float | Literal["kinetic"] = "kinetic"
+    damping: float | Literal["auto", "kinetic"] = "auto"
     rest_tol: float = 1e-6
     rest_frames: int = 2
     max_frames: int = 20_000
@@ -97,13 +104,17 @@ class XPBDSettings:
         if not (self.dt > 0 and self.substeps >= 1 and self.iterations >= 1):
             raise InputError("xpbd needs dt > 0, substeps >= 1 and iterations >= 1")
         if self.iteration not in ITERATIONS:
-            raise InputError(f"xpbd iteration {self.iteration!r} is not one of {', '.join(ITERATIONS)}")
+            raise InputError(
+                f"xpbd iteration {self.iteration!r} is not one of {', '.join(ITERATIONS)}"
+            )
         if self.coupling not in COUPLINGS:
-            raise InputError(f"xpbd coupling {self.coupling!r} is not one of {', '.join(COUPLINGS)}")
-        if self.damping != "kinetic" and not (
+            raise InputError(
+                f"xpbd coupling {self.coupling!r} is not one of {', '.join(COUPLINGS)}"
+            )
+        if self.damping not in ("auto", "kinetic") and not (
             isinstance(self.damping, int | float) and self.damping >= 0
         ):
-            raise InputError(f"xpbd damping {self.damping!r} is not 'kinetic' or a rate >= 0")
+            raise InputError(f"xpbd damping {self.damping!r} is not auto, kinetic or a rate >= 0")
 
 
 @dataclass
@@ -134,7 +145,10 @@ def why_not(scene: Scene) -> str | None:
     """
     law = scene.material.law
     if law not in LAWS:
-        return f"model xpbd: isotropic stable neo-Hookean constraints have no {law} law; it takes {', '.join(LAWS)}"
+        return (
+            f"model xpbd: isotropic stable neo-Hookean constraints have no {law} law; "
+            f"it takes {', '.join(LAWS)}"
+        )
     return None
 
 
@@ -175,6 +189,30 @@ class XPBD:
         self.inv_count = 1.0 / np.maximum(2.0 * counts, 1.0)
         m = self.tets.shape[0]
         self._lam_d, self._lam_h, self._dp = np.zeros(m), np.zeros(m), np.zeros((n, 3))
+        self.damping_rate = self._damping_rate()
+
+    def _damping_rate(self) -> float:
+        """The viscous rate (1/s) of the settings: ``2 omega_R`` for ``auto`` (0 when the
+        scene neither loads nor moves the body; then no damping)."""
+        d = self.settings.damping
+        if d == "kinetic":
+            return 0.0
+        if d != "auto":
+            return float(d)
+        system = StableNeoHookean(self.scene)
+        K = system.internal_stiffness(system.x0)
+        n3 = 3 * self.x0.shape[0]
+        free = np.ones(n3, dtype=bool)
+        free[self.fixed_dofs] = False
+        u = np.zeros(n3)
+        u[self.fixed_dofs] = self._x_fixed - self.x0.ravel()[self.fixed_dofs]
+        f = external_forces(self.scene).ravel() - K @ u
+        from scipy.sparse.linalg import spsolve
+
+        u[free] = spsolve(K[free][:, free].tocsc(), f[free])
+        mass = float(np.sum(np.repeat(self.masses, 3)[free] * u[free] ** 2))
+        stiff = float(u @ (K @ u))
+        return 2.0 * math.sqrt(stiff / mass) if mass > 0 and stiff > 0 else 0.0
 
     @property
     def h(self) -> float:
@@ -197,13 +235,13 @@ class XPBD:
         one substep."""
         s = self.settings
         kinetic = s.damping == "kinetic"
-        damp = 1.0 if kinetic else math.exp(-float(s.damping) * self.h)
+        damp = math.exp(-self.damping_rate * self.h)
         return float(
             frame(
                 x, v, self.w, self.masses, a_ext, self.tets, self.G, self.alpha_d, self.alpha_h,
                 self.gamma, self.h, s.substeps, s.iterations, self.order,
-                s.iteration == "jacobi", s.coupling == "coupled", s.omega, self.inv_count, damp, kinetic,
-                self._lam_d, self._lam_h, self._dp,
+                s.iteration == "jacobi", s.coupling == "coupled", s.omega, self.inv_count,
+                damp, kinetic, self._lam_d, self._lam_h, self._dp,
             )
         )  # fmt: skip
 
@@ -252,7 +290,9 @@ class XPBD:
                 a = self.accelerations(x)
             moved = self.advance(x, v, a)
             if not np.isfinite(x).all():
-                raise SolverError(f"xpbd: positions not finite after frame {k} (t = {k * s.dt:.4g} s)")
+                raise SolverError(
+                    f"xpbd: positions not finite after frame {k} (t = {k * s.dt:.4g} s)"
+                )
             scale = float(np.abs(x - self.x0).max())
             calm = calm + 1 if moved <= s.rest_tol * max(scale, 1e-300) else 0
             if calm >= s.rest_frames:
@@ -261,7 +301,8 @@ class XPBD:
         wall = time.perf_counter() - t0
         return XPBDResult(
             u=x - self.x0, converged=converged, frames=k, substeps=k * s.substeps,
-            wall_time=wall, residual=self.residual(x), info={"settings": asdict(s)},
+            wall_time=wall, residual=self.residual(x),
+            info={"settings": asdict(s), "damping_rate": self.damping_rate},
         )  # fmt: skip
 
     def residual(self, x: np.ndarray) -> float:

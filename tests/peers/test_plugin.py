@@ -49,8 +49,9 @@ def test_xpbd_has_no_explicit_form_and_refuses_anisotropic_laws():
     scene = scene_from_dict(SCENE)
     with pytest.raises(InputError, match="no explicit form"):
         models.get("xpbd").system(scene)
-    table = dict(SCENE, material={"law": "transverse-linear", "E_fiber": 3e4, "E_cross": 1e4,
-                                  "nu_fiber_cross": 0.3, "nu_cross": 0.4, "G_fiber": 5e3})  # fmt: skip
+    transverse = {"law": "transverse-linear", "E_fiber": 3e4, "E_cross": 1e4,
+                  "nu_fiber_cross": 0.3, "nu_cross": 0.4, "G_fiber": 5e3}  # fmt: skip
+    table = dict(SCENE, material=transverse)
     why = models.get("xpbd").applies(scene_from_dict(table))
     assert why is not None and why.startswith("model xpbd:")
 

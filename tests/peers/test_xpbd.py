@@ -60,6 +60,7 @@ def test_constraint_gradients_are_finite_differences(scene):
     tets = s.tets[:20]
     G = s.G[:20]
     h = 1e-7
+
     def F_of(X):  # element-local positions (m, 4, 3): a node moves in one element only
         return np.einsum("kac,kad->kcd", X[:, 1:] - X[:, :1], G)
 
@@ -72,7 +73,9 @@ def test_constraint_gradients_are_finite_differences(scene):
                 Xp[:, a, c] += h
                 Xm[:, a, c] -= h
                 fd = (value(F_of(Xp))[0] - value(F_of(Xm))[0]) / (2 * h)
-                np.testing.assert_allclose(grad[:, a, c], fd, rtol=1e-6, atol=1e-6 * np.abs(fd).max())
+                np.testing.assert_allclose(
+                    grad[:, a, c], fd, rtol=1e-6, atol=1e-6 * np.abs(fd).max()
+                )
 
 
 def test_rigid_motion_leaves_the_constraints_at_their_rest_values(scene):

@@ -1,0 +1,108 @@
+"""The numbers of docs/peers.rst#measured, from one run.
+
+    .venv/bin/python examples/peers_numbers.py
+
+XPBD's rest state against P1 and P2 neo-Hookean on the same mesh as substeps and iterations
+grow (a 60 Hz frame; Gauss-Seidel, coupled, kinetic damping, rest_tol 1e-7), the edge
+mass-spring network's Newton answer, and the cost of one XPBD substep (one iteration) against
+one explicit P1 neo-Hookean force pass (medians of interleaved rounds,
+:func:`studies.timing.interleaved`). A shared machine: ratios from one run, not constants.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from peers.plugin import models as peer_models
+from peers.xpbd import XPBD, XPBDSettings
+from reference_fem.explicit import ExplicitFem
+from reference_fem.scenes import bench_scene
+from springfem.mechanics.limits import solve_limits
+from springfem.scene import load_scene
+from studies import metrics, models
+from studies.timing import interleaved, median
+
+
+def scene_rows(scene, grid, jacobi=()):
+    """XPBD errors against P1-NH and P2-NH, the network's, times."""
+    with solve_limits(max_time=600.0):
+        ref = {n: models.run(scene, n) for n in ("P1-NH", "P2-NH")}
+        ref = {n: models.run(scene, n) for n in ("P1-NH", "P2-NH")}  # timed after warm-up
+    print(f"\n{scene.name} ({scene.mesh.n_tets} tets); P1-NH {ref['P1-NH'].seconds:.2f} s, "
+          f"P2-NH {ref['P2-NH'].seconds:.2f} s; P1-NH vs P2-NH rel L2 "
+          f"{metrics.relative_l2_error(ref['P1-NH'].u, ref['P2-NH'].u):.3e}")  # fmt: skip
+    print(f"  {'model':<34} {'vs P1-NH':>9} {'vs P2-NH':>9} {'seconds':>8} {'frames':>7}")
+    rows = []
+    cases = [("gauss-seidel", n, k) for n, k in grid] + [("jacobi", n, k) for n, k in jacobi]
+    for it, n, k in cases:
+        XPBD(scene, XPBDSettings(substeps=n, iterations=k, iteration=it, max_frames=10)).solve()
+        out = XPBD(scene, XPBDSettings(substeps=n, iterations=k, iteration=it,
+                                       rest_tol=1e-7, max_frames=200_000)).solve()  # fmt: skip
+        e1 = metrics.relative_l2_error(out.u, ref["P1-NH"].u)
+        e2 = metrics.relative_l2_error(out.u, ref["P2-NH"].u)
+        name = f"xpbd {it} {n} substeps x {k}"
+        print(f"  {name:<34} {e1:9.2e} {e2:9.2e} {out.wall_time:8.2f} {out.frames:7d}"
+              f"{'' if out.converged else '  (no rest)'}")  # fmt: skip
+        rows.append((name, e1, e2, out.wall_time))
+    ms = peer_models()[1]
+    ms.solve(scene)
+    got = ms.solve(scene)
+    e1 = metrics.relative_l2_error(got.u, ref["P1-NH"].u)
+    e2 = metrics.relative_l2_error(got.u, ref["P2-NH"].u)
+    print(f"  {'mass-spring (Newton)':<34} {e1:9.2e} {e2:9.2e} {got.result.wall_time:8.2f}")
+    return rows
+
+
+def substep_cost() -> None:
+    print("\none XPBD substep (1 iteration) vs one explicit P1 neo-Hookean force pass,")
+    print("medians of 7 interleaved rounds of 20:")
+    scene = bench_scene(50_000)
+    fem = ExplicitFem(scene, law="neo-hookean")
+    x_f = fem.x0 * 1.001
+    one = {"substeps": 1, "iterations": 1, "damping": 0.0}
+    solvers = {
+        it: XPBD(scene, XPBDSettings(iteration=it, **one)) for it in ("gauss-seidel", "jacobi")
+    }
+    states = {it: s.start() for it, s in solvers.items()}
+    a = {it: s.accelerations(s.x0) for it, s in solvers.items()}
+
+    def xpbd(it):
+        def go():
+            for _ in range(20):
+                solvers[it].advance(*states[it], a[it])
+
+        return go
+
+    def force():
+        for _ in range(20):
+            fem.internal(x_f)
+
+    cases = {"P1 neo-Hookean force": force, **{f"xpbd {it}": xpbd(it) for it in solvers}}
+    for go in cases.values():
+        go()
+    samples = interleaved(cases, rounds=7)
+    base = median(samples, "P1 neo-Hookean force")
+    m = scene.mesh.n_tets
+    for k in cases:
+        t = median(samples, k) / 20
+        print(f"  {k:<22} {1e3 * t:7.3f} ms ({m / t / 1e6:5.1f} M tets/s), "
+              f"{median(samples, k) / base:4.2f}x the force pass")  # fmt: skip
+
+
+def main() -> None:
+    t0 = time.perf_counter()
+    grid = [(n, 2) for n in (5, 10, 20, 40, 80)] + [(10, k) for k in (1, 4, 8)]
+    rows = scene_rows(load_scene("cantilever-large-rotation"), grid, jacobi=[(10, 2), (40, 2)])
+    n = np.array([5, 10, 20, 40, 80])
+    e = np.array([r[1] for r in rows[:5]])
+    print(f"  rate in substeps (vs P1-NH, polyfit of the last 3): "
+          f"{-np.polyfit(np.log(n[2:]), np.log(e[2:]), 1)[0]:.2f}")  # fmt: skip
+    scene_rows(load_scene("sag"), [(n, 2) for n in (10, 40)])
+    substep_cost()
+    print(f"\n({time.perf_counter() - t0:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()
