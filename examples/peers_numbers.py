@@ -1,4 +1,4 @@
-"""The numbers of docs/peers.rst#measured, from one run.
+"""The numbers of docs/peers.rst#xpbd-bias and docs/peers.rst#measured, from one run.
 
     .venv/bin/python examples/peers_numbers.py
 
@@ -11,17 +11,20 @@ one explicit P1 neo-Hookean force pass (medians of interleaved rounds,
 
 from __future__ import annotations
 
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
 from peers.plugin import models as peer_models
-from peers.xpbd import XPBD, XPBDSettings
+from peers.xpbd import XPBD, StableNeoHookean, XPBDSettings
 from reference_fem.explicit import ExplicitFem
 from reference_fem.scenes import bench_scene
 from springfem.errors import SolverError
+from springfem.mechanics import static
 from springfem.mechanics.limits import solve_limits
-from springfem.scene import load_scene
+from springfem.scene import load_scene, scene_from_dict
 from studies import metrics, models
 from studies.timing import interleaved, median
 
@@ -98,8 +101,59 @@ def substep_cost() -> None:
               f"{median(samples, k) / base:4.2f}x the force pass")  # fmt: skip
 
 
+def gmsh_cantilever(path: Path, size: float = 0.01) -> None:
+    """An unstructured gmsh box 0.1 x 0.02 x 0.02 m (the one of tests/peers)."""
+    import gmsh
+
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("box")
+        gmsh.model.occ.addBox(0, 0, 0, 0.1, 0.02, 0.02)
+        gmsh.model.occ.synchronize()
+        gmsh.option.setNumber("Mesh.MeshSizeMin", size)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+        gmsh.model.addPhysicalGroup(3, [1], name="body")
+        gmsh.model.mesh.generate(3)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+
+
+def gmsh_convergence() -> None:
+    """XPBD's rest state against the Newton answer of its own energy on a gmsh cantilever
+    sagging under gravity (docs/peers.rst#xpbd-bias)."""
+    path = Path(tempfile.mkdtemp()) / "box.msh"
+    gmsh_cantilever(path)
+    scene = scene_from_dict({
+        "mesh": {"file": str(path)},
+        "material": {"law": "neo-hookean", "E": 1e4, "nu": 0.3, "density": 1000.0},
+        "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+        "load": [{"type": "gravity", "value": [0.0, 0.0, -9.81]}],
+    })  # fmt: skip
+    system = StableNeoHookean(scene)
+    u = static(system, tol=1e-11).x - system.x0
+    sag = -u[:, 2].min() / 0.1
+    print(f"\ngmsh cantilever ({scene.mesh.n_tets} tets), tip sag / length {sag:.2f}")
+    print("  max-norm error against Newton on the same energy:")
+
+    def err(**settings):
+        out = XPBD(scene, XPBDSettings(rest_tol=1e-9, **settings)).solve()
+        return np.abs(out.u - u).max() / np.abs(u).max()
+
+    n = np.array([10, 20, 40, 80])
+    e = np.array([err(substeps=int(k), iterations=2) for k in n])
+    print("  substeps x 2: " + ", ".join(f"{k}: {v:.2e}" for k, v in zip(n, e)))
+    print(f"  rate over 20-80: {-np.polyfit(np.log(n[1:]), np.log(e[1:]), 1)[0]:.2f}")
+    its = {k: err(substeps=10, iterations=k) for k in (1, 2, 4, 16)}
+    print("  10 substeps, iterations: " + ", ".join(f"{k}: {v:.3e}" for k, v in its.items()))
+    print(f"  40 x 2 sequential {err(substeps=40, iterations=2, coupling='sequential'):.2e}, "
+          f"jacobi {err(substeps=40, iterations=2, iteration='jacobi'):.2e}")  # fmt: skip
+
+
 def main() -> None:
     t0 = time.perf_counter()
+    gmsh_convergence()
     grid = [(n, 2) for n in (10, 20, 40, 80)] + [(20, k) for k in (1, 4, 8)]
     rows = scene_rows(load_scene("cantilever-large-rotation"), grid, jacobi=[(20, 2), (40, 2)])
     n = np.array([10, 20, 40, 80])
