@@ -31,11 +31,11 @@ def test_the_entry_point_registers_both_models():
 
 
 def test_compare_weighs_them_against_p1_neo_hookean():
-    """At a fifth of the length of sag XPBD's default rest state (10 substeps of a 60 Hz frame) is closer to P1
-    neo-Hookean's tip than the network's, and within 5 % of it (the energies agree to second
-    order; the substep error at 10 substeps is of order 1 %: tests/peers/test_xpbd.py); the
-    network is another material (Cauchy relations) and only has to sag the same way, within
-    a factor 3."""
+    """Sag of a fifth of the length: XPBD's default rest state (10 substeps of a 60 Hz frame)
+    is closer to P1 neo-Hookean's tip than the network's, and within 5 % of it (the energies
+    agree to second order; the substep error at 10 substeps is of order 1 %:
+    tests/peers/test_xpbd.py); the network is another material (Cauchy relations) and only
+    has to sag the same way, within a factor 3."""
     scene = scene_from_dict(SCENE)
     cmp = compare_scene(scene, models=["P1-NH", "xpbd", "mass-spring"])
     tip = {m: cmp.solutions[m].result.probes["tip"][2] for m in ("P1-NH", "xpbd", "mass-spring")}

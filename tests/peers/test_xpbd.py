@@ -166,9 +166,9 @@ def _error(scene, newton, **settings):
 
 def test_xpbd_rest_state_converges_to_newton_as_substeps_grow(scene, newton):
     """Gravity sag of a gmsh cantilever (tip down by its length): XPBD's rest state against
-    the Newton answer of the same energy. The error falls as h^2 (Macklin et al. 2016 drop the change of the
-    constraint gradients within a substep: a residual O(h^2) of the momentum equation that
-    stays at rest); fitted rate within 0.3 of 2."""
+    the Newton answer of the same energy. The error falls as h^2 (Macklin et al. 2016 drop
+    the change of the constraint gradients within a substep: a residual O(h^2) of the
+    momentum equation that stays at rest); fitted rate within 0.3 of 2."""
     substeps = np.array([20, 40, 80])
     err = np.array([_error(scene, newton, substeps=int(n), iterations=2) for n in substeps])
     rate = -np.polyfit(np.log(substeps), np.log(err), 1)[0]
