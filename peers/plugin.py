@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from springfem.errors import InputError
+from springfem.errors import InputError, SolverError
 from springfem.mechanics.system import MechanicalSystem
 from springfem.model_api import ModelSolution, SystemModel, model_result
 from springfem.scene import Scene
@@ -80,9 +80,21 @@ class XPBDModel:
         return XPBD(scene, self._settings)
 
     def solve(self, scene: Scene, verbose: bool = False) -> ModelSolution:
-        """The rest state under the scene's loads (``converged``: rest came within
-        ``max_frames``)."""
+        """The rest state under the scene's loads.
+
+        Raises
+        ------
+        SolverError
+            When rest does not come within ``max_frames`` (a moving state is no static
+            answer; the error names the frames) or the positions stop being finite.
+        """
         out = self._solver(scene).solve()
+        if not out.converged:
+            s = self._settings
+            raise SolverError(
+                f"{self.name}: no rest after {out.frames} frames ({out.frames * s.dt:.4g} s): "
+                f"still moving by more than rest_tol = {s.rest_tol:g} of its displacement"
+            )
         if verbose:
             print(f"{self.name}: rest after {out.frames} frames ({out.substeps} substeps)",
                   file=sys.stderr)  # fmt: skip

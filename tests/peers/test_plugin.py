@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from peers.plugin import models as peer_models
-from springfem.errors import InputError
+from springfem.errors import InputError, SolverError
 from springfem.model_api import ModelPlugin, plugin_models
 from springfem.scene import scene_from_dict
 from studies import models
@@ -54,6 +54,14 @@ def test_xpbd_has_no_explicit_form_and_refuses_anisotropic_laws():
     table = dict(SCENE, material=transverse)
     why = models.get("xpbd").applies(scene_from_dict(table))
     assert why is not None and why.startswith("model xpbd:")
+
+
+def test_xpbd_without_rest_is_a_solver_error():
+    """A run that does not come to rest is no static answer: a one-line SolverError."""
+    from peers.plugin import XPBDModel
+
+    with pytest.raises(SolverError, match=r"xpbd: no rest after 2 frames \(0\.03333 s\)"):
+        XPBDModel(max_frames=2).solve(scene_from_dict(SCENE))
 
 
 def test_xpbd_runs_frames_of_dynamics():
