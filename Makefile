@@ -17,7 +17,7 @@ export OMP_WAIT_POLICY ?= passive
 # through a temporary file and an atomic rename).
 TEST_WORKERS ?= 2
 # The packages mypy checks in `make test` (clean: any error fails the target).
-TYPED = springfem reference_fem corotational
+TYPED = springfem reference_fem corotational peers
 XDIST = $(if $(filter-out 0,$(TEST_WORKERS)),-n $(TEST_WORKERS) --dist loadfile)
 
 .PHONY: demo test test-slow lint docs report quick-report bench clean

@@ -17,12 +17,13 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("springfem", "springmodel", "reference_fem", "corotational", "studies")
+PACKAGES = ("springfem", "springmodel", "reference_fem", "corotational", "peers", "studies")
 ALLOWED = {
     "springfem": {"springfem"},
     "springmodel": {"springfem", "springmodel"},
     "reference_fem": {"springfem", "reference_fem"},
     "corotational": {"springfem", "corotational"},
+    "peers": {"springfem", "peers"},
     "studies": set(PACKAGES),
 }
 #: A module this long is a smell worth a look (one idea per module), not a target.

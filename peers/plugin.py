@@ -1,0 +1,164 @@
+"""XPBD and the edge mass–spring network as models of the plug-in API
+(:mod:`springfem.model_api`; docs/peers.rst).
+
+``xpbd``
+    the run to rest of :class:`peers.xpbd.XPBD` (its own settings: frame, substeps,
+    iterations, Gauss–Seidel or Jacobi, coupled or sequential, damping, rest tolerance); it
+    has no force-based explicit form (:meth:`XPBDModel.system` is ``None``), its dynamics
+    are its own frames (:meth:`XPBDModel.run`);
+``mass-spring``
+    :class:`peers.mass_spring.MassSpring` through :class:`~springfem.model_api.SystemModel`:
+    Newton for the static answer, the core's integrators for timed runs.
+
+Neither is weighed by default (``default`` false: ``--models xpbd,mass-spring``). The entry
+point ``peers = "peers.plugin:models"`` of group ``springfem.models`` registers them.
+
+Examples
+--------
+>>> [m.name for m in models()], models()[0].settings["substeps"]
+(['xpbd', 'mass-spring'], 10)
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Mapping
+from dataclasses import asdict
+from functools import cache
+from typing import Any
+
+import numpy as np
+
+from springfem.errors import InputError, SolverError
+from springfem.mechanics.system import MechanicalSystem
+from springfem.model_api import ModelSolution, SystemModel, model_result
+from springfem.scene import Scene
+
+from .mass_spring.network import MassSpring
+from .mass_spring.network import why_not as mass_spring_why_not
+from .xpbd.solver import XPBD, XPBDSettings
+from .xpbd.solver import why_not as xpbd_why_not
+
+
+class XPBDModel:
+    """XPBD as a plug-in model: :meth:`solve` runs to rest.
+
+    Parameters
+    ----------
+    name, label
+        See :class:`~springfem.model_api.ModelPlugin`.
+    default
+        Weighed by the studies without being named.
+    **settings
+        Fields of :class:`peers.xpbd.XPBDSettings`.
+    """
+
+    def __init__(self, name: str = "xpbd", label: str | None = None, default: bool = False,
+                 **settings: Any):  # fmt: skip
+        self.name = name
+        self._settings = XPBDSettings(**settings)
+        s = self._settings
+        self.label = label or f"XPBD stable neo-Hookean ({s.substeps} substeps x {s.iterations})"
+        self.default = default
+        self.settings: Mapping[str, Any] = asdict(s)
+
+    def __repr__(self) -> str:
+        return f"XPBDModel({self.name!r}, settings={dict(self.settings)!r})"
+
+    def applies(self, scene: Scene) -> str | None:
+        return xpbd_why_not(scene)
+
+    def system(self, scene: Scene) -> MechanicalSystem | None:
+        """``None``: XPBD moves positions by constraint projection, not by forces."""
+        return None
+
+    def _solver(self, scene: Scene) -> XPBD:
+        why = self.applies(scene)
+        if why is not None:
+            raise InputError(why)
+        return XPBD(scene, self._settings)
+
+    def solve(self, scene: Scene, verbose: bool = False) -> ModelSolution:
+        """The rest state under the scene's loads.
+
+        Raises
+        ------
+        SolverError
+            When rest does not come within ``max_frames`` (a moving state is no static
+            answer; the error names the frames) or the positions stop being finite.
+        """
+        out = self._solver(scene).solve()
+        if not out.converged:
+            s = self._settings
+            raise SolverError(
+                f"{self.name}: no rest after {out.frames} frames ({out.frames * s.dt:.4g} s): "
+                f"still moving by more than rest_tol = {s.rest_tol:g} of its displacement"
+            )
+        if verbose:
+            print(f"{self.name}: rest after {out.frames} frames ({out.substeps} substeps)",
+                  file=sys.stderr)  # fmt: skip
+        info = {"frames": out.frames, "substeps": out.substeps, "settings": dict(self.settings),
+                "equilibrium_residual": out.residual}  # fmt: skip
+        result = model_result(
+            scene, out.u, model=self.name, element="P1", law="stable-neo-hookean",
+            wall_time=out.wall_time, converged=out.converged, iterations=out.substeps, info=info,
+        )  # fmt: skip
+        return ModelSolution(result, out.u)
+
+    def run(self, scene: Scene, frames: int) -> ModelSolution:
+        """``frames`` frames of XPBD dynamics from rest under the loads.
+
+        Parameters
+        ----------
+        scene
+            The scene.
+        frames
+            Frames of ``dt``.
+
+        Returns
+        -------
+        ModelSolution
+            ``status`` "end of run at t = ...".
+        """
+        solver = self._solver(scene)
+        t0 = time.perf_counter()
+        x, _ = solver.run(frames)
+        u = x - solver.x0
+        t = frames * solver.settings.dt
+        result = model_result(
+            scene, u, model=self.name, element="P1", law="stable-neo-hookean",
+            wall_time=time.perf_counter() - t0, converged=False,
+            iterations=frames * solver.settings.substeps,
+            info={"frames": frames, "settings": dict(self.settings)},
+            status=f"end of run at t = {t:.4g} s after {frames} frames",
+        )  # fmt: skip
+        return ModelSolution(result, np.asarray(u))
+
+
+def build_mass_spring(
+    scene: Scene, calibration: str = "van-gelder", damping: float = 0.0
+) -> MassSpring:
+    """The network of ``scene`` (what :class:`~springfem.model_api.SystemModel` builds)."""
+    return MassSpring(scene, calibration=calibration, damping=damping)
+
+
+@cache
+def models() -> tuple[XPBDModel | SystemModel, ...]:
+    """The two peers (one object each per process).
+
+    Returns
+    -------
+    tuple
+    """
+    return (
+        XPBDModel(),
+        SystemModel(
+            "mass-spring", "edge mass-spring network (van Gelder)", build_mass_spring,
+            law="mass-spring", default=False, applies=mass_spring_why_not,
+            calibration="van-gelder", damping=0.0,
+        ),
+    )  # fmt: skip
+
+
+__all__ = ["XPBDModel", "build_mass_spring", "models"]

@@ -1,0 +1,127 @@
+"""The edge mass–spring network against independent references: finite differences of its
+energy and forces, rigid motions, the Cauchy–Born moduli of a periodic lattice and the
+Cauchy relations every central-force network obeys (Born & Huang 1954), on a gmsh mesh and on
+a box lattice; a static Newton solve and an explicit run on the core's solvers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+from support.meshes import gmsh_box
+
+from peers.mass_spring import MassSpring
+from springfem.errors import InputError
+from springfem.mechanics import explicit, stable_time_step, static
+from springfem.scene import scene_from_dict
+
+MATERIAL = {"law": "linear", "E": 1.0e4, "nu": 0.3, "density": 1000.0}
+
+
+def _scene(mesh, load=True):
+    table = {"mesh": mesh, "material": MATERIAL,
+             "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}]}  # fmt: skip
+    if load:
+        table["load"] = [{"type": "traction", "region": "x_max", "value": [0.0, 0.0, -10.0]}]
+    return scene_from_dict(table)
+
+
+@pytest.fixture(scope="module")
+def gmsh_scene(tmp_path_factory):
+    path = tmp_path_factory.mktemp("ms") / "box.msh"
+    gmsh_box(path, 0.01, dims=(0.1, 0.02, 0.02))
+    return _scene({"file": str(path)})
+
+
+def _deformed(x0, amplitude, seed=0):
+    rng = np.random.default_rng(seed)
+    return x0 + amplitude * np.ptp(x0, axis=0).max() * rng.standard_normal(x0.shape)
+
+
+def test_forces_and_tangent_are_finite_differences(gmsh_scene):
+    s = MassSpring(gmsh_scene)
+    x = _deformed(s.x0, 0.02)
+    f = s.internal(x).ravel()
+    K = s.stiffness(x)
+    h = 1e-7 * np.ptp(s.x0, axis=0).max()
+    for i in np.random.default_rng(1).choice(f.size, 6, replace=False):
+        xp, xm = x.copy().ravel(), x.copy().ravel()
+        xp[i] += h
+        xm[i] -= h
+        dE = (s.strain_energy(xp.reshape(-1, 3)) - s.strain_energy(xm.reshape(-1, 3))) / (2 * h)
+        assert abs(dE + f[i]) <= 1e-6 * np.abs(f).max()
+        col = -(s.internal(xp.reshape(-1, 3)) - s.internal(xm.reshape(-1, 3))).ravel() / (2 * h)
+        np.testing.assert_allclose(K[:, i].toarray().ravel(), col, atol=1e-5 * np.abs(col).max())
+
+
+def test_rigid_motion_gives_no_force_and_damping_only_relative_motion(gmsh_scene):
+    s = MassSpring(gmsh_scene, damping=0.01)
+    Q = Rotation.from_rotvec([0.9, -0.4, 1.6]).as_matrix()
+    x = s.x0 @ Q.T + [0.1, 0.2, -0.3]
+    scale = np.abs(s.internal(_deformed(s.x0, 0.01))).max()
+    assert np.abs(s.internal(x)).max() < 1e-10 * scale
+    v = np.tile([1.0, -2.0, 0.5], (s.n_points, 1))  # a translation: no dashpot force
+    assert np.abs(s.internal(s.x0, v)).max() < 1e-12 * scale
+    assert abs(s.strain_energy(x)) < 1e-12 * s.strain_energy(_deformed(s.x0, 0.01))
+
+
+def _lattice_tensor(points, tets, E):
+    """(1 / V) sum over tets of E V_t sum_{edges of t} n n n n (each edge's van Gelder
+    stiffness k l^2 is E times the volume of the tets sharing it)."""
+    C = np.zeros((3, 3, 3, 3))
+    x = points[tets]
+    V = np.abs(np.linalg.det(x[:, 1:] - x[:, :1])) / 6
+    for a, b in ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)):
+        n = x[:, b] - x[:, a]
+        n /= np.linalg.norm(n, axis=1)[:, None]
+        C += E * np.einsum("t,ti,tj,tk,tl->ijkl", V, n, n, n, n)
+    return C / V.sum()
+
+
+def test_small_strain_moduli_are_cauchy_born_and_obey_the_cauchy_relations():
+    """A box lattice (six tets per cell) under affine strains: the network's energy is
+    V/2 eps : C : eps with C from the bond sum (computed here from the geometry alone), the
+    interior nodes feel no force (Cauchy–Born is exact for a lattice of centrosymmetric
+    nodes), and C is fully symmetric (C_1122 = C_1212 ...: the Cauchy relations), so no
+    spring constants give nu = 0.3 (Poisson's ratio along x here differs from 0.3)."""
+    box = {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [4, 4, 4]}
+    s = MassSpring(_scene(box, load=False))
+    C = _lattice_tensor(s.x0, s.tets, 1.0e4)
+    interior = np.all((s.x0 > 1e-9) & (s.x0 < 1 - 1e-9), axis=1)
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        eps = rng.standard_normal((3, 3)) * 1e-6
+        eps = 0.5 * (eps + eps.T)
+        x = s.x0 + s.x0 @ eps.T
+        assert np.abs(s.internal(x)[interior]).max() < 1e-6 * np.abs(s.internal(x)).max()
+        # boundary edges carry less volume: the total energy is the lattice density times V
+        np.testing.assert_allclose(
+            s.strain_energy(x), 0.5 * np.einsum("ij,ijkl,kl", eps, C, eps), rtol=1e-4
+        )  # the O(eps^3) terms of the spring lengths: relative ~1e-6
+    np.testing.assert_allclose(C, C.transpose(0, 2, 1, 3), atol=1e-12 * np.abs(C).max())
+    voigt = [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)]
+    D = np.array([[C[i, j, k, l] for k, l in voigt] for i, j in voigt])
+    S = np.linalg.inv(D)
+    assert abs(-S[0, 1] / S[0, 0] - 0.3) > 0.05
+
+
+def test_static_newton_and_explicit_run_on_a_gmsh_mesh(gmsh_scene):
+    """Newton converges; an undamped explicit run (velocity Verlet, 0.9 of the stable step)
+    conserves the energy to 1 %; with damping the run loses energy."""
+    s = MassSpring(gmsh_scene)
+    info = static(s, tol=1e-10)
+    assert info.converged and (info.x - s.x0)[:, 2].min() < 0
+    dt = 0.9 * stable_time_step(s)[0]
+    traj = explicit(s, dt=dt, steps=400, integrator="verlet")
+    kinetic = 0.5 * float(np.sum(s.masses[:, None] * traj.v**2))
+    total = kinetic + s.energy(traj.x)
+    swing = abs(s.energy(info.x))  # the potential energy at equilibrium: the scale of the run
+    assert abs(total) < 0.01 * swing
+
+
+def test_bad_input_gives_one_line():
+    box = {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [1, 1, 1]}
+    with pytest.raises(InputError, match="calibration 'lloyd' is not one of van-gelder"):
+        MassSpring(_scene(box), calibration="lloyd")
+    with pytest.raises(InputError, match="damping"):
+        MassSpring(_scene(box), damping=-1.0)
