@@ -7,7 +7,9 @@ in a nested way without moving the boundary, so the family is one of sizes): pro
 (``land-ventricle``) on uniform sizes :data:`P2_LEVELS`; problem 3
 (``land-ventricle-active``) on :data:`P3_LEVELS`, sizes whose axis size (``[mesh]
 axis_size``) shrinks in proportion, because its fibre field is singular on the long axis
-(docs/verification.rst#land-problem-3-fibres). The observed order and the Richardson value
+(docs/verification.rst#land-problem-3-fibres); families ``3a`` and ``3c`` refine only the
+axis, ``3c`` with ``[fem] geometry = "curved"`` (the walls' P2 edge nodes on the true
+ellipsoids). The observed order and the Richardson value
 of the three finest levels come from
 :func:`studies.study_tissue.convergence.observed_order`; ``h`` is the beam's element length
 ``10 / n`` mm, and for the ventricles the edge of the regular tet of the mean tet volume,
