@@ -99,7 +99,12 @@ class MixedProblem(FemProblem):
         self.law_name = f"{label}/{self.pair_label}"
         self.nu = self.space.n_dofs
         self.n_p = scene.mesh.n_points
-        pb = skfem.Basis(self.space.skmesh, skfem.ElementTetP1(), intorder=self.space.intorder)
+        pb = skfem.Basis(
+            self.space.skmesh,
+            skfem.ElementTetP1(),
+            self.space.mapping,
+            intorder=self.space.intorder,
+        )
         self.p_nodes = np.ascontiguousarray(pb.element_dofs.T, dtype=np.int64)
         self.p_values = np.stack([np.asarray(b[0])[0] for b in pb.basis], axis=1)  # (nq, 4)
         self.p_scale = P_SCALE * scene.material.mu

@@ -23,6 +23,7 @@ LinearSolver = Literal["auto", "direct", "amg"]
 Solver = Literal["static", "explicit", "implicit"]
 Precision = Literal["float64", "mixed", "float32"]
 Formulation = Literal["displacement", "mixed", "nodal-volume", "nodal-strain", "mini"]
+Geometry = Literal["straight", "curved"]
 #: The formulations on nodal volumes (``[fem] stabilisation`` applies to them).
 NODAL_FORMULATIONS = ("nodal-volume", "nodal-strain")
 
@@ -87,6 +88,12 @@ class FemOptions:
         (``rule-based`` or ``land-ellipsoid`` axes, taken at the quadrature points) needs
         more: Land's problem 3 takes ``intorder = 6`` (15 points, exact to degree 5;
         docs/verification.rst#land-problem-3-fibres).
+    geometry
+        ``straight`` (straight-sided tets, the default) or ``curved``: order 2 on a mesh of
+        the ``ellipsoid`` generator, with the P2 edge nodes of the endo- and epicardial
+        facets on the true ellipsoids (isoparametric tets,
+        :func:`springfem.ellipsoid.curved_edge_nodes`;
+        docs/verification.rst#land-problem-3-fibres).
     """
 
     order: int = 1
@@ -104,6 +111,7 @@ class FemOptions:
     stabilisation: float | None = None
     strain_stabilisation: float = STRAIN_STABILISATION
     intorder: int | None = None
+    geometry: Geometry = "straight"
 
     @property
     def volumetric_share(self) -> float:
@@ -118,6 +126,7 @@ class FemOptions:
             "solver": Solver,
             "precision": Precision,
             "formulation": Formulation,
+            "geometry": Geometry,
         }
         return get_args(kinds[name]) if name in kinds else ()
 
@@ -148,7 +157,7 @@ def parse_fem_options(r: TableReader) -> FemOptions:
         kw["linear_solver"] = r.get(
             "linear_solver", "str", choices=FemOptions.choices("linear_solver")
         )
-    for key in ("solver", "precision", "formulation"):
+    for key in ("solver", "precision", "formulation", "geometry"):
         if r.has(key):
             kw[key] = r.get(key, "str", choices=FemOptions.choices(key))
     for key in ("tol", "t_end", "dt"):
@@ -177,6 +186,8 @@ def parse_fem_options(r: TableReader) -> FemOptions:
     form, order = kw.get("formulation", "displacement"), kw.get("order", 1)
     if form in NODAL_FORMULATIONS + ("mini",) and order != 1:
         raise r.fail("order", f'formulation = "{form}" is for linear tets: order 1, not {order}')
+    if kw.get("geometry") == "curved" and order != 2:
+        raise r.fail("geometry", f'"curved" is for quadratic tets: order 2, not {order}')
     if kw.get("solver", "static") != "static" and "t_end" not in kw and "steps" not in kw:
         raise r.fail("solver", f"{kw['solver']!r} needs fem.t_end or fem.steps")
     r.finish()

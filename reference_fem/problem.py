@@ -47,7 +47,7 @@ from .materials import material_groups
 from .newton import InvertedElements
 from .options import FemOptions
 from .point_fibres import quadrature_frames
-from .space import Space, default_intorder
+from .space import Space, default_intorder, edge_list
 
 
 class FemProblem:
@@ -111,7 +111,7 @@ class FemProblem:
         if intorder is None:
             intorder = FemOptions.of(scene).intorder
         q = default_intorder(self.order, self.nonlinear) if intorder is None else intorder
-        return Space(scene.mesh, self.order, q)
+        return Space(scene.mesh, self.order, q, curved_edge_nodes_of(scene))
 
     # -- the NonlinearProblem protocol ------------------------------------------------------
     @property
@@ -235,3 +235,25 @@ class FemProblem:
         space = self.space if self.space.intorder >= 3 else Space(self.scene.mesh, 2, 3)
         F = np.eye(3) + displacement_gradient(space, np.asarray(u).reshape(-1, 3))
         return float((space.dx * _det(F)).sum())
+
+
+def curved_edge_nodes_of(scene: Scene) -> np.ndarray | None:
+    """The P2 edge nodes of ``[fem] geometry = "curved"`` (``None`` when straight).
+
+    The scene's mesh must come from ``[mesh] generator = "ellipsoid"``: its ``endo``,
+    ``epi`` and ``base_z`` give the surfaces (:func:`springfem.ellipsoid.curved_edge_nodes`).
+    """
+    if FemOptions.of(scene).geometry != "curved":
+        return None
+    from springfem import ellipsoid
+
+    table = scene.raw.get("mesh") or {}
+    if table.get("generator") != "ellipsoid":
+        raise InputError(
+            'fem.geometry = "curved" needs [mesh] generator = "ellipsoid", got '
+            f"{table.get('generator', 'a mesh file')!r}"
+        )
+    endo = tuple(table.get("endo", ellipsoid.ENDO))
+    epi = tuple(table.get("epi", ellipsoid.EPI))
+    base_z = float(table.get("base_z", ellipsoid.BASE_Z))
+    return ellipsoid.curved_edge_nodes(scene.mesh, edge_list(scene.mesh), endo, epi, base_z)

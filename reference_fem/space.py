@@ -24,6 +24,7 @@ from functools import cached_property
 
 import numpy as np
 import skfem
+from skfem.mapping import MappingAffine, MappingIsoparametric
 
 from springfem.errors import InputError
 from springfem.mesh import TetMesh
@@ -55,6 +56,19 @@ def p1_gradients(points: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.n
     return G, np.linalg.det(T) / 6.0
 
 
+def edge_list(mesh: TetMesh) -> np.ndarray:
+    """``(n_edges, 2)`` vertex pairs in scikit-fem's edge order (the P2 edge nodes' order).
+
+    Examples
+    --------
+    >>> from springfem.mesh import box_mesh
+    >>> edge_list(box_mesh((1.0, 1.0, 1.0), (1, 1, 1))).shape
+    (19, 2)
+    """
+    m = skfem.MeshTet(np.ascontiguousarray(mesh.points.T), np.ascontiguousarray(mesh.tets.T))
+    return np.ascontiguousarray(m.edges.T, dtype=np.int64)
+
+
 def default_intorder(order: int, nonlinear: bool = False) -> int:
     """Quadrature order: 1 point for P1 (constant gradients), 4 points for P2.
 
@@ -76,6 +90,29 @@ def default_intorder(order: int, nonlinear: bool = False) -> int:
     return 1 if order == 1 else 2
 
 
+class CurvedMapping(MappingIsoparametric):
+    """scikit-fem's isoparametric map of a ``MeshTet2`` whose inverse starts from the
+    straight tet's.
+
+    scikit-fem's own inverse starts every point at ``(0.5, 0.5, 0.5)`` and clips to the unit
+    cube, which cycles on some curved boundary tets; starting from the affine inverse of the
+    same tet (exact for its straight part) Newton converges in a few steps.
+    """
+
+    def __init__(self, mesh: skfem.MeshTet2, straight: skfem.MeshTet):
+        super().__init__(mesh, mesh.elem(), mesh.bndelem)
+        self.affine = MappingAffine(straight)
+
+    def invF(self, x, tind=None, newton_max_iters=50, newton_tol=1e-12):
+        X = self.affine.invF(x, tind=tind)
+        for _ in range(newton_max_iters):
+            dX = np.einsum("ijkl,jkl->ikl", self.invDF(X, tind), x - self.F(X, tind))
+            X = X + dX
+            if (np.linalg.norm(dX, 1, (0, 2)) < newton_tol).all():
+                return X
+        raise InputError(f"curved geometry: the inverse map did not converge to {newton_tol}")
+
+
 class Space:
     """Scalar Lagrange space of ``order`` 1 or 2 on a :class:`TetMesh`, used component-wise.
 
@@ -93,12 +130,25 @@ class Space:
         ``(m, nq)`` quadrature weights times the Jacobian.
     values
         ``(nq, nloc)`` shape-function values at the quadrature points.
+    edge_nodes
+        ``None`` (straight-sided tets), or ``(n_edges, 3)`` positions of the P2 edge nodes:
+        the isoparametric (curved) geometry of a scikit-fem ``MeshTet2``, e.g. from
+        :func:`springfem.ellipsoid.curved_edge_nodes`.
     """
 
-    def __init__(self, mesh: TetMesh, order: int = 1, intorder: int | None = None):
+    def __init__(
+        self,
+        mesh: TetMesh,
+        order: int = 1,
+        intorder: int | None = None,
+        edge_nodes: np.ndarray | None = None,
+    ):
         if order not in (1, 2):
             raise InputError(f"fem order must be 1 or 2, got {order!r}")
+        if edge_nodes is not None and order != 2:
+            raise InputError("curved geometry (edge nodes) needs fem order 2")
         self.mesh = mesh
+        self.edge_nodes = None if edge_nodes is None else np.asarray(edge_nodes, dtype=float)
         self.order = order
         self.intorder = default_intorder(order) if intorder is None else int(intorder)
         self.n_vertices = mesh.n_points
@@ -133,10 +183,29 @@ class Space:
 
     @cached_property
     def skmesh(self) -> skfem.MeshTet:
-        """The scikit-fem mesh on the same vertices and tets (same element order)."""
-        return skfem.MeshTet(
-            np.ascontiguousarray(self.mesh.points.T), np.ascontiguousarray(self.mesh.tets.T)
-        )
+        """The scikit-fem mesh on the same vertices and tets (same element order); a
+        quadratic ``MeshTet2`` through :attr:`edge_nodes` when they are given."""
+        p = np.ascontiguousarray(self.mesh.points.T)
+        t = np.ascontiguousarray(self.mesh.tets.T)
+        if self.edge_nodes is None:
+            return skfem.MeshTet(p, t)
+        straight = skfem.MeshTet2.from_mesh(skfem.MeshTet(p, t))
+        nv = self.mesh.n_points
+        if straight.doflocs.shape[1] != nv + len(self.edge_nodes):
+            raise InputError(
+                f"curved geometry: {len(self.edge_nodes)} edge nodes for "
+                f"{straight.doflocs.shape[1] - nv} edges"
+            )
+        doflocs = np.hstack([p, self.edge_nodes.T])
+        return skfem.MeshTet2(np.ascontiguousarray(doflocs), t)
+
+    @cached_property
+    def mapping(self):
+        """The reference map: affine, or (curved) :class:`CurvedMapping`."""
+        if self.edge_nodes is None:
+            return self.skmesh.mapping()
+        p = np.ascontiguousarray(self.mesh.points.T)
+        return CurvedMapping(self.skmesh, skfem.MeshTet(p, np.ascontiguousarray(self.mesh.tets.T)))
 
     @cached_property
     def element(self) -> skfem.Element:
@@ -146,18 +215,20 @@ class Space:
     @cached_property
     def basis(self) -> skfem.CellBasis:
         """Scalar scikit-fem basis with this space's quadrature."""
-        return skfem.Basis(self.skmesh, self.element, intorder=self.intorder)
+        return skfem.Basis(self.skmesh, self.element, self.mapping, intorder=self.intorder)
 
     @cached_property
     def edges(self) -> np.ndarray:
         """``(n_edges, 2)`` vertex pairs; P2 edge ``e`` has node ``n_vertices + e``."""
-        return np.ascontiguousarray(self.skmesh.edges.T, dtype=np.int64)
+        return edge_list(self.mesh)
 
     @cached_property
     def node_coordinates(self) -> np.ndarray:
         """``(n_nodes, 3)`` coordinates of the nodes (vertices, then edge midpoints)."""
         if self.order == 1:
             return self.mesh.points
+        if self.edge_nodes is not None:
+            return np.vstack([self.mesh.points, self.edge_nodes])
         mid = 0.5 * (self.mesh.points[self.edges[:, 0]] + self.mesh.points[self.edges[:, 1]])
         return np.vstack([self.mesh.points, mid])
 
@@ -196,7 +267,11 @@ class Space:
     def facet_basis(self, facets: np.ndarray, intorder: int) -> skfem.FacetBasis:
         """Scalar facet basis on the given boundary triangles (vertex triples)."""
         return skfem.FacetBasis(
-            self.skmesh, self.element, facets=self.facet_indices(facets), intorder=intorder
+            self.skmesh,
+            self.element,
+            self.mapping,
+            facets=self.facet_indices(facets),
+            intorder=intorder,
         )
 
     def interpolation_matrix(self, tets: np.ndarray, points: np.ndarray):
@@ -211,7 +286,7 @@ class Space:
         points = np.atleast_2d(np.asarray(points, dtype=float))
         if len(points) == 0:
             return sp.csr_matrix((0, self.n_nodes))
-        mapping = self.skmesh.mapping()
+        mapping = self.mapping
         X = mapping.invF(points.T[:, :, None], tind=tets)
         phis = np.array(
             [self.element.gbasis(mapping, X, k, tind=tets)[0][:, 0] for k in range(self.nloc)]

@@ -206,3 +206,91 @@ def _surface_name(x: np.ndarray, endo, epi, base_z: float) -> str | None:
         if np.abs(level - 1.0).max() <= 1e-6:
             return name
     return None
+
+
+def project_to_ellipsoid(x: np.ndarray, radii, base_z: float = BASE_Z) -> np.ndarray:
+    """Points moved onto the ellipsoid ``(x^2 + y^2) / a^2 + z^2 / c^2 = 1``.
+
+    A point at the base plane's height (within 1e-9 of ``base_z``, e.g. the midpoint of an
+    edge of the basal ring) moves radially in that plane, so that it stays on both
+    surfaces; every other point moves along the ray from the centre in the scaled
+    coordinates ``(x / a, y / a, z / c)``.
+
+    Parameters
+    ----------
+    x
+        ``(k, 3)`` points near the surface.
+    radii
+        ``(a, c)``: the short and long radius (mm).
+    base_z
+        Height of the base plane (mm).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(k, 3)`` points on the ellipsoid.
+
+    Examples
+    --------
+    >>> p = project_to_ellipsoid(np.array([[3.0, 0.0, -8.0], [6.0, 0.0, 5.0]]), (7.0, 17.0))
+    >>> lev = (p[:, 0] ** 2 + p[:, 1] ** 2) / 49 + p[:, 2] ** 2 / 289
+    >>> np.allclose(lev, 1.0), float(p[1, 2])
+    (True, 5.0)
+    """
+    a, c = (float(r) for r in radii)
+    x = np.array(x, dtype=float, copy=True)
+    rho2 = (x[:, 0] ** 2 + x[:, 1] ** 2) / a**2
+    level = rho2 + x[:, 2] ** 2 / c**2
+    ring = np.abs(x[:, 2] - base_z) <= 1e-9 * max(a, c)
+    s = 1.0 / np.sqrt(level)
+    x[~ring] *= s[~ring, None]
+    ring_scale = np.sqrt((1.0 - base_z**2 / c**2) / np.maximum(rho2[ring], 1e-300))
+    x[ring, :2] *= ring_scale[:, None]
+    return x
+
+
+def curved_edge_nodes(mesh: TetMesh, edges: np.ndarray, endo=ENDO, epi=EPI,
+                      base_z: float = BASE_Z) -> np.ndarray:  # fmt: skip
+    """The P2 edge nodes of an ellipsoid mesh with its curved walls: isoparametric geometry.
+
+    Each edge's node is its midpoint, except on the edges of the ``endo`` and ``epi``
+    facets, whose nodes move onto the true ellipsoid (:func:`project_to_ellipsoid`), so that
+    the quadratic map of each boundary tet follows the wall to ``O(h^3)`` instead of the
+    faceted ``O(h^2)`` (docs/verification.rst#land-problem-3-fibres).
+
+    Parameters
+    ----------
+    mesh
+        A mesh of :func:`ellipsoid_mesh` (its ``endo`` and ``epi`` facet sets).
+    edges
+        ``(n_edges, 2)`` vertex pairs, in the P2 space's edge order.
+    endo, epi, base_z
+        The geometry the mesh was built with (mm).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n_edges, 3)`` edge-node positions.
+
+    Examples
+    --------
+    >>> m = ellipsoid_mesh(size=6.0)
+    >>> e = np.unique(np.sort(m.tets[:, [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]]]
+    ...               .reshape(-1, 2), axis=1), axis=0)
+    >>> moved = np.linalg.norm(curved_edge_nodes(m, e) - m.points[e].mean(axis=1), axis=1)
+    >>> bool(moved.max() > 0.1), bool((moved > 0).sum() < len(e))
+    (True, True)
+    """
+    edges = np.asarray(edges, dtype=np.int64)
+    x = np.asarray(mesh.points, dtype=float)
+    nodes = 0.5 * (x[edges[:, 0]] + x[edges[:, 1]])
+    n = len(x)
+    keys = edges.min(axis=1) * n + edges.max(axis=1)
+    for name, radii in (("endo", endo), ("epi", epi)):
+        tri = mesh.facet_sets.get(name)
+        if tri is None or len(tri) == 0:
+            raise InputError(f'curved geometry needs the ellipsoid mesh\'s "{name}" facets')
+        fe = np.asarray(tri, dtype=np.int64)[:, [[0, 1], [1, 2], [2, 0]]].reshape(-1, 2)
+        on = np.isin(keys, np.unique(fe.min(axis=1) * n + fe.max(axis=1)))
+        nodes[on] = project_to_ellipsoid(nodes[on], radii, base_z)
+    return nodes

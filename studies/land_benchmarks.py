@@ -7,7 +7,9 @@ in a nested way without moving the boundary, so the family is one of sizes): pro
 (``land-ventricle``) on uniform sizes :data:`P2_LEVELS`; problem 3
 (``land-ventricle-active``) on :data:`P3_LEVELS`, sizes whose axis size (``[mesh]
 axis_size``) shrinks in proportion, because its fibre field is singular on the long axis
-(docs/verification.rst#land-problem-3-fibres). The observed order and the Richardson value
+(docs/verification.rst#land-problem-3-fibres); families ``3a`` and ``3c`` refine only the
+axis, ``3c`` with ``[fem] geometry = "curved"`` (the walls' P2 edge nodes on the true
+ellipsoids). The observed order and the Richardson value
 of the three finest levels come from
 :func:`studies.study_tissue.convergence.observed_order`; ``h`` is the beam's element length
 ``10 / n`` mm, and for the ventricles the edge of the regular tet of the mean tet volume,
@@ -53,17 +55,21 @@ P2_LEVELS = ((4.0, None), (3.0, None), (2.5, None), (2.0, None))
 #: Problem 3: (size, axis size) in mm, coarse to fine, the axis size a quarter of the size.
 P3_LEVELS = ((4.0, 1.0), (3.0, 0.75), (2.0, 0.5), (1.5, 0.375))
 #: Problem 3 refined along the axis only (``3a``: size 4 mm, axis size halved): where its
-#: fibre field is singular.
+#: fibre field is singular. ``3c``: the same meshes with curved (isoparametric) walls.
 P3_AXIS_LEVELS = ((4.0, 1.0), (4.0, 0.5), (4.0, 0.25))
 SCENES = {"1": "land-beam", "2": "land-ventricle", "3": "land-ventricle-active",
-          "3a": "land-ventricle-active"}  # fmt: skip
-LEVELS = {"1": P1_LEVELS, "2": P2_LEVELS, "3": P3_LEVELS, "3a": P3_AXIS_LEVELS}
+          "3a": "land-ventricle-active", "3c": "land-ventricle-active"}  # fmt: skip
+LEVELS = {"1": P1_LEVELS, "2": P2_LEVELS, "3": P3_LEVELS, "3a": P3_AXIS_LEVELS,
+          "3c": P3_AXIS_LEVELS}  # fmt: skip
+#: Families solved with ``[fem] geometry = "curved"`` (``3c``: the ``3a`` meshes with the P2
+#: edge nodes of the walls on the true ellipsoids).
+CURVED = ("3c",)
 #: Each problem's measured points: (probe name, its rest z, mm).
 _APEXES = (("endo", -17.0), ("epi", -20.0))
-PROBES = {"1": (("tip", 1.0),), "2": _APEXES, "3": _APEXES, "3a": _APEXES}
+PROBES = {"1": (("tip", 1.0),), "2": _APEXES, "3": _APEXES, "3a": _APEXES, "3c": _APEXES}
 #: FEniCS-pulse's apex z (mm; github.com/finsberg/pulse pull request 98).
 PULSE = {"2": {"endo": -26.5328, "epi": -28.1790}, "3": {"endo": -12.00, "epi": -15.22},
-         "3a": {"endo": -12.00, "epi": -15.22}}  # fmt: skip
+         "3a": {"endo": -12.00, "epi": -15.22}, "3c": {"endo": -12.00, "epi": -15.22}}  # fmt: skip
 #: Land et al. 2015's range over its 11 codes (mm; problem 1, the beam's deformed z).
 PAPER_RANGE = {"1": {"tip": (4.14, 4.20)}}
 #: Land et al. 2015: typical relative difference between the groups' fine solutions.
@@ -107,6 +113,8 @@ def solve_level(problem: str, level: int, load_steps: int = 10) -> dict:
         if axis is not None:
             data["mesh"]["axis_size"] = axis
     data["fem"]["load_steps"] = load_steps
+    if problem in CURVED:
+        data["fem"]["geometry"] = "curved"
     row: dict = {"problem": problem, "size": size, "axis_size": axis}
     t0 = time.perf_counter()
     try:
@@ -147,11 +155,11 @@ def merge_row(row: dict, folder: Path = OUT) -> list[dict]:
 
 
 def _h(row: dict) -> float:
-    """The element size of a level: the beam's length, the axis size of family ``3a``, a
-    ventricle's mean-volume tet edge."""
+    """The element size of a level: the beam's length, the axis size of families ``3a`` and
+    ``3c``, a ventricle's mean-volume tet edge."""
     if row["problem"] == "1":
         return float(row["size"])
-    if row["problem"] == "3a":
+    if row["problem"] in ("3a", "3c"):
         return float(row["axis_size"])
     return float((6.0 * math.sqrt(2.0) * wall_volume() / row["tets"]) ** (1.0 / 3.0))
 
@@ -246,7 +254,11 @@ def rst(rows: list[dict]) -> str:
 def main(argv: list[str] | None = None) -> int:
     """Command line: solve one level (``--problem``, ``--level``) or print ``--table``."""
     ap = argparse.ArgumentParser(prog="python -m studies.land_benchmarks")
-    ap.add_argument("--problem", choices=sorted(SCENES), help="3a: problem 3, axis family")
+    ap.add_argument(
+        "--problem",
+        choices=sorted(SCENES),
+        help="3a: problem 3, axis family; 3c: the same, curved geometry",
+    )
     ap.add_argument("--level", type=int)
     ap.add_argument("--table", action="store_true")
     ap.add_argument("--rst", action="store_true", help="the table as reStructuredText")
