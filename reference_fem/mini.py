@@ -55,6 +55,7 @@ class MiniSpace(Space):
 
     def __init__(self, mesh: TetMesh, intorder: int | None = None):
         self.mesh = mesh
+        self.edge_nodes = None  # straight-sided tets only
         self.order = 1  # vertices are the only nodes on the boundary: regions as for P1
         self.intorder = MINI_INTORDER if intorder is None else int(intorder)
         self.n_vertices = mesh.n_points

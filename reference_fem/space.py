@@ -136,6 +136,9 @@ class Space:
         :func:`springfem.ellipsoid.curved_edge_nodes`.
     """
 
+    #: Straight-sided unless a subclass or ``__init__`` says otherwise.
+    edge_nodes: np.ndarray | None = None
+
     def __init__(
         self,
         mesh: TetMesh,
