@@ -10,13 +10,14 @@
     :class:`peers.mass_spring.MassSpring` through :class:`~springfem.model_api.SystemModel`:
     Newton for the static answer, the core's integrators for timed runs.
 
-Neither is weighed by default (``default`` false: ``--models xpbd,mass-spring``). The entry
+Both are weighed by default where they apply (``default`` true: the verdict, the comparison
+and the studies of docs/peers.rst#in-the-studies). The entry
 point ``peers = "peers.plugin:models"`` of group ``springfem.models`` registers them.
 
 Examples
 --------
 >>> [m.name for m in models()], models()[0].settings["substeps"]
-(['xpbd', 'mass-spring'], 10)
+(['xpbd', 'mass-spring'], 20)
 """
 
 from __future__ import annotations
@@ -54,7 +55,7 @@ class XPBDModel:
         Fields of :class:`peers.xpbd.XPBDSettings`.
     """
 
-    def __init__(self, name: str = "xpbd", label: str | None = None, default: bool = False,
+    def __init__(self, name: str = "xpbd", label: str | None = None, default: bool = True,
                  **settings: Any):  # fmt: skip
         self.name = name
         self._settings = XPBDSettings(**settings)
@@ -155,7 +156,7 @@ def models() -> tuple[XPBDModel | SystemModel, ...]:
         XPBDModel(),
         SystemModel(
             "mass-spring", "edge mass-spring network (van Gelder)", build_mass_spring,
-            law="mass-spring", default=False, applies=mass_spring_why_not,
+            law="mass-spring", applies=mass_spring_why_not,
             calibration="van-gelder", damping=0.0,
         ),
     )  # fmt: skip
