@@ -17,7 +17,7 @@ point ``peers = "peers.plugin:models"`` of group ``springfem.models`` registers 
 Examples
 --------
 >>> [m.name for m in models()], models()[0].settings["substeps"]
-(['xpbd', 'mass-spring'], 20)
+(['xpbd', 'mass-spring'], 40)
 """
 
 from __future__ import annotations

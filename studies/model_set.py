@@ -142,6 +142,8 @@ def _solve_key(scene: Scene, name: str) -> Any:
     m = models.get(name)
     if m.kind == "spring":
         return ("spring", repr(m.spring_options(scene)))
+    if m.kind == "plugin":  # its own solve: the same only as itself
+        return ("plugin", m.name)
     fem_scene, order, law = m.fem_settings(scene)
     fem = FemOptions.of(fem_scene)
     fem = replace(fem, order=fem.order if order is None else order)

@@ -83,15 +83,18 @@ class Verdict:
     reference
         The reference model.
     table
-        One row per model: status, error, static time, step cost, stable step, cost per
-        simulated second, what it solves against the reference's law, and whether it is
-        within the tolerance.
+        One row per model: status, error, its rank by error, static time, step cost, stable
+        step, cost per simulated second, what it solves against the reference's law, and
+        whether it is within the tolerance.
     static_pick, dynamic_pick
         The cheapest model within the tolerance for static solves (the reference when no
         other model within it is cheaper) and for explicit dynamics (``None``: none
         qualifies).
     sentence
         The answer in words (:func:`verdict_sentence`).
+    ranking
+        Every model by its error against the reference (:func:`ranking_line`; the table's
+        ``rank`` column).
     notes
         What was skipped, merged or substituted, and why.
     """
@@ -104,6 +107,7 @@ class Verdict:
     dynamic_pick: str | None
     sentence: str
     notes: list[str] = field(default_factory=list)
+    ranking: str = ""
 
 
 def candidate_models(scene: Scene) -> list[str]:
@@ -340,7 +344,76 @@ def verdict(
     static_pick = _cheapest(ok, "static time (s)")
     dynamic_pick = _cheapest(ok, "cost per simulated s")
     sentence = verdict_sentence(table, ref, tolerance, static_pick, dynamic_pick)
-    return Verdict(scene.name, tolerance, ref, table, static_pick, dynamic_pick, sentence, notes)
+    ranked = rank_by_error(table, ref, same_as_ref)
+    table.insert(3, "rank", ranked)
+    v = Verdict(scene.name, tolerance, ref, table, static_pick, dynamic_pick, sentence, notes)
+    v.ranking = ranking_line(table, ref)
+    return v
+
+
+def rank_by_error(table: pd.DataFrame, ref: str, same_as_ref: pd.Series) -> pd.Series:
+    """Each model's place by its error against the reference (1: closest), ties sharing
+    the lower place; the reference, rows that are its solve and rows without an error get
+    none (``<NA>``).
+
+    Parameters
+    ----------
+    table
+        The verdict's table (``model``, ``rel L2 error``).
+    ref
+        The reference model.
+    same_as_ref
+        Per row, whether it is the reference's solve.
+
+    Returns
+    -------
+    pandas.Series
+        Nullable integers, aligned with ``table``.
+
+    Examples
+    --------
+    >>> t = pd.DataFrame({"model": ["P2", "xpbd", "P1"], "rel L2 error": [0, .02, .01]})
+    >>> rank_by_error(t, "P2", t["model"] == "P2").tolist()
+    [<NA>, 2, 1]
+    """
+    err = table["rel L2 error"].where(~same_as_ref & np.isfinite(table["rel L2 error"]))
+    return err.rank(method="min").astype("Int64")
+
+
+def ranking_line(table: pd.DataFrame, ref: str) -> str:
+    """One line: every ranked model (:func:`rank_by_error`), closest first, with its error
+    and its static time as a ratio to the reference's.
+
+    Parameters
+    ----------
+    table
+        The verdict's table with its ``rank`` column.
+    ref
+        The reference model.
+
+    Returns
+    -------
+    str
+        Empty when nothing is ranked.
+
+    Examples
+    --------
+    >>> t = pd.DataFrame({"model": ["P2", "xpbd", "P1"], "rank": pd.array([None, 2, 1], "Int64"),
+    ...     "rel L2 error": [0, .02, .01], "static time (s)": [4.0, 8.0, 1.0]})
+    >>> ranking_line(t, "P2")
+    'By error against P2: 1. P1 1% (0.25× its time), 2. xpbd 2% (2×).'
+    """
+    ranked = table[table["rank"].notna()].sort_values(["rank", "static time (s)"])
+    if ranked.empty or not ref:
+        return ""
+    t_ref = float(table.set_index("model").at[ref, "static time (s)"])
+    parts = []
+    for i, (_, r) in enumerate(ranked.iterrows()):
+        ratio = float(r["static time (s)"]) / t_ref
+        when = f"{ratio:.2g}×" if np.isfinite(ratio) else "time n/a"
+        when = f"{when} its time" if i == 0 and np.isfinite(ratio) else when
+        parts.append(f"{int(r['rank'])}. {r['model']} {_pct(float(r['rel L2 error']))} ({when})")
+    return f"By error against {ref}: " + ", ".join(parts) + "."
 
 
 def _static_times(
@@ -400,7 +473,7 @@ def write_verdict_markdown(v: Verdict, path: str | Path) -> Path:
     from springfem.files import atomic_write_text
 
     path = Path(path)
-    lines = [f"# Verdict: {v.scene}", "", v.sentence, ""]
+    lines = [f"# Verdict: {v.scene}", "", v.sentence, ""] + ([v.ranking, ""] if v.ranking else [])
     lines += [f"- note: {n}" for n in v.notes] + ([""] if v.notes else [])
     lines.append(v.table.drop(columns=["message"]).to_markdown(index=False, floatfmt=".4g"))
     atomic_write_text(path, "\n".join(lines) + "\n")

@@ -90,7 +90,7 @@ class XPBDSettings:
     """
 
     dt: float = 1.0 / 60.0
-    substeps: int = 20
+    substeps: int = 40
     iterations: int = 2
     iteration: Iteration = "gauss-seidel"
     coupling: Coupling = "coupled"

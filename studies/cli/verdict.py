@@ -44,6 +44,7 @@ def cmd_verdict(args: argparse.Namespace) -> int:
             "static": v.static_pick,
             "dynamic": v.dynamic_pick,
             "sentence": v.sentence,
+            "ranking": v.ranking,
             "notes": v.notes,
             "warnings": [warning] if warning is not None else [],
             "rows": v.table.to_dict(orient="records"),
@@ -57,5 +58,7 @@ def cmd_verdict(args: argparse.Namespace) -> int:
         for note in v.notes:
             print(f"note: {note}")
         print(f"verdict: {v.sentence}")
+        if v.ranking:
+            print(v.ranking)
         print(f"wrote {md.with_suffix('.csv')} and {md}")
     return 0 if v.reference else 3

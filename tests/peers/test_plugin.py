@@ -32,7 +32,7 @@ def test_the_entry_point_registers_both_models():
 
 
 def test_compare_weighs_them_against_p1_neo_hookean():
-    """Sag of a fifth of the length: XPBD's default rest state (20 substeps of a 60 Hz frame)
+    """Sag of a fifth of the length: XPBD's default rest state (40 substeps of a 60 Hz frame)
     is closer to P1 neo-Hookean's tip than the network's, and within 5 % of it (the energies
     agree to second order; the substep error at 10-20 substeps is of order 1 %:
     tests/peers/test_xpbd.py); the network is another material (Cauchy relations) and only

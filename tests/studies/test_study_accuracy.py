@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 
 from springfem.scene import scene_from_dict
-from studies import analytic
+from studies import analytic, models
 from studies import study_accuracy as sa
 from studies.cache import CaseCache
 from studies.metrics import timoshenko_tip_deflection
@@ -50,15 +50,34 @@ def test_outputs(output):
     n = len(sa.SCENES) + len(EXTRA)
     # model + total per scene, discretisation on two, exact model/total and the specification's vs
     # P1-NH on every scene, the exact vs P1-NH on the isotropic ones (4 of 6)
-    own = {k: v for k, v in out.headline.items() if not k.startswith("corotational_")}
+    peers = models.plugins()
+    assert {"corotational", "xpbd", "mass-spring"} <= set(peers)
+    prefixes = tuple(p.replace("-", "_") + "_" for p in peers)
+    own = {k: v for k, v in out.headline.items() if not k.startswith(prefixes)}
     assert len(own) == 2 * n + len(sa.DISCRETISATION_HEADLINE) + 2 * n + 2 * (n - 2)
-    # the plug-in model co-rotational P1 (docs/plugins.rst): against the reference on every
-    # scene, against P1-NH on the isotropic ones
-    assert len(out.headline) - len(own) == n + (n - 2)
+    # the plug-in models (docs/plugins.rst, docs/peers.rst): against the reference on every
+    # scene whose law they take, against P1-NH on the isotropic ones (4 of 6); co-rotational
+    # P1 takes every law, XPBD and the network only the isotropic ones
+    isotropic = n - 2
+    per_peer = {"corotational": n + isotropic, "xpbd": 2 * isotropic, "mass-spring": 2 * isotropic}
+    for peer, count in per_peer.items():
+        keys = [k for k in out.headline if k.startswith(peer.replace("-", "_") + "_")]
+        assert len(keys) == count, (peer, keys)
     assert all(np.isfinite(v) for v in out.headline.values())
     json.dumps(out.headline)
-    assert len(out.findings) == 7 + 1  # one sentence on the plug-in
-    assert out.findings[-1].startswith("corotational (a plug-in model)")
+    assert len(out.findings) == 7 + len(peers)  # one sentence per plug-in
+    assert out.findings[7].startswith("corotational (a plug-in model)")
+
+
+def test_xpbd_is_p1_at_small_strain(output):
+    """XPBD's constraints linearise to the scene's linear elasticity on P1 tets
+    (docs/peers.rst#xpbd), so at these strains its total error is the same-mesh P1's
+    discretisation error, up to its O(h^2) substep bias (about 1 % at 20 substeps)."""
+    _, errors, _ = output
+    for name in ("cantilever", "cantilever-elongated"):
+        p1 = errors.at[name, "discretisation err L2"]
+        xpbd = errors.at[name, "xpbd total err L2"]
+        assert abs(xpbd - p1) < 0.05 * p1, (name, xpbd, p1)
 
 
 def test_corotational_is_p1_at_small_strain(output):
