@@ -232,7 +232,8 @@ def law_versus(scene: Scene, name: str, reference_law: str) -> str:
     law`` (linear FEM against a hyperelastic reference), ``small-strain calibration`` or
     ``stiffened calibration`` (a spring element calibrated to the law's small-strain
     tangent, plain or exponentially stiffened, against a finite-strain law: only the tissue
-    element equals a tissue law at finite strain), or ``other law``.
+    element equals a tissue law at finite strain), ``own law (...)`` (a plug-in model's own
+    law, such as XPBD's stable neo-Hookean energy), or ``other law``.
 
     Parameters
     ----------
@@ -264,6 +265,9 @@ def law_versus(scene: Scene, name: str, reference_law: str) -> str:
         if opts.stiffening == "law" and ref in TISSUE_LAWS:
             return "same law"
         return "small-strain calibration" if opts.stiffening == "off" else "stiffened calibration"
+    if m.kind == "plugin":  # its own law (a plug-in's ``law``, when it names one)
+        own = getattr(m.plugin, "law", None) or getattr(m.plugin, "_law", None)
+        return "same law" if own == ref else f"own law ({own})" if own else "own law"
     fem_scene, _, law = m.fem_settings(scene)
     law = (law or fem_scene.material.law).split("/")[0]
     if law == ref:

@@ -58,6 +58,8 @@ from springfem.scene import Scene
 from . import fem_laws, metrics, model_set, models
 from .compare import LARGE_STRAIN, max_principal_strain
 from .timing import interleaved, median
+from .verdict_rank import pct as _pct
+from .verdict_rank import rank_by_error, ranking_line, same_mesh_line
 
 #: Default tolerance: the largest relative L2 error a model may have to count.
 TOLERANCE = 0.05
@@ -66,6 +68,8 @@ TOLERANCE = 0.05
 STEPS = 20
 SAMPLE_SECONDS = 0.05
 MAX_STEPS = 2000
+#: The same mesh's P1 of a reference's law: the model error of a P1-based fast model.
+SAME_MESH_P1 = {"P2-NH": "P1-NH", "P2": "P1"}
 #: Warm static solves per model whose median is its static time (interleaved rounds).
 SOLVES = 3
 
@@ -337,6 +341,13 @@ def verdict(
             }
         )
     table = pd.DataFrame(rows)
+    p1 = SAME_MESH_P1.get(ref)
+    if p1 in names and outcomes[p1].ok:  # model error: against the same mesh's P1 of the law
+        u_p1 = outcomes[p1].u
+        table.insert(3, f"vs {p1} (same mesh)", [
+            metrics.relative_l2_error(outcomes[n].u, u_p1) if outcomes[n].ok and n != p1
+            else (0.0 if n == p1 else float("nan")) for n in names
+        ])  # fmt: skip
     # the reference competes too (a model within the tolerance but dearer is no answer);
     # the rows that are the same solve as the reference are the reference
     same_as_ref = table["model"].map(lambda n: alias.get(n, n) == alias.get(ref, ref))
@@ -348,72 +359,9 @@ def verdict(
     table.insert(3, "rank", ranked)
     v = Verdict(scene.name, tolerance, ref, table, static_pick, dynamic_pick, sentence, notes)
     v.ranking = ranking_line(table, ref)
+    if p1 in names and outcomes[p1].ok:
+        v.ranking += " " + same_mesh_line(table, ref, p1, same_as_ref)
     return v
-
-
-def rank_by_error(table: pd.DataFrame, ref: str, same_as_ref: pd.Series) -> pd.Series:
-    """Each model's place by its error against the reference (1: closest), ties sharing
-    the lower place; the reference, rows that are its solve and rows without an error get
-    none (``<NA>``).
-
-    Parameters
-    ----------
-    table
-        The verdict's table (``model``, ``rel L2 error``).
-    ref
-        The reference model.
-    same_as_ref
-        Per row, whether it is the reference's solve.
-
-    Returns
-    -------
-    pandas.Series
-        Nullable integers, aligned with ``table``.
-
-    Examples
-    --------
-    >>> t = pd.DataFrame({"model": ["P2", "xpbd", "P1"], "rel L2 error": [0, .02, .01]})
-    >>> rank_by_error(t, "P2", t["model"] == "P2").tolist()
-    [<NA>, 2, 1]
-    """
-    err = table["rel L2 error"].where(~same_as_ref & np.isfinite(table["rel L2 error"]))
-    return err.rank(method="min").astype("Int64")
-
-
-def ranking_line(table: pd.DataFrame, ref: str) -> str:
-    """One line: every ranked model (:func:`rank_by_error`), closest first, with its error
-    and its static time as a ratio to the reference's.
-
-    Parameters
-    ----------
-    table
-        The verdict's table with its ``rank`` column.
-    ref
-        The reference model.
-
-    Returns
-    -------
-    str
-        Empty when nothing is ranked.
-
-    Examples
-    --------
-    >>> t = pd.DataFrame({"model": ["P2", "xpbd", "P1"], "rank": pd.array([None, 2, 1], "Int64"),
-    ...     "rel L2 error": [0, .02, .01], "static time (s)": [4.0, 8.0, 1.0]})
-    >>> ranking_line(t, "P2")
-    'By error against P2: 1. P1 1% (0.25× its time), 2. xpbd 2% (2×).'
-    """
-    ranked = table[table["rank"].notna()].sort_values(["rank", "static time (s)"])
-    if ranked.empty or not ref:
-        return ""
-    t_ref = float(table.set_index("model").at[ref, "static time (s)"])
-    parts = []
-    for i, (_, r) in enumerate(ranked.iterrows()):
-        ratio = float(r["static time (s)"]) / t_ref
-        when = f"{ratio:.2g}×" if np.isfinite(ratio) else "time n/a"
-        when = f"{when} its time" if i == 0 and np.isfinite(ratio) else when
-        parts.append(f"{int(r['rank'])}. {r['model']} {_pct(float(r['rel L2 error']))} ({when})")
-    return f"By error against {ref}: " + ", ".join(parts) + "."
 
 
 def _static_times(
@@ -483,11 +431,6 @@ def write_verdict_markdown(v: Verdict, path: str | Path) -> Path:
 def _cheapest(rows: pd.DataFrame, column: str) -> str | None:
     rows = rows[np.isfinite(rows[column])]
     return None if rows.empty else str(rows.loc[rows[column].idxmin(), "model"])
-
-
-def _pct(x: float) -> str:
-    """``5%``, ``12.3%``, ``0.04%``."""
-    return f"{100 * x:.3g}%"
 
 
 def _unlike(row: pd.Series) -> str:
