@@ -8,7 +8,8 @@
 2. Largest load survived: the scene's loads times growing factors, solved statically by the
    spring model (energy, cosine torsion, the exact element), small-strain FEM (survives any
    load, but past 10 % of the body's size its solution is no solution: ``unphysical``) and
-   neo-Hookean Newton (diverges or inverts) and the plug-in models (XPBD's run to rest);
+   neo-Hookean Newton (diverges or inverts) and the plug-in models (XPBD's run to rest, and
+   its Jacobi variant's);
    what fails is recorded. A summary table and figure (``survival``) give every method's
    largest step and largest load.
 3. Near-incompressibility, on a scene with a beam-theory reference (the bundled bar): tip

@@ -21,7 +21,7 @@ from ..analytic import extent, reference_for
 from ..scenes import StudyScene, case_scene
 from .critical_step import measure_critical_step
 from .xpbd_step import VARIANTS as XPBD_VARIANTS
-from .xpbd_step import xpbd_step_case
+from .xpbd_step import xpbd_load_case, xpbd_step_case
 
 VERSION = 3
 
@@ -144,10 +144,11 @@ def grids(scenes: list[StudyScene], q: Settings) -> dict[str, list[dict]]:
         m = dict(series_methods(built.material.law))
         # the plug-in models (studies.models.plugins): static series where they apply,
         # explicit series where they have an explicit form; XPBD's step search
-        # (studies.study_stability.xpbd_step) in the dt series
+        # (studies.study_stability.xpbd_step) in the dt series, its Jacobi variant's run
+        # to rest beside the plug-in's in the load series
         peers, peers_x = models.plugins(built), models.plugins(built, explicit=True)
         xpbd = tuple(XPBD_VARIANTS) if "xpbd" in peers else ()
-        m = {"dt": (*m["dt"], *peers_x, *xpbd), "load": (*m["load"], *peers),
+        m = {"dt": (*m["dt"], *peers_x, *xpbd), "load": (*m["load"], *peers, *xpbd[1:]),
              "map": (*m["map"], *peers_x)}  # fmt: skip
 
         def case(kind: str, **kw) -> dict:
@@ -211,6 +212,8 @@ def load_case(case: dict) -> dict:
     a small-strain law, ``unphysical`` (largest displacement beyond :data:`UNPHYSICAL` of
     the body's size: the linear solve is no solution of the large-deformation problem).
     """
+    if case["method"] in XPBD_VARIANTS and case["method"] != "xpbd":
+        return xpbd_load_case(case)
     scene = case_scene(case, case["factor"])
     got = models.run(scene, case["method"])
     if not got.ok:

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from springfem.errors import SolverError
 from springfem.scene import Scene
 
 from .. import models
@@ -43,6 +44,9 @@ VARIANTS: dict[str, dict[str, Any]] = {"xpbd": {}, "xpbd-jacobi": {"iteration": 
 GROWTH = 100.0
 #: Largest substep tried, over the bound ``2 / omega_max``; smallest: :data:`BOTTOM`.
 TOP, BOTTOM = 1024.0, 1.0 / 64.0
+#: Frames at most of the Jacobi variant's run to rest (the plug-in's 20,000 cost minutes when
+#: rest never comes; docs/peers.rst's measured runs took at most 3,000).
+LOAD_MAX_FRAMES = 3000
 
 
 def xpbd_settings(method: str, h: float, damping: float | str = 0.0):
@@ -132,3 +136,29 @@ def xpbd_step_case(case: dict) -> dict[str, Any]:
     """A ``dt`` case of an XPBD variant (:func:`measure_xpbd_step`)."""
     scene = case_scene(case, 0.0)
     return measure_xpbd_step(scene, case["method"], case["steps"], case["bisections"])
+
+
+def xpbd_load_case(case: dict) -> dict[str, Any]:
+    """A ``load`` case of the Jacobi variant (the plug-in's own is ``xpbd``, through
+    :func:`studies.models.run`): its run to rest at the plug-in's settings with Jacobi
+    iteration and at most :data:`LOAD_MAX_FRAMES` frames, ``diverged`` when rest does not
+    come or the positions stop being finite, ``inverted`` with elements of J <= 0 at rest."""
+    from peers.xpbd import XPBD, XPBDSettings
+
+    from ..analytic import extent
+
+    scene = case_scene(case, case["factor"])
+    own = dict(models.get("xpbd").plugin.settings)
+    settings = XPBDSettings(**{**own, **VARIANTS[case["method"]], "max_frames": LOAD_MAX_FRAMES})
+    try:
+        out = XPBD(scene, settings).solve()
+    except SolverError as exc:
+        return {"status": "diverged", "message": str(exc)[:160], "u/size": float("nan")}
+    ratio = float(np.linalg.norm(out.u, axis=1).max() / max(extent(scene)))
+    if not out.converged:
+        msg = f"no rest after {out.frames} frames"
+        return {"status": "diverged", "message": msg, "u/size": ratio}
+    inv = int((scene.mesh.volumes(scene.mesh.points + out.u) <= 0).sum())
+    if inv:
+        return {"status": "inverted", "u/size": ratio, "message": f"{inv} inverted elements"}
+    return {"status": "ok", "u/size": ratio, "message": ""}

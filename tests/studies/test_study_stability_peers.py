@@ -81,12 +81,12 @@ def test_xpbd_unstable_substep_is_caught_by_energy_growth_not_only_by_nan():
 def test_peers_join_the_series_they_apply_to():
     """On the isotropic bar: the mass-spring network (a mechanical system) in the critical
     step and failure-map series, XPBD (no mechanical system) and its Jacobi variant in the
-    critical-step search, both peers in the largest-load series."""
+    critical-step search and the largest-load series, as the network."""
     q = StabilitySettings.quick()
     cases = grids([bar(10, 1, ("dt", "load", "map"))], q)
     got = {k: {c["method"] for c in v} for k, v in cases.items()}
     assert {"mass-spring", "xpbd", "xpbd-jacobi"} <= got["dt"]
-    assert {"mass-spring", "xpbd"} <= got["load"]
+    assert {"mass-spring", "xpbd", "xpbd-jacobi"} <= got["load"]
     assert "mass-spring" in got["map"] and "xpbd" not in got["map"]
 
 
@@ -100,3 +100,22 @@ def test_survival_table_takes_the_largest_ok_factor_and_the_first_failure():
     sv = survival({"dt": dt, "load": dl}).set_index("method")
     assert sv.loc["m", "max load factor"] == 100 and sv.loc["m", "first failing factor"] == 10
     assert np.isnan(sv.loc["x", "max load factor"]) and sv.loc["x", "largest step (s)"] == 2.0
+
+
+def test_jacobi_run_to_rest_fails_where_its_configured_substep_is_past_its_limit():
+    """Two independent measurements agree: the step search (loads off, undamped) puts
+    Jacobi's limit above the configured 1/1200 s substep on the 10x1x1 bar and below it on
+    the 20x2x2 bar (finer elements, higher omega_max); the run to rest under the bar's load
+    (auto damping, the largest-load series) then comes on the first and blows up on the
+    second."""
+    from studies.study_stability.cases import load_case
+    from studies.study_stability.xpbd_step import setting_substep
+
+    h = setting_substep("xpbd-jacobi")
+    for (nx, ny), fits in (((10, 1), True), ((20, 2), False)):
+        sc = bar(nx, ny, ("dt", "load"))
+        limit = measure_xpbd_step(case_scene(sc.case("t", VERSION), 0.0), "xpbd-jacobi",
+                                  steps=400, bisections=3)["dt_measured"]  # fmt: skip
+        assert (h <= limit) == fits
+        got = load_case(sc.case("t", VERSION, kind="load", method="xpbd-jacobi", factor=1))
+        assert (got["status"] == "ok") == fits, got
