@@ -1,5 +1,5 @@
-"""Study ``dynamics``: the spring elements against explicit P1 FEM of the same law, in
-undamped dynamics of an anisotropic tissue scene.
+"""Study ``dynamics``: the spring elements and the fast peers against explicit P1 FEM of the
+same law, in undamped dynamics of an anisotropic tissue scene and of its isotropic twin.
 
 Every model starts from its own static equilibrium under the scene's loads and is released
 (loads off): undamped symplectic Euler at half its own critical step
@@ -7,28 +7,32 @@ Every model starts from its own static equilibrium under the scene's loads and i
 energy per element), the stiffened exact element (``spring-stiffened``: one exponent per
 element) and the exact small-strain element (``spring-exact``), against explicit P1 of the
 scene's law on the same mesh (:class:`reference_fem.explicit.ExplicitFem`, the compiled
-anisotropic kernels). It reports the probe displacement error over time (relative L2 over
-the run and max), each model's energy balance (kinetic + strain − work, drift relative to
-its initial energy), the stable step each model uses, and the median cost of one step of
+anisotropic kernels), and the plug-in models weighed by default where they apply: those
+with an explicit form (co-rotational P1, the mass-spring network) the same way, XPBD by its
+own undamped substeps from its run to rest (:mod:`.xpbd_release`); a plug-in that does not
+apply has a row saying why. It reports the probe displacement error over time (relative L2
+over the run and max), each model's energy balance (kinetic + strain − work, drift relative
+to its initial energy), the stable step each model uses, and the median cost of one step of
 every model, interleaved in one process after a warm-up.
 
 The bundled run uses Land's beam (Land et al. 2015, problem 1: Guccione, fibres along the
 beam) made compressible for explicit dynamics: ``kappa = 50 C`` (explicit P1 has no
 pressure unknown), density 1000 kg/m³ in the scene's mm-kPa units, Land's 0.004 kPa as a
-dead traction on the bottom face. The run length is in Rayleigh periods of the reference's
-static deflection. The ventricle under a pressure pulse is not part of it: see
-docs/studies.rst. ``springfem study dynamics --scene FILE`` runs the same function on a
-user's compressible scene with a load (its first ``[[probe]]``, else the node farthest from
-the fixed nodes).
+dead traction on the bottom face, and the same beam in compressible neo-Hookean
+(``land-beam-nh``: ``E = C b_f``, ``nu = 0.45``), where the isotropic peers apply. The run
+length is in Rayleigh periods of the reference's static deflection. The ventricle under a
+pressure pulse is not part of it: see docs/studies.rst. ``springfem study dynamics --scene
+FILE`` runs the same function on a user's compressible scene with a load (its first
+``[[probe]]``, else the node farthest from the fixed nodes).
 
 The study is split into :mod:`.cases` (settings, models, the beam, the cases), :mod:`.work`
-(the period, one release run, the step cost), :mod:`.tables`, :mod:`.figures` and
-:mod:`.findings`.
+(the period, one release run, the step cost), :mod:`.xpbd_release`, :mod:`.tables`,
+:mod:`.figures` and :mod:`.findings`.
 
 Examples
 --------
 >>> [s.label for s in bundled_scenes(Settings.quick())]
-['land-beam']
+['land-beam', 'land-beam-nh']
 """
 
 from __future__ import annotations

@@ -19,7 +19,7 @@ from springfem.scene import Scene
 from .. import models
 from ..scenes import StudyScene
 
-STUDY, VERSION = "dynamics", 1
+STUDY, VERSION = "dynamics", 2
 
 #: The spring elements compared with explicit P1 of the same law: the tissue element (the
 #: law's own energy per element), the stiffened exact element (one exponent per element)
@@ -28,7 +28,12 @@ SPRINGS = ("spring-tissue", "spring-stiffened", "spring-exact")
 #: Line colours of the models (the reference is black).
 COLORS = {"spring-tissue": "tab:orange", "spring-stiffened": "tab:blue",
           "spring-exact": "tab:green", "spring-spec": "tab:purple",
-          "corotational": "goldenrod"}  # fmt: skip
+          "corotational": "goldenrod", "xpbd": "tab:red", "mass-spring": "tab:brown"}  # fmt: skip
+#: Plug-in models without an explicit form that bring their own time integration
+#: (:mod:`.xpbd_release`).
+OWN_DYNAMICS = ("xpbd",)
+#: The isotropic beam: neo-Hookean, ``E`` = Guccione's small-strain fibre modulus ``C b_f``.
+NH_NU = 0.45
 #: Land's beam, made compressible: ``kappa`` = this × ``C`` (as the explicit kernels' test).
 KAPPA_PER_C = 50.0
 #: Density of the bundled beam: 1000 kg/m³ in the scene's mm-kPa units (kg/mm³; forces in
@@ -112,15 +117,36 @@ def beam_table(divisions: tuple[int, int, int], load: float = 1.0) -> StudyScene
     return StudyScene(sc.label, table, roles=("release",))
 
 
+def isotropic_beam(divisions: tuple[int, int, int], load: float = 1.0) -> StudyScene:
+    """Land's beam of :func:`beam_table`, isotropic: compressible neo-Hookean with ``E`` the
+    Guccione law's small-strain fibre modulus ``C b_f`` and ``nu`` = :data:`NH_NU`, so that
+    the models of isotropic laws (co-rotational P1, XPBD, the mass-spring network) apply.
+
+    Examples
+    --------
+    >>> m = isotropic_beam((4, 1, 1)).build().material
+    >>> m.law, round(m.E, 6), m.nu
+    ('neo-hookean', 16.0, 0.45)
+    """
+    sc = beam_table(divisions, load)
+    g = sc.table["material"]
+    table = dict(sc.table)
+    table["material"] = {"law": "neo-hookean", "E": float(g["C"]) * float(g["b_f"]),
+                         "nu": NH_NU, "density": g["density"]}  # fmt: skip
+    table.pop("axes", None)
+    return StudyScene("land-beam-nh", table, roles=("release",))
+
+
 def bundled_scenes(s: Settings) -> list[StudyScene]:
-    """The compressible Guccione beam (Land's problem 1 made compressible).
+    """The compressible Guccione beam (Land's problem 1 made compressible) and its isotropic
+    neo-Hookean twin (:func:`isotropic_beam`).
 
     Examples
     --------
     >>> [x.label for x in bundled_scenes(Settings.quick())]
-    ['land-beam']
+    ['land-beam', 'land-beam-nh']
     """
-    return [beam_table(s.beam, s.load)]
+    return [beam_table(s.beam, s.load), isotropic_beam(s.beam, s.load)]
 
 
 def reference_model(scene: Scene) -> str:
@@ -151,10 +177,33 @@ def check_scene(sc: StudyScene) -> Scene:
 
 def spring_models(scene: Scene, s: Settings) -> list[str]:
     """The settings' spring models that apply to the scene (the tissue element needs a tissue
-    law), then the plug-in models with an explicit form on it (:func:`studies.models.plugins`:
+    law, the stiffened one a modulus to stiffen by), then the plug-in models with an
+    explicit form on it (:func:`studies.models.plugins`:
     ``corotational`` on a linear or neo-Hookean scene)."""
-    own = [m for m in s.models if models.get(m).applies(scene) is None]
+    own = [m for m in s.models if models.get(m).applies(scene) is None and _builds(m, scene)]
     return own + [m for m in models.plugins(scene, explicit=True) if m not in own]
+
+
+def _builds(model: str, scene: Scene) -> bool:
+    """Whether the model's mechanical system builds on the scene (the stiffened element
+    needs a stiffening modulus a neo-Hookean law does not give)."""
+    try:
+        models.get(model).system(scene)
+    except InputError:
+        return False
+    return True
+
+
+def own_dynamics(scene: Scene) -> list[str]:
+    """The plug-in models weighed by default that apply to the scene and bring their own
+    time integration (:data:`OWN_DYNAMICS`)."""
+    return [m for m in models.plugins(scene) if m in OWN_DYNAMICS]
+
+
+def not_applicable(scene: Scene) -> list[str]:
+    """The plug-in models weighed by default that do not apply to the scene (a row each in
+    the table, with the model's reason)."""
+    return [m for m in models.plugins() if models.get(m).applies(scene) is not None]
 
 
 def period_case(sc: StudyScene) -> dict[str, Any]:
@@ -164,17 +213,19 @@ def period_case(sc: StudyScene) -> dict[str, Any]:
 
 
 def release_cases(sc: StudyScene, s: Settings, t_end: float) -> list[dict[str, Any]]:
-    """The reference and every spring model, released from its static state for ``t_end``
-    seconds."""
+    """The reference, every spring model and XPBD, released from its static state for
+    ``t_end`` seconds, and a case for each plug-in model that does not apply (its row says
+    why)."""
     scene = sc.build()
-    names = [reference_model(scene), *spring_models(scene, s)]
+    names = [reference_model(scene), *spring_models(scene, s), *own_dynamics(scene),
+             *not_applicable(scene)]  # fmt: skip
     run = {"t_end": t_end, "samples": s.samples, "safety": s.safety}
     return [sc.case(STUDY, VERSION, kind="release", model=m, **run) for m in names]
 
 
 def cost_case(sc: StudyScene, s: Settings) -> dict[str, Any]:
-    """Every model's cost per step, interleaved in one process."""
+    """Every model's cost per step (XPBD: per substep), interleaved in one process."""
     scene = sc.build()
-    names = [reference_model(scene), *spring_models(scene, s)]
+    names = [reference_model(scene), *spring_models(scene, s), *own_dynamics(scene)]
     return sc.case(STUDY, VERSION, kind="cost", models=names, rounds=s.rounds, steps=s.steps,
                    safety=s.safety)  # fmt: skip

@@ -28,6 +28,8 @@ from springfem.scene import Scene
 
 from .. import models
 from ..scenes import case_scene
+from . import xpbd_release
+from .cases import OWN_DYNAMICS
 
 #: Static Newton of the preload: relative tolerance, iterations per load step.
 NEWTON_TOL, NEWTON_ITER = 1e-10, 40
@@ -106,6 +108,11 @@ def release_case(case: dict[str, Any]) -> dict[str, Any]:
     from springfem.mechanics import explicit
 
     scene = case_scene(case)
+    why = models.get(case["model"]).applies(scene)
+    if why is not None:
+        return {"status": "not applicable", "message": why[:200]}
+    if case["model"] in OWN_DYNAMICS:
+        return xpbd_release.release_case(case, probe_weights)
     system = models.get(case["model"]).system(scene)
     try:
         x_load = preload(system)
@@ -148,7 +155,8 @@ def release_case(case: dict[str, Any]) -> dict[str, Any]:
 
 
 def cost_case(case: dict[str, Any]) -> dict[str, Any]:
-    """Median wall time of one explicit step of every model, in one process, warm.
+    """Median wall time of one explicit step of every model (XPBD: one substep,
+    :func:`.xpbd_release.substep_timer`), in one process, warm.
 
     Each model runs from rest under the scene's loads at ``safety`` × its critical step at
     rest; after one untimed warm-up run, ``rounds`` rounds run ``steps`` steps of every
@@ -159,7 +167,9 @@ def cost_case(case: dict[str, Any]) -> dict[str, Any]:
 
     scene = case_scene(case)
     names = list(case["models"])
-    systems = {m: models.get(m).system(scene) for m in names}
+    own = {m: xpbd_release.substep_timer(scene, case["safety"]) for m in names
+           if m in OWN_DYNAMICS}  # fmt: skip
+    systems = {m: models.get(m).system(scene) for m in names if m not in own}
     dts = {m: case["safety"] * stable_time_step(s)[0] for m, s in systems.items()}
     times: dict[str, list[float]] = {m: [] for m in names}
     n = int(case["steps"])
@@ -177,11 +187,17 @@ def cost_case(case: dict[str, Any]) -> dict[str, Any]:
 
         return tick
 
+    def steps(m: str, k: int, tick=None) -> None:
+        if m in own:
+            own[m](k, (lambda: tick(0, 0.0, None, None)) if tick else (lambda: None))
+        else:
+            explicit(systems[m], dt=dts[m], steps=k, record_every=k, callback=tick)
+
     for m in names:  # warm-up: compiled kernels, caches
-        explicit(systems[m], dt=dts[m], steps=min(20, n), record_every=n)
+        steps(m, min(20, n))
     for _ in range(int(case["rounds"])):
         for m in names:  # no energy records inside the timed steps
-            explicit(systems[m], dt=dts[m], steps=n, record_every=n, callback=timer(m))
+            steps(m, n, timer(m))
     return {"step_seconds": {m: float(np.median(v)) for m, v in times.items()}}
 
 

@@ -20,8 +20,10 @@ from .. import models
 from ..analytic import extent, reference_for
 from ..scenes import StudyScene, case_scene
 from .critical_step import measure_critical_step
+from .xpbd_step import VARIANTS as XPBD_VARIANTS
+from .xpbd_step import xpbd_load_case, xpbd_step_case
 
-VERSION = 2
+VERSION = 3
 
 #: Spring variants of every series: energy and cosine torsion (the scene's other options),
 #: and the exact element.
@@ -141,9 +143,13 @@ def grids(scenes: list[StudyScene], q: Settings) -> dict[str, list[dict]]:
         built = s.build()
         m = dict(series_methods(built.material.law))
         # the plug-in models (studies.models.plugins): static series where they apply,
-        # explicit series where they have an explicit form
+        # explicit series where they have an explicit form; XPBD's step search
+        # (studies.study_stability.xpbd_step) in the dt series, its Jacobi variant's run
+        # to rest beside the plug-in's in the load series
         peers, peers_x = models.plugins(built), models.plugins(built, explicit=True)
-        m = {"dt": (*m["dt"], *peers_x), "load": (*m["load"], *peers), "map": (*m["map"], *peers_x)}
+        xpbd = tuple(XPBD_VARIANTS) if "xpbd" in peers else ()
+        m = {"dt": (*m["dt"], *peers_x, *xpbd), "load": (*m["load"], *peers, *xpbd[1:]),
+             "map": (*m["map"], *peers_x)}  # fmt: skip
 
         def case(kind: str, **kw) -> dict:
             return s.case("stability", VERSION, kind=kind, **kw)  # noqa: B023
@@ -181,7 +187,10 @@ def _inverted(scene: Scene, u: np.ndarray) -> int:
 
 
 def critical_step_case(case: dict) -> dict:
-    """Predicted and measured critical explicit step of one method (loads off)."""
+    """Predicted and measured critical explicit step of one method (loads off); for an XPBD
+    variant its largest surviving substep (:func:`.xpbd_step.xpbd_step_case`)."""
+    if case["method"] in XPBD_VARIANTS:
+        return xpbd_step_case(case)
     scene = case_scene(case, 0.0)
     system = models.get(case["method"]).system(scene)
     dt_pred, omega, ratio = measure_critical_step(system, case["steps"], case["bisections"])
@@ -203,6 +212,8 @@ def load_case(case: dict) -> dict:
     a small-strain law, ``unphysical`` (largest displacement beyond :data:`UNPHYSICAL` of
     the body's size: the linear solve is no solution of the large-deformation problem).
     """
+    if case["method"] in XPBD_VARIANTS and case["method"] != "xpbd":
+        return xpbd_load_case(case)
     scene = case_scene(case, case["factor"])
     got = models.run(scene, case["method"])
     if not got.ok:

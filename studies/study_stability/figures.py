@@ -80,3 +80,48 @@ def failure_map_figure(
         + ", ".join(f"{m} {v:.0%}" for m, v in ok_share.items())
         + ".",
     )
+
+
+def survival_figure(ctx: StudyContext, sv: pd.DataFrame, dt: pd.DataFrame) -> Figure:
+    """Every method's largest stable step (left) and largest load factor solved (right), the
+    plug-in peers in red; ``≥`` marks a method no factor of the series failed."""
+    plt = pyplot()
+    fig, ax = plt.subplots(1, 2, figsize=(11, 0.42 * len(sv) + 1.9), layout="constrained")
+    y = np.arange(len(sv))
+    colours = ["tab:red" if ("xpbd" in m or m == "mass-spring") else "tab:blue"
+               for m in sv.method]  # fmt: skip
+    step, load = sv["largest step (s)"].to_numpy(), sv["max load factor"].to_numpy()
+    ax[0].scatter(step, y, c=colours, s=40, zorder=3)
+    for i, v in enumerate(step):
+        if v == v:
+            ax[0].annotate(f"{v:.3g} s", (v, i), xytext=(6, -3), textcoords="offset points",
+                           fontsize=8)  # fmt: skip
+    h = dt["setting_h"].dropna()
+    if len(h):
+        ax[0].axvline(float(h.iloc[0]), color="k", ls="--", lw=1,
+                      label=f"XPBD's configured substep {float(h.iloc[0]):.3g} s")  # fmt: skip
+        ax[0].legend(fontsize=8, loc="upper left")
+    ax[0].set_xscale("log")
+    ax[0].set_xlabel("largest stable step (s): explicit step; XPBD: substep")
+    ax[0].set_title(f"largest step ({sv['dt scene'].iloc[0]})")
+    ax[1].scatter(load, y, c=colours, s=40, zorder=3)
+    for i, (v, bad) in enumerate(zip(load, sv["first failing factor"])):
+        text = ("≥ " if bad != bad else "") + f"{v:g}" if v == v else "not in this series"
+        ax[1].annotate(text, (v if v == v else np.nanmin(load), i), xytext=(6, -3),
+                       textcoords="offset points", fontsize=8)  # fmt: skip
+    ax[1].set_xscale("log")
+    ax[1].set_xlabel("largest load factor solved without failure (≥: none of the series failed)")
+    ax[1].set_title(f"largest load ({sv['load scene'].iloc[0]})")
+    for a in ax:
+        a.set_yticks(y, list(sv.method))
+        a.set_ylim(len(sv) - 0.5, -0.5)
+        a.margins(x=0.25)
+        a.grid(alpha=0.3, which="both")
+    steps = ", ".join(f"{m} {v:.3g} s" for m, v in zip(sv.method, step) if v == v)
+    return ctx.figure(
+        fig,
+        "survival.png",
+        "Largest stable step (left; XPBD: its largest surviving substep, the dashed line its "
+        "configured one) and largest load factor solved (right) of every method, the plug-in "
+        f"peers in red: {steps}.",
+    )

@@ -16,7 +16,7 @@ KEYS = {
 }
 #: The result columns each series' table shows.
 COLUMNS = {
-    "dt": ["scene", "method", "tets", "dt_pred", "dt_measured", "ratio"],
+    "dt": ["scene", "method", "tets", "dt_pred", "dt_measured", "ratio", "setting_h", "failure"],
     "load": ["scene", "method", "load_factor", "status", "u/size", "message"],
     "lock": ["scene", "method", "nu", "tip_ratio", "volume_change", "inverted"],
     "map": ["scene", "method", "load_factor", "dt_factor", "status"],
@@ -43,6 +43,43 @@ def frames(cases: dict[str, list[dict]], results: dict[str, list[dict]]) -> dict
     return out
 
 
+def survival(f: dict[str, pd.DataFrame]) -> pd.DataFrame:
+    """Every method's largest step and largest load: per method of the ``dt`` series, its
+    largest stable step (s) and ratio on the ``dt`` series' first scene, and, per method of
+    the ``load`` series, the largest load factor solved without failure on its first scene
+    (``nan`` where a method is not in the series) and the smallest that failed (``nan``:
+    none of the series' factors failed).
+
+    Examples
+    --------
+    >>> dt = pd.DataFrame({"scene": ["a"], "method": ["m"], "dt_measured": [2e-3],
+    ...                    "ratio": [1.0]})
+    >>> ld = pd.DataFrame({"scene": ["a", "a"], "method": ["m", "m"], "load_factor": [1, 10],
+    ...                    "status": ["ok", "diverged"]})
+    >>> survival({"dt": dt, "load": ld}).iloc[0].to_dict()["max load factor"]
+    1.0
+    """
+    dt, dl = f["dt"], f["load"]
+    dt = dt[dt.scene == dt.scene.iloc[0]] if len(dt) else dt
+    dl = dl[dl.scene == dl.scene.iloc[0]] if len(dl) else dl
+    rows = []
+    for m in dict.fromkeys([*dt["method"], *dl["method"]]):
+        d = dt[dt.method == m]
+        ok = dl[(dl.method == m) & (dl.status == "ok")]["load_factor"]
+        bad = dl[(dl.method == m) & (dl.status != "ok")]["load_factor"]
+        rows.append({
+            "method": m,
+            "dt scene": d.scene.iloc[0] if len(d) else "",
+            "largest step (s)": float(d.dt_measured.iloc[0]) if len(d) else float("nan"),
+            "step / 2/ω_max": float(d.ratio.iloc[0]) if len(d) else float("nan"),
+            "load scene": dl.scene.iloc[0] if (dl.method == m).any() else "",
+            "max load factor": (float(ok.max()) if len(ok) else 0.0) if (dl.method == m).any()
+            else float("nan"),
+            "first failing factor": float(bad.min()) if len(bad) else float("nan"),
+        })  # fmt: skip
+    return pd.DataFrame(rows)
+
+
 def write_tables(ctx: StudyContext, f: dict[str, pd.DataFrame]) -> list[Table]:
     """Write the tables of the series that ran: critical step, largest load, locking, failure
     map.
@@ -52,7 +89,10 @@ def write_tables(ctx: StudyContext, f: dict[str, pd.DataFrame]) -> list[Table]:
             "critical_dt",
             "Predicted critical step 2/ω_max against the measured largest stable step "
             "(bisection, undamped runs from a perturbed rest state, loads off); ratio = "
-            "measured / predicted.",
+            "measured / predicted. XPBD (its own settings, and Jacobi): the largest substep "
+            "h it survives (finite, no inverted element, energy within 100x of its start) "
+            "against 2/ω_max of its own energy; setting_h is its configured substep "
+            "dt/substeps, failure why the first failing step failed.",
         ),
         "load": (
             "max_load",
@@ -70,4 +110,11 @@ def write_tables(ctx: StudyContext, f: dict[str, pd.DataFrame]) -> list[Table]:
             "with inverted elements.",
         ),
     }
-    return [ctx.table(f[k], name, caption) for k, (name, caption) in captions.items() if len(f[k])]
+    out = [ctx.table(f[k], name, caption) for k, (name, caption) in captions.items() if len(f[k])]
+    if len(f["dt"]) or len(f["load"]):
+        out.insert(0, ctx.table(survival(f), "survival", (
+            "Every method's largest step and largest load: the largest stable explicit step "
+            "(XPBD: the largest surviving substep) on the critical-step series' first scene, "
+            "and the largest load factor solved without failure on the largest-load series' "
+            "first scene (nan: not in that series).")))  # fmt: skip
+    return out

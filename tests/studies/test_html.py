@@ -41,8 +41,8 @@ def test_the_page_holds_what_the_study_wrote(page):
     embedded (no file reference left), the command named."""
     path, out = page
     text = path.read_text()
-    assert text.count("<table") >= len(out.tables) and len(out.tables) == 4
-    assert text.count("data:image/png;base64,") == len(out.figures) == 2
+    assert text.count("<table") >= len(out.tables) and len(out.tables) == 5
+    assert text.count("data:image/png;base64,") == len(out.figures) == 3
     assert "springfem study stability --quick" in text
     assert 'src="' not in text.replace('src="data:image/png;base64,', "")  # self-contained
     ((folder, summary),) = read_outputs(path.parent)

@@ -68,10 +68,11 @@ def test_series_follow_the_scene_roles_and_the_law():
     b = bar(10, 1, ("load",))
     g = grids([b], q)
     assert not g["dt"] and not g["lock"] and not g["map"]
-    # the series' own methods and the default plug-in models (co-rotational P1)
+    # the series' own methods, the default plug-in models (co-rotational P1) and XPBD's
+    # Jacobi variant
     peers = models.plugins(b.build())
     assert "corotational" in peers
-    assert len(g["load"]) == (len(series_methods("linear")["load"]) + len(peers)) * len(
+    assert len(g["load"]) == (len(series_methods("linear")["load"]) + len(peers) + 1) * len(
         q.load_factors
     )
     user = type(b)("user", b.table)  # no roles, no closed-form reference

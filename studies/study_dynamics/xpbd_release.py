@@ -1,0 +1,131 @@
+"""XPBD in the dynamics study: its own frames as the time integration.
+
+XPBD has no forces to integrate explicitly (:class:`peers.plugin.XPBDModel` has no
+mechanical system), so its release run is its own: the static state is its run to rest
+(:meth:`peers.xpbd.XPBD.solve`, ``auto`` damping) under the scene's loads, then undamped
+substeps with the loads off. The substep is the plug-in's own ``dt / substeps`` unless that
+exceeds ``safety`` times ``2 / omega_max`` of XPBD's own energy
+(:class:`peers.xpbd.StableNeoHookean`, at rest and loaded, as every explicit model's step);
+then the substeps per frame are raised until it does not (the stability study measures how
+little past that bound XPBD survives: :mod:`studies.study_stability.xpbd_step`). A frame of
+``substeps`` substeps advances exactly as ``substeps`` frames of one, so the release runs
+frames of one substep and reads the probe at every substep; the energy balance is
+kinetic + stable neo-Hookean strain (the loads are off, no work).
+
+Examples
+--------
+>>> substeps_for(1.0 / 60.0, 20, 1e-4)   # 1/60 s frames need 167 substeps of <= 1e-4 s
+167
+>>> substeps_for(1.0 / 60.0, 20, 1.0)    # the setting's 20 already fit
+20
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from springfem.errors import SolverError
+from springfem.scene import Scene
+
+from .. import models
+from ..scenes import case_scene
+
+
+def substeps_for(dt: float, substeps: int, h_max: float) -> int:
+    """The substeps per frame of ``dt`` so that ``dt / substeps <= h_max`` (at least the
+    setting's ``substeps``)."""
+    return max(int(substeps), math.ceil(dt / h_max * (1 - 1e-12)))
+
+
+def xpbd_solver(scene: Scene, safety: float, x_load: np.ndarray | None = None):
+    """The XPBD of ``scene`` at the plug-in's settings with the substeps raised as the module
+    docstring says; its critical steps ``(at rest, loaded)`` (loaded: at ``x_load``, else
+    the rest value)."""
+    from peers.xpbd import XPBD, StableNeoHookean, XPBDSettings
+    from springfem.mechanics import stable_time_step
+
+    own = XPBDSettings(**dict(models.get("xpbd").plugin.settings))
+    energy = StableNeoHookean(scene)
+    rest = stable_time_step(energy)[0]
+    loaded = stable_time_step(energy, x=x_load)[0] if x_load is not None else rest
+    n = substeps_for(own.dt, own.substeps, safety * min(rest, loaded))
+    return XPBD(scene, replace(own, substeps=n)), (rest, loaded)
+
+
+def release_case(case: dict[str, Any], probe_weights) -> dict[str, Any]:
+    """XPBD released from its rest state: the keys of
+    :func:`studies.study_dynamics.work.release_case` (``dt`` is the substep, ``steps`` the
+    substeps) and ``frames_to_rest``, ``substeps_per_frame``."""
+    from peers.xpbd import XPBD, StableNeoHookean
+
+    scene = case_scene(case)
+    solver, _ = xpbd_solver(scene, case["safety"])
+    static = solver.solve()
+    if not static.converged:
+        return {"status": "failed", "message": f"xpbd: no rest after {static.frames} frames"}
+    x = solver.x0 + static.u
+    solver, (dt_rest, dt_load) = xpbd_solver(scene, case["safety"], x)
+    s = solver.settings
+    h = s.dt / s.substeps
+    run = XPBD(scene, replace(s, dt=h, substeps=1, damping=0.0))
+    energy = StableNeoHookean(scene)
+    t_end = float(case["t_end"])
+    steps = int(np.ceil(t_end / h))
+    nodes, w, _ = probe_weights(scene)
+    X = run.x0[nodes]
+    U = np.full((steps + 1, 3), np.nan)
+    U[0] = w @ (x[nodes] - X)
+    v, a, m = np.zeros_like(x), np.zeros_like(x), run.masses[:, None]
+    every = max(1, steps // int(case["samples"]))
+    et, E = [0.0], [energy.strain_energy(x)]
+    out: dict[str, Any] = {"status": "ok", "message": "", "dt_crit_rest": dt_rest,
+                           "dt_crit_loaded": dt_load, "dt": h, "steps": steps,
+                           "frames_to_rest": static.frames,
+                           "substeps_per_frame": s.substeps}  # fmt: skip
+    t0 = time.perf_counter()
+    for k in range(1, steps + 1):
+        run.advance(x, v, a)
+        if not np.isfinite(x).all():
+            out.update(status="blew up", message=f"xpbd: positions not finite at substep {k}")
+            break
+        U[k] = w @ (x[nodes] - X)
+        if k % every == 0:
+            et.append(k * h)
+            E.append(0.5 * float(np.sum(m * v * v)) + energy.strain_energy(x))
+    out["seconds"] = time.perf_counter() - t0
+    t = np.linspace(0.0, t_end, int(case["samples"]) + 1)
+    tk = h * np.arange(steps + 1)
+    ok = np.isfinite(U[:, 0])
+    out["t"] = t.tolist()
+    out["u"] = np.column_stack(
+        [np.interp(t, tk[ok], U[ok, i], right=np.nan) for i in range(3)]
+    ).tolist()
+    if out["status"] == "ok":
+        out["energy_t"], out["energy"] = et, E
+    return out
+
+
+def substep_timer(scene: Scene, safety: float):
+    """A function ``(steps, tick)`` running ``steps`` undamped XPBD substeps from rest under
+    the loads, calling ``tick()`` after each (the cost case's clock)."""
+    from peers.xpbd import XPBD
+
+    solver, _ = xpbd_solver(scene, safety)
+    s = solver.settings
+    run = XPBD(scene, replace(s, dt=s.dt / s.substeps, substeps=1, damping=0.0))
+
+    def go(steps: int, tick) -> None:
+        x, v = run.start()
+        a = run.accelerations(x)
+        for _ in range(steps):
+            run.advance(x, v, a)
+            tick()
+        if not np.isfinite(x).all():
+            raise SolverError("xpbd: positions not finite in the timed substeps")
+
+    return go
