@@ -105,6 +105,35 @@ def test_small_strain_moduli_are_cauchy_born_and_obey_the_cauchy_relations():
     assert abs(-S[0, 1] / S[0, 0] - 0.3) > 0.05
 
 
+def test_van_gelder_rule_on_the_six_tet_lattice_has_its_closed_form_moduli():
+    """van Gelder's claim is two-dimensional: on equilateral triangles his rule
+    k = E sum A / l^2 = (sqrt 3 / 2) E gives the triangular lattice's Young's modulus
+    2 k / sqrt 3 = E exactly (nu = 1/3). Its volume form has no such lattice in 3D. On the
+    box lattice of six tets per cube (every tet has one edge along each axis, two face
+    diagonals and the body diagonal) the bond sum gives, by hand, C_1111 = E (1 + 1/3 + 1/9)
+    = 13/9 E and C_1122 = C_1212 = E (1/6 + 1/9) = 5/18 E: Young's modulus along an axis
+    (C11 - C12)(C11 + 2 C12)/(C11 + C12) = 42/31 E, 35 % stiffer than E, and nu = 5/31.
+    The network's energy under affine strains has exactly these moduli
+    (docs/peers.rst#mass-spring)."""
+    E = 2.0e3
+    box = {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [3, 3, 3], "split": "six"}
+    fix = [{"region": "x_min", "fix": ["x", "y", "z"]}]
+    s = MassSpring(scene_from_dict({"mesh": box, "material": dict(MATERIAL, E=E), "boundary": fix}))
+    t = 1e-6
+
+    def modulus(eps):  # 2 W / (V t^2), V = 1
+        return 2 * s.strain_energy(s.x0 + s.x0 @ np.asarray(eps).T) / t**2
+
+    c11 = modulus(np.diag([t, 0, 0]))
+    c12 = (modulus(np.diag([t, t, 0])) - 2 * c11) / 2
+    shear = np.zeros((3, 3))
+    shear[0, 1] = shear[1, 0] = t / 2
+    c44 = modulus(shear)
+    np.testing.assert_allclose([c11, c12, c44], [13 / 9 * E, 5 / 18 * E, 5 / 18 * E], rtol=1e-5)
+    young = (c11 - c12) * (c11 + 2 * c12) / (c11 + c12)
+    np.testing.assert_allclose([young / E, c12 / (c11 + c12)], [42 / 31, 5 / 31], rtol=1e-5)
+
+
 def test_static_newton_and_explicit_run_on_a_gmsh_mesh(gmsh_scene):
     """Newton converges; an undamped explicit run (velocity Verlet, 0.9 of the stable step)
     conserves the energy to 1 %; with damping the run loses energy."""
