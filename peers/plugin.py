@@ -53,7 +53,21 @@ class XPBDModel:
         Weighed by the studies without being named.
     **settings
         Fields of :class:`peers.xpbd.XPBDSettings`.
+
+    Attributes
+    ----------
+    sweep
+        The settings the speed-accuracy study charts (:data:`SWEEP`, substeps x iterations;
+        see :class:`~springfem.model_api.ModelPlugin`); :meth:`with_settings` makes each.
     """
+
+    #: Substeps x iterations, most telling first (a quick study takes the first few): the
+    #: default and 80 substeps (20 to 40 is not yet the h² regime on a slender bar), the rest
+    #: of the substep series at 2 iterations, then 1 and 4 iterations at 20 substeps.
+    SWEEP: tuple[Mapping[str, Any], ...] = tuple(
+        {"substeps": n, "iterations": k} for n, k in ((20, 2), (80, 2), (40, 2), (10, 2),
+                                                     (20, 1), (20, 4))
+    )  # fmt: skip
 
     def __init__(self, name: str = "xpbd", label: str | None = None, default: bool = True,
                  **settings: Any):  # fmt: skip
@@ -63,6 +77,17 @@ class XPBDModel:
         self.label = label or f"XPBD stable neo-Hookean ({s.substeps} substeps x {s.iterations})"
         self.default = default
         self.settings: Mapping[str, Any] = asdict(s)
+        self.sweep: tuple[Mapping[str, Any], ...] = self.SWEEP
+
+    def with_settings(self, **settings: Any) -> XPBDModel:
+        """The same model with some settings changed (its label follows them).
+
+        Examples
+        --------
+        >>> XPBDModel().with_settings(substeps=40).label
+        'XPBD stable neo-Hookean (40 substeps x 2)'
+        """
+        return XPBDModel(self.name, None, self.default, **{**self.settings, **settings})
 
     def __repr__(self) -> str:
         return f"XPBDModel({self.name!r}, settings={dict(self.settings)!r})"
