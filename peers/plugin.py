@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from springfem.errors import InputError, SolverError
+from springfem.mechanics.limits import Deadline
 from springfem.mechanics.system import MechanicalSystem
 from springfem.model_api import ModelSolution, SystemModel, model_result
 from springfem.scene import Scene
@@ -113,8 +114,17 @@ class XPBDModel:
         SolverError
             When rest does not come within ``max_frames`` (a moving state is no static
             answer; the error names the frames) or the positions stop being finite.
+        SolveStopped
+            At the time cap of :func:`springfem.mechanics.limits.solve_limits` (``--max-time``,
+            a study's budget): a watchdog interrupts the frames.
         """
-        out = self._solver(scene).solve()
+        deadline = Deadline()
+        deadline.progress = "frames to rest"
+        try:
+            with deadline.watch():
+                out = self._solver(scene).solve()
+        except KeyboardInterrupt:
+            raise deadline.stopped(interrupted=True) from None
         if not out.converged:
             s = self._settings
             raise SolverError(

@@ -16,9 +16,9 @@ The plug-in models (:func:`studies.models.plugins`, e.g. ``corotational``) that 
 the scene get their own ``static`` points and, with an explicit form, ``explicit`` points
 at the last explicit setting. A plug-in with a ``sweep`` of its own settings
 (:class:`springfem.model_api.ModelPlugin`; XPBD's substeps x iterations) gets one
-``static`` point per sweep entry (the settings' ``sweep`` first entries), solved by the
-model ``with_settings`` those settings; its method name shows them
-(``xpbd 20x2 static``, :func:`method_name`).
+``static`` point per sweep entry (the settings' ``sweep`` first entries; past the first
+only up to level ``sweep_levels``), solved by the model ``with_settings`` those settings;
+its method name shows them (``xpbd 20x2 static``, :func:`method_name`).
 
 Every case is a :meth:`~studies.scenes.StudyScene.case` of the scene with ``model``,
 ``solution``, ``factor`` (the refinement level, :mod:`studies.study_convergence.levels`)
@@ -80,6 +80,10 @@ class Settings:
         --tolerance``) and per fast model.
     sweep
         Plug-in sweeps: their first this many entries (``None``: all).
+    sweep_levels
+        The sweeps' entries after the first run on the levels up to this one (``None``:
+        all): XPBD's static answer takes hundreds of frames on a slender bar, minutes at
+        80 substeps on level 4.
     """
 
     levels: tuple[int, ...] = (1, 2, 4)
@@ -89,6 +93,7 @@ class Settings:
     max_tets: int = 40_000
     max_error: float = 0.05
     sweep: int | None = None
+    sweep_levels: int | None = 2
 
     @classmethod
     def full(cls) -> Settings:
@@ -99,7 +104,8 @@ class Settings:
     def quick(cls) -> Settings:
         """Levels 1, 2 and the reference at 4, one explicit setting."""
         return cls(levels=(1, 2), reference=4, explicit=((1e-6, 0.5),),
-                   implicit={100.0: 1, 1e4: 2}, max_tets=5_000, sweep=2)  # fmt: skip
+                   implicit={100.0: 1, 1e4: 2}, max_tets=5_000, sweep=2,
+                   sweep_levels=None)  # fmt: skip
 
 
 def bundled_scenes(settings: Settings) -> list[StudyScene]:
@@ -184,8 +190,9 @@ def points(s: StudyScene, scene: Scene, levels: list[int], q: Settings) -> list[
         tol, safety = q.explicit[-1]  # the exact element: the last explicit setting only
         add(EXACT, "explicit", tol=tol, dt_safety=safety)
         for m in peers:  # the plug-in models: a point per sweep entry, or one
-            for own in sweep(m, q) or [None]:
-                out.append(point_case(s, m, "static", k, {"model": own} if own else {}))
+            for j, own in enumerate(sweep(m, q) or [None]):
+                if j == 0 or q.sweep_levels is None or k <= q.sweep_levels:
+                    out.append(point_case(s, m, "static", k, {"model": own} if own else {}))
         for m in peers_explicit:
             add(m, "explicit", tol=tol, dt_safety=safety)
     return out

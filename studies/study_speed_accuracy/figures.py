@@ -83,7 +83,7 @@ def pareto_figure(
     plt = pyplot()
 
     good = df[(df["status"] == "ok") & (df[column] > 0)]
-    fig, (ax, side) = plt.subplots(1, 2, figsize=(14, 6.2), width_ratios=(2.2, 1))
+    fig, (ax, side) = plt.subplots(1, 2, figsize=(14, 7.6), width_ratios=(2.2, 1))
     entry = good["method"].map(lambda m: _family(m)[0])
     colour: dict = {}
     for method, grp in good.groupby(entry, sort=False):
@@ -120,7 +120,7 @@ def pareto_figure(
     ax.set_ylabel(f"{column} vs {reference} (%)")
     ax.set_title(f"{label}: time against error (labels: refinement factor[:settings])")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="center right", ncol=2, framealpha=0.85)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=4)
     panel = _sweep_panel(side, good, colour)
     if not panel:
         side.set_axis_off()

@@ -3,10 +3,10 @@ and the plug-ins' sweeps of their own settings (error against each setting, obse
 
 A plug-in's sweep (:func:`.cases.sweep`, e.g. XPBD's substeps x iterations) is read one
 setting at a time: the points whose other settings are the plug-in's defaults, on the
-finest level, error against the P1-NH answer of the same mesh (:data:`.tables.SAME`, the
-error the setting controls) where the table has it, else against the reference. The
-observed rate ``p`` is the slope of ``-log(error)`` on ``log(setting)``, least squares
-(``error ~ setting**-p``).
+finest level where the setting varies, error against the P1-NH answer of the same mesh
+(:data:`.tables.SAME`, the error the setting controls) where the table has it, else against
+the reference. The observed rate ``p`` is the slope of ``-log(error)`` on ``log(setting)``,
+least squares (``error ~ setting**-p``).
 """
 
 from __future__ import annotations
@@ -80,34 +80,41 @@ def observed_rate(values, errors) -> float:
 def sweep_findings(
     df: pd.DataFrame, cases: list[dict], err: str, finest: str
 ) -> tuple[list[str], dict[str, float]]:
-    """For each plug-in sweep and each of its settings that varies on the finest level
-    (the others at the plug-in's defaults): the errors by setting and the observed rate,
-    a sentence each, and headline keys ``rate_<model>_<setting>_<level>``."""
+    """For each plug-in sweep and each of its settings that varies (the others at the
+    plug-in's defaults), on the finest level where it varies (``finest`` first): the errors
+    by setting and the observed rate, a sentence each, and headline keys
+    ``rate_<model>_<setting>_<level>``."""
     from .. import models
 
     own = [c["setting"].get("model") or {} for c in cases]
-    ok = (df["status"] == "ok") & (df["mesh"] == finest)
+    ok = df["status"] == "ok"
     column = SAME if SAME in df and df.loc[ok, SAME].notna().any() else err
     against = "P1-NH on the same mesh" if column == SAME else "the reference"
+    meshes = df.sort_values("tets", ascending=False, kind="stable")["mesh"].unique().tolist()
+    meshes = sorted(meshes, key=lambda m: m != finest)  # stable: finest, then by size
     lines, rates = [], {}
     for name in dict.fromkeys(c["model"] for c, o in zip(cases, own, strict=True) if o):
         defaults = models.get(name).plugin.settings
-        rows = [i for i, c in enumerate(cases) if c["model"] == name and own[i] and ok.iloc[i]]
-        for key in dict.fromkeys(k for i in rows for k in own[i]):
-            series = sorted(
-                (own[i][key], float(df[column].iloc[i]))
-                for i in rows
-                if all(v == defaults.get(k) for k, v in own[i].items() if k != key)
-            )
-            if len({v for v, _ in series}) < 2:
+        swept = [i for i, c in enumerate(cases) if c["model"] == name and own[i] and ok.iloc[i]]
+        for key in dict.fromkeys(k for i in swept for k in own[i]):
+            for mesh in meshes:
+                series = sorted(
+                    (own[i][key], float(df[column].iloc[i]))
+                    for i in swept
+                    if df["mesh"].iloc[i] == mesh
+                    and all(v == defaults.get(k) for k, v in own[i].items() if k != key)
+                )
+                if len({v for v, _ in series}) >= 2:
+                    break
+            else:
                 continue
             rate = observed_rate(*zip(*series, strict=True))
-            fixed = ", ".join(f"{k} {v}" for k, v in defaults.items() if k in own[rows[0]]
+            fixed = ", ".join(f"{k} {v}" for k, v in defaults.items() if k in own[swept[0]]
                               and k != key)  # fmt: skip
             errors = ", ".join(f"{v}: {100 * e:.3g}%" for v, e in series)
             lines.append(
-                f"{name} on {finest}, error against {against} by {key} ({fixed}): {errors}; "
+                f"{name} on {mesh}, error against {against} by {key} ({fixed}): {errors}; "
                 f"observed rate {rate:.2f} (error ~ {key}^-p, least squares)."
             )
-            rates[f"rate_{name}_{key}_{finest}"] = round(rate, 4)
+            rates[f"rate_{name}_{key}_{mesh}"] = round(rate, 4)
     return lines, rates

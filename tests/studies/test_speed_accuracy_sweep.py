@@ -112,3 +112,28 @@ def test_figure_shows_every_model_with_its_front(block_sweep, tmp_path):
     ctx = StudyContext("speed_accuracy", tmp_path, True, CaseCache(tmp_path, "s"), False)
     fig = pareto_figure(ctx, df, SAME, "P1-NH", "front.", "block")
     assert fig.path.is_file() and "each model's own front" in fig.caption
+
+
+def test_sweep_entries_after_the_first_stop_at_sweep_levels():
+    """Full settings on levels 1, 2, 4: the whole sweep on 1 and 2, the first (default)
+    setting alone on 4."""
+    pts = [c for c in sa.points(BLOCK, BLOCK.build(), [1, 2, 4], sa.Settings.full())
+           if c["model"] == "xpbd"]  # fmt: skip
+    by_level = {k: [c["setting"]["model"] for c in pts if c["factor"] == k] for k in (1, 2, 4)}
+    assert len(by_level[1]) == len(by_level[2]) == 6
+    assert by_level[4] == [{"substeps": 20, "iterations": 2}]
+
+
+def test_xpbd_stops_at_the_time_cap():
+    """A run that never rests (``rest_tol = 0``) stops at the cap of ``solve_limits`` (a
+    study's budget, ``--max-time``) instead of running its frames out."""
+    import time
+
+    from springfem.mechanics.limits import SolveStopped, solve_limits
+
+    model = XPBDModel(rest_tol=0.0, max_frames=20_000)  # uncapped: ~25 s, then a SolverError
+    scene = BLOCK.build()
+    t0 = time.monotonic()
+    with solve_limits(max_time=0.5), pytest.raises(SolveStopped, match="frames to rest"):
+        model.solve(scene)
+    assert time.monotonic() - t0 < 10.0
