@@ -44,28 +44,51 @@ def _family(method: str) -> tuple[str, str]:
     return method, ""
 
 
+def _settings(text: str) -> dict[str, str]:
+    """A sweep point's settings back from its table text (``substeps 20, iterations 2``)."""
+    return dict(part.rsplit(" ", 1) for part in str(text).split(", "))
+
+
 def _sweep_panel(ax, good: pd.DataFrame, colour: dict) -> bool:
     """The sweeps' error against P1-NH on the same mesh (:data:`.tables.SAME`) against CPU
-    time, a line per model and level through its settings; ``False``: nothing to draw."""
-    swept = good[good["method"].str.split().str.len() == 3]
-    if SAME not in good or swept[SAME].notna().sum() < 2:
+    time: per model and level a line through each setting's series (the other settings at
+    the plug-in's defaults; solid: the first setting, dotted: the next); ``False``: nothing
+    to draw."""
+    from .. import models
+
+    swept = good[(good["method"].str.split().str.len() == 3) & (good[SAME] > 0)]
+    if SAME not in good or len(swept) < 2:
         return False
-    groups = swept.groupby([swept["method"].map(model_of), "factor"])
-    for j, ((model, factor), grp) in enumerate(groups):
-        g = grp[grp[SAME] > 0].sort_values("seconds")
-        ax.plot(g["seconds"], 100 * g[SAME], marker=MARKERS.get(model, "o"), ms=6, lw=0.9,
-                ls=("-", "--", ":", "-.")[j % 4], color=colour.get(model), mec="k", mew=0.4,
-                label=f"{model}, level {factor}")  # fmt: skip
-        for _, r in g.iterrows():
-            ax.annotate(_family(r["method"])[1], (r["seconds"], 100 * r[SAME]), fontsize=6,
-                        xytext=(3, 2), textcoords="offset points")  # fmt: skip
+    shades = ("-", ":", "-.", "--")
+    for j, ((model, factor), grp) in enumerate(
+        swept.groupby([swept["method"].map(model_of), "factor"])
+    ):
+        defaults = {k: str(v) for k, v in models.get(model).plugin.settings.items()}
+        own = grp["setting"].map(_settings)
+        keys = list(dict.fromkeys(k for o in own for k in o))
+        alpha = 1.0 - 0.25 * (j % 3)
+        ax.scatter(grp["seconds"], 100 * grp[SAME], marker=MARKERS.get(model, "o"), s=36,
+                   color=colour.get(model), edgecolor="k", linewidth=0.4, alpha=alpha,
+                   label=f"{model}, level {factor}", zorder=3)  # fmt: skip
+        for i, key in enumerate(keys):
+            on = [all(v == defaults.get(k) for k, v in o.items() if k != key) for o in own]
+            line = grp[on].assign(v=[float(o[key]) for o, keep in zip(own, on) if keep])
+            line = line.sort_values("v")
+            if len(line) < 2:
+                continue
+            ax.plot(line["seconds"], 100 * line[SAME], ls=shades[i % 4], lw=0.9,
+                    color=colour.get(model), alpha=alpha, zorder=2,
+                    label=f"{model}, level {factor}: by {key}")  # fmt: skip
+        for _, r in grp.iterrows():
+            ax.annotate(f"{r['factor']}:{_family(r['method'])[1]}", (r["seconds"], 100 * r[SAME]),
+                        fontsize=6, xytext=(3, 2), textcoords="offset points")  # fmt: skip
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("CPU time (s)")
     ax.set_ylabel(f"{SAME} (%)")
     ax.set_title("sweeps: error against P1-NH Newton, same mesh", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=6)
     return True
 
 
