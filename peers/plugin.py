@@ -10,8 +10,8 @@
     :class:`peers.mass_spring.MassSpring` through :class:`~springfem.model_api.SystemModel`:
     Newton for the static answer, the core's integrators for timed runs.
 
-Both are weighed by default where they apply (``default`` true: the verdict, the comparison
-and the studies of docs/peers.rst#in-the-studies). The entry
+Both are weighed by default where they apply (``default`` true: the verdict and the
+studies of docs/peers.rst#in-the-studies). The entry
 point ``peers = "peers.plugin:models"`` of group ``springfem.models`` registers them.
 
 Examples
@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from springfem.errors import InputError, SolverError
+from springfem.mechanics.limits import Deadline
 from springfem.mechanics.system import MechanicalSystem
 from springfem.model_api import ModelSolution, SystemModel, model_result
 from springfem.scene import Scene
@@ -53,7 +54,21 @@ class XPBDModel:
         Weighed by the studies without being named.
     **settings
         Fields of :class:`peers.xpbd.XPBDSettings`.
+
+    Attributes
+    ----------
+    sweep
+        The settings the speed-accuracy study charts (:data:`SWEEP`, substeps x iterations;
+        see :class:`~springfem.model_api.ModelPlugin`); :meth:`with_settings` makes each.
     """
+
+    #: Substeps x iterations, most telling first (a quick study takes the first few, every
+    #: level the first): the default and 80 substeps, the rest of the substep series at 2
+    #: iterations, then 1 and 4 iterations at 20 substeps.
+    SWEEP: tuple[Mapping[str, Any], ...] = tuple(
+        {"substeps": n, "iterations": k} for n, k in ((40, 2), (80, 2), (20, 2), (10, 2),
+                                                     (20, 1), (20, 4))
+    )  # fmt: skip
 
     def __init__(self, name: str = "xpbd", label: str | None = None, default: bool = True,
                  **settings: Any):  # fmt: skip
@@ -63,6 +78,19 @@ class XPBDModel:
         self.label = label or f"XPBD stable neo-Hookean ({s.substeps} substeps x {s.iterations})"
         self.default = default
         self.settings: Mapping[str, Any] = asdict(s)
+        self.sweep: tuple[Mapping[str, Any], ...] = self.SWEEP
+        #: What it solves (the verdict's ``law vs reference``).
+        self.law = "stable-neo-hookean"
+
+    def with_settings(self, **settings: Any) -> XPBDModel:
+        """The same model with some settings changed (its label follows them).
+
+        Examples
+        --------
+        >>> XPBDModel().with_settings(substeps=40).label
+        'XPBD stable neo-Hookean (40 substeps x 2)'
+        """
+        return XPBDModel(self.name, None, self.default, **{**self.settings, **settings})
 
     def __repr__(self) -> str:
         return f"XPBDModel({self.name!r}, settings={dict(self.settings)!r})"
@@ -88,8 +116,17 @@ class XPBDModel:
         SolverError
             When rest does not come within ``max_frames`` (a moving state is no static
             answer; the error names the frames) or the positions stop being finite.
+        SolveStopped
+            At the time cap of :func:`springfem.mechanics.limits.solve_limits` (``--max-time``,
+            a study's budget): a watchdog interrupts the frames.
         """
-        out = self._solver(scene).solve()
+        deadline = Deadline()
+        deadline.progress = "frames to rest"
+        try:
+            with deadline.watch():
+                out = self._solver(scene).solve()
+        except KeyboardInterrupt:
+            raise deadline.stopped(interrupted=True) from None
         if not out.converged:
             s = self._settings
             raise SolverError(

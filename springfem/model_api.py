@@ -87,6 +87,14 @@ class ModelPlugin(Protocol):
     settings
         The model's own settings (substeps, iterations, tangent ...): plain values that
         go into the studies' cache keys, so that changing one recomputes.
+
+    Notes
+    -----
+    Optional, not checked by ``isinstance``: a plug-in may offer ``sweep``, a sequence of
+    mappings of its own settings (most telling first), with ``with_settings(**changes)``
+    returning the model with those settings changed. The speed-accuracy study then charts
+    one point per sweep entry (its quick preset the first few) where a model without
+    ``sweep`` has one static point (docs/peers.rst#in-the-studies).
     """
 
     name: str

@@ -16,9 +16,15 @@ level-1 vertices. A method is a model of :mod:`studies.models` and a solution me
 - ``spring-exact``: static Newton and explicit relaxation (the last explicit setting);
 - ``P1``, ``P2``, ``P1-NH``, ``P2-NH`` static, those that apply to the scene's law;
 - ``P1-NH explicit``: the explicit P1 FEM (isotropic laws), to rest with the same solver
-  and settings as the spring model.
+  and settings as the spring model;
+- the plug-in models weighed by default (``corotational``, ``xpbd``, ``mass-spring``):
+  ``static`` (and ``explicit`` with an explicit form); a plug-in with a sweep of its own
+  settings a static point per setting, ``xpbd 20x2 static`` (substeps x iterations).
 
-The non-dominated (Pareto) points are those no other point beats in both time and error.
+The non-dominated (Pareto) points are those no other point beats in both time and error,
+among all points and per model (the figure). The table also has each point's error against
+the P1-NH answer on its own level (:data:`.tables.SAME`): for XPBD the substep error, whose
+observed rate the findings give (:mod:`.sweeps`).
 Where the explicit FEM applies, a separate case measures on each level the cost of one
 explicit step of the spring model and of the explicit P1 FEM (median of repeats, both in
 the same run, same solver loop). Timings are noisy on a shared machine: they appear in
@@ -99,7 +105,7 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
             sdf = step_frame(s, levels, steps)
         finest = level_label(s.table, levels[-1])
         findings, headline, front = report_findings(
-            df, steps[-1] if steps else None, how, finest, s.label, settings.max_error
+            df, steps[-1] if steps else None, how, finest, s.label, settings.max_error, cases
         )
         if notes:
             findings.insert(0, f"{s.label}: {'; '.join(notes)}.")

@@ -14,11 +14,15 @@ A method is a model of :mod:`studies.models` and a solution method, named
 
 The plug-in models (:func:`studies.models.plugins`, e.g. ``corotational``) that apply to
 the scene get their own ``static`` points and, with an explicit form, ``explicit`` points
-at the last explicit setting.
+at the last explicit setting. A plug-in with a ``sweep`` of its own settings
+(:class:`springfem.model_api.ModelPlugin`; XPBD's substeps x iterations) gets one
+``static`` point per sweep entry (the settings' ``sweep`` first entries; past the first
+only up to level ``sweep_levels``), solved by the model ``with_settings`` those settings;
+its method name shows them (``xpbd 20x2 static``, :func:`method_name`).
 
 Every case is a :meth:`~studies.scenes.StudyScene.case` of the scene with ``model``,
 ``solution``, ``factor`` (the refinement level, :mod:`studies.study_convergence.levels`)
-and ``setting``.
+and ``setting`` (the solver's settings; a sweep point's model settings under ``"model"``).
 """
 
 from __future__ import annotations
@@ -39,7 +43,7 @@ from ..solve import Solution
 from ..study_convergence import cases as convergence
 from ..study_convergence.levels import case_level, coarse_index
 
-VERSION = 2
+VERSION = 3
 #: Static and implicit tolerances (relative residual).
 STATIC_TOL = 1e-8
 IMPLICIT_TOL = 1e-6
@@ -72,8 +76,14 @@ class Settings:
         Levels with more tets are left out (the two coarsest always run).
     max_error
         The tolerance: the findings name the cheapest point (CPU time) whose error is at
-        most this, overall and among the spring model's (``study speed-accuracy
-        --tolerance``).
+        most this, overall, among the spring model's (``study speed-accuracy
+        --tolerance``) and per fast model.
+    sweep
+        Plug-in sweeps: their first this many entries (``None``: all).
+    sweep_levels
+        The sweeps' entries after the first run on the levels up to this one (``None``:
+        all): XPBD's static answer takes hundreds of frames on a slender bar, minutes at
+        80 substeps on level 4.
     """
 
     levels: tuple[int, ...] = (1, 2, 4)
@@ -82,6 +92,8 @@ class Settings:
     implicit: dict[float, int] = field(default_factory=lambda: {100.0: 2, 1e4: 4})
     max_tets: int = 40_000
     max_error: float = 0.05
+    sweep: int | None = None
+    sweep_levels: int | None = 2
 
     @classmethod
     def full(cls) -> Settings:
@@ -92,7 +104,8 @@ class Settings:
     def quick(cls) -> Settings:
         """Levels 1, 2 and the reference at 4, one explicit setting."""
         return cls(levels=(1, 2), reference=4, explicit=((1e-6, 0.5),),
-                   implicit={100.0: 1, 1e4: 2}, max_tets=5_000)  # fmt: skip
+                   implicit={100.0: 1, 1e4: 2}, max_tets=5_000, sweep=2,
+                   sweep_levels=None)  # fmt: skip
 
 
 def bundled_scenes(settings: Settings) -> list[StudyScene]:
@@ -107,9 +120,37 @@ def reference_model(law: str) -> str:
     return convergence.fem_models(law)[1]
 
 
-def method_name(model: str, solution: str) -> str:
-    """A method's one spelling: the registry's model name and the solution method."""
-    return f"{model} {solution}"
+def method_name(model: str, solution: str, setting: dict | None = None) -> str:
+    """A method's one spelling: the registry's model name, a sweep point's model settings
+    (their values joined by ``x``) and the solution method.
+
+    Examples
+    --------
+    >>> method_name("xpbd", "static", {"model": {"substeps": 20, "iterations": 2}})
+    'xpbd 20x2 static'
+    >>> method_name("P1", "static", {"tol": 1e-8})
+    'P1 static'
+    """
+    own = (setting or {}).get("model")
+    tag = f" {'x'.join(map(str, own.values()))}" if own else ""
+    return f"{model}{tag} {solution}"
+
+
+def sweep(model: str, q: Settings) -> tuple[dict, ...]:
+    """A plug-in's sweep (its optional ``sweep`` attribute; ``()``: none), the first
+    ``q.sweep`` entries."""
+    got = tuple(dict(s) for s in getattr(models.get(model).plugin, "sweep", None) or ())
+    return got if q.sweep is None else got[: q.sweep]
+
+
+def with_settings(m: models.Model, own: dict | None) -> models.Model:
+    """The plug-in model ``m`` with its own settings changed (``own`` empty: ``m``)."""
+    if not own:
+        return m
+    if not hasattr(m.plugin, "with_settings"):
+        raise InputError(f"model {m.name} takes no settings of its own (no with_settings)")
+    plugin = m.plugin.with_settings(**own)
+    return replace(m, label=plugin.label, plugin=plugin)
 
 
 def explicit_fem_refusal(scene: Scene) -> str | None:
@@ -148,8 +189,10 @@ def points(s: StudyScene, scene: Scene, levels: list[int], q: Settings) -> list[
                 add(EXPLICIT_FEM, "explicit", tol=tol, dt_safety=safety)
         tol, safety = q.explicit[-1]  # the exact element: the last explicit setting only
         add(EXACT, "explicit", tol=tol, dt_safety=safety)
-        for m in peers:  # the plug-in models
-            add(m, "static")
+        for m in peers:  # the plug-in models: a point per sweep entry, or one
+            for j, own in enumerate(sweep(m, q) or [None]):
+                if j == 0 or q.sweep_levels is None or k <= q.sweep_levels:
+                    out.append(point_case(s, m, "static", k, {"model": own} if own else {}))
         for m in peers_explicit:
             add(m, "explicit", tol=tol, dt_safety=safety)
     return out
@@ -189,7 +232,7 @@ def solver(solution: str, setting: dict):
 
     def static(m: models.Model, scene: Scene) -> Solution:
         if m.kind in ("fem", "plugin"):
-            return m.solve(scene)
+            return with_settings(m, setting.get("model")).solve(scene)
         from springmodel.model import solve_spring
 
         opts = replace(m.spring_options(scene), solver="static", tol=setting["tol"])

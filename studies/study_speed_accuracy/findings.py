@@ -5,6 +5,7 @@ from __future__ import annotations
 import pandas as pd
 
 from .cases import EXACT, EXPLICIT_FEM, SPRING, STEP_REPEATS, method_name
+from .sweeps import model_of, most_accurate, per_model_sentence, sweep_findings
 from .tables import Measure
 
 #: The explicit setting the spring model and the explicit FEM are compared at, if both ran it.
@@ -13,14 +14,16 @@ COMPARED_SETTING = "tol 1e-06, dt = 0.5 dt_crit"
 
 def report_findings(
     df: pd.DataFrame, steps: dict | None, how: Measure, finest: str, label: str,
-    tolerance: float = 0.05,
+    tolerance: float = 0.05, cases: list[dict] | None = None,
 ) -> tuple[list[str], dict[str, float], str]:  # fmt: skip
     """The findings, the headline errors and the Pareto-front sentence of one scene.
 
     ``steps``: the step costs on the finest level (``None``: none); ``finest``: its label
-    (``20x2x2``). The headline holds the errors on the finest level (no timings, rounded to
-    4 decimals), ``<measure>_<model>_<solution>_<level>``, and point and failure counts; the
-    front's sentence is also the figure's caption.
+    (``20x2x2``); ``cases``: the points' cases, row by row (for the plug-ins' sweeps,
+    :func:`.sweeps.sweep_findings`). The headline holds the errors on the finest level (no
+    timings, rounded to 4 decimals), ``<measure>_<model>_<solution>_<level>``, the sweeps'
+    observed rates, and point and failure counts; the front's sentence is also the figure's
+    caption.
     """
     err, key = how.column, how.key
     findings: list[str] = []
@@ -93,11 +96,16 @@ def report_findings(
     )
     findings.append(front_text)
     findings.append(cheapest_sentence(good, err, tolerance))
+    findings.append(per_model_sentence(good, err, tolerance))
     for _, r in failed.iterrows():
         findings.append(
             f"{r['method']} on {r['mesh']} ({r['setting']}) {r['status']}: {r['message'][:140]}"
         )
-    findings += peer_findings(good, best, put, pct, finest, sp, p1)
+    findings += peer_findings(good, err, put, pct, finest, sp, p1)
+    if cases is not None:
+        lines, rates = sweep_findings(df, cases, err, finest)
+        findings += lines
+        headline.update(rates)
     exact = df["method"].str.startswith(f"{EXACT} ")
     headline["n_points"] = float((~exact).sum())
     headline["n_failed"] = float((~ok & ~exact).sum())
@@ -119,19 +127,24 @@ def report_findings(
     return findings, headline, front_text
 
 
-def peer_findings(good, best, put, pct, finest: str, sp, p1) -> list[str]:
+def peer_findings(good, err: str, put, pct, finest: str, sp, p1) -> list[str]:
     """A sentence per plug-in model (``studies.models.plugins``) on the finest level: its
-    error and time, static and explicit, beside the spring model's and P1's."""
+    most accurate static point (of its sweep, if it has one) and explicit point, error and
+    time, beside the spring model's and P1's."""
     from .. import models
 
     out = []
-    names = {m.split()[0] for m in good["method"]}
-    for name in [n for n in names if models.get(n).kind == "plugin"]:
-        st, ex = best(name, "static"), best(name, "explicit")
+    fine = good[good["mesh"] == finest]
+    for name in dict.fromkeys(model_of(m) for m in good["method"]):
+        if models.get(name).kind != "plugin":
+            continue
+        own = fine[fine["method"].map(model_of) == name]
+        st, ex = (most_accurate(own, err, suffix) for suffix in (" static", " explicit"))
         if st is None:
             continue
         put(name, "static", st)
-        text = f"{name} on {finest}: {pct(st)} off the reference (static, {st['seconds']:.2f} s"
+        text = f"{name} on {finest}: {pct(st)} off the reference ({st['method']}, "
+        text += f"{st['seconds']:.2f} s"
         if ex is not None:
             put(name, "explicit", ex)
             text += f"; to rest explicitly {pct(ex)}, {ex['seconds']:.2f} s"

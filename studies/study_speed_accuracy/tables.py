@@ -3,7 +3,9 @@
 A point's error is the relative error of the scene's probe displacement (the probe of its
 closed-form reference, e.g. the cantilever's ``tip``, else its first probe) against the
 reference, or, on a scene without probes, the relative L2 error at the level-1 vertices;
-both are in the table.
+both are in the table. Beside it, :data:`SAME` is the relative L2 error at the level-1
+vertices against the ``P1-NH`` static point on the same level (where it ran): the error of a
+P1 model against the Newton answer of its own mesh, e.g. XPBD's substep error.
 """
 
 from __future__ import annotations
@@ -22,6 +24,8 @@ from ..tables import write_table
 from .cases import EXPLICIT_FEM, SPRING, STEP_COUNT, STEP_REPEATS, method_name
 
 L2 = "L2 err (level-1 vertices)"
+#: The column of the error against P1-NH static on the same level.
+SAME = "L2 vs P1-NH same mesh"
 
 
 def pareto_front(seconds: np.ndarray, error: np.ndarray) -> np.ndarray:
@@ -48,7 +52,11 @@ def setting_label(solution: str, setting: dict) -> str:
     --------
     >>> setting_label("explicit", {"tol": 1e-6, "dt_safety": 0.5})
     'tol 1e-06, dt = 0.5 dt_crit'
+    >>> setting_label("static", {"model": {"substeps": 20, "iterations": 2}})
+    'substeps 20, iterations 2'
     """
+    if setting.get("model"):
+        return ", ".join(f"{k} {v}" for k, v in setting["model"].items())
     if solution == "implicit":
         return f"dt = {setting['dt_factor']:g} dt_crit"
     if "dt_safety" in setting:
@@ -102,11 +110,16 @@ def points_frame(
     the reference (and the probe over its closed form), steps, message, on the Pareto front.
     """
     u_ref = np.asarray(ref["u"], float)
+    same = {
+        c["factor"]: np.asarray(r["u"], float)
+        for c, r in zip(cases, results, strict=True)
+        if (c["model"], c["solution"]) == (EXPLICIT_FEM, "static") and r["status"] == "ok"
+    }
     rows = []
     for c, r in zip(cases, results, strict=True):
         ok = r["status"] == "ok"
         row = {
-            "method": method_name(c["model"], c["solution"]),
+            "method": method_name(c["model"], c["solution"], c["setting"]),
             "factor": c["factor"],
             "mesh": level_label(s.table, c["factor"]),
             "tets": r["tets"],
@@ -122,6 +135,10 @@ def points_frame(
             component, value, source = how.analytic
             row[f"{how.probe} / {source}"] = probe[component] / value if ok else np.nan
         row[L2] = metrics.relative_l2_error(np.asarray(r["u"], float), u_ref) if ok else np.nan
+        if same:
+            own = same.get(c["factor"]) if ok else None
+            u = np.asarray(r["u"], float) if own is not None else None
+            row[SAME] = np.nan if u is None else metrics.relative_l2_error(u, own)
         row["steps"] = r.get("steps", np.nan)
         row["message"] = r.get("message", "")
         rows.append(row)
