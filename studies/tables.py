@@ -30,6 +30,25 @@ def pyplot():
     return plt
 
 
+def plain_log_ticks(*axes) -> None:
+    """Label a log axis at its decades and at 2 and 5 between them, in plain numbers
+    (``0.2``, ``1``, ``5e-04``): matplotlib labels every minor tick of an axis spanning under
+    a decade, and their ``2×10⁻⁴`` labels overlap.
+
+    Parameters
+    ----------
+    *axes
+        matplotlib ``Axis`` objects (``ax.xaxis``, ``ax.yaxis``) already on a log scale.
+    """
+    from matplotlib.ticker import FuncFormatter, LogLocator
+
+    plain = FuncFormatter(lambda v, _pos: f"{v:g}")
+    for axis in axes:
+        axis.set_minor_locator(LogLocator(subs=(2.0, 5.0)))
+        axis.set_major_formatter(plain)
+        axis.set_minor_formatter(plain)
+
+
 def save_figure(fig, path: str | os.PathLike, dpi: int = 120) -> Path:
     """Save a matplotlib figure atomically as PNG and close it."""
     plt = pyplot()

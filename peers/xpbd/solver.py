@@ -47,6 +47,7 @@ import numpy as np
 
 from springfem.errors import InputError, SolverError
 from springfem.loads import external_forces, has_follower_loads, lumped_masses
+from springfem.mechanics.limits import checkpoint
 from springfem.mesh import element_colouring
 from springfem.scene import Scene
 
@@ -286,6 +287,7 @@ class XPBD:
         converged = False
         k = 0
         for k in range(1, s.max_frames + 1):
+            checkpoint()  # a study's time cap, also off the main thread (no watchdog there)
             if self._follower:
                 a = self.accelerations(x)
             moved = self.advance(x, v, a)

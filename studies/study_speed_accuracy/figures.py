@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from ..registry import Figure, StudyContext
-from ..tables import pyplot
+from ..tables import plain_log_ticks, pyplot
 from .sweeps import model_of
 from .tables import SAME, pareto_front
 
@@ -84,6 +84,7 @@ def _sweep_panel(ax, good: pd.DataFrame, colour: dict) -> bool:
                         fontsize=6, xytext=(3, 2), textcoords="offset points")  # fmt: skip
     ax.set_xscale("log")
     ax.set_yscale("log")
+    plain_log_ticks(ax.xaxis, ax.yaxis)
     ax.set_xlabel("CPU time (s)")
     ax.set_ylabel(f"{SAME} (%)")
     ax.set_title("sweeps: error against P1-NH Newton, same mesh", fontsize=9)

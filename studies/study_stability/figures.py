@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 
 from ..registry import Figure, StudyContext
-from ..tables import pyplot
+from ..tables import plain_log_ticks, pyplot
 from .cases import Settings
 
 
@@ -102,6 +102,7 @@ def survival_figure(ctx: StudyContext, sv: pd.DataFrame, dt: pd.DataFrame) -> Fi
                       label=f"XPBD's configured substep {float(h.iloc[0]):.3g} s")  # fmt: skip
         ax[0].legend(fontsize=8, loc="upper left")
     ax[0].set_xscale("log")
+    plain_log_ticks(ax[0].xaxis)
     ax[0].set_xlabel("largest stable step (s): explicit step; XPBD: substep")
     ax[0].set_title(f"largest step ({sv['dt scene'].iloc[0]})")
     ax[1].scatter(load, y, c=colours, s=40, zorder=3)

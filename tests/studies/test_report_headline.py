@@ -39,6 +39,11 @@ TIMING_KEYS = {
             f"land-beam_{m}_cost_ratio"
             for m in ("spring-exact", "spring-stiffened", "spring-tissue")
         ),
+        "land-beam-nh_P1-NH_step_us",
+        *(
+            f"land-beam-nh_{m}_cost_ratio"
+            for m in ("spring-exact", "corotational", "mass-spring", "xpbd")
+        ),
     },
     # the cheapest method within the tolerance is picked by its solve time
     "locking": {
@@ -199,7 +204,7 @@ for _scene in ("stretch_fiber", "stretch_cross"):
         1e-8,
         "P1 = P2 = exact on a uniform stretch",
     )
-for _method in ("spring-energy", "spring-cosine", "P1", "P1-NH", "spring-exact"):
+for _method in ("spring-energy", "spring-cosine", "P1", "P1-NH", "spring-exact", "mass-spring"):
     REFERENCES[("stability", f"dt_ratio_{_method}")] = (
         lambda h: 1.0,
         0.1,
