@@ -64,10 +64,11 @@ class XPBDModel:
 
     #: Substeps x iterations, most telling first (a quick study takes the first few, every
     #: level the first): the default and 80 substeps, the rest of the substep series at 2
-    #: iterations, then 1 and 4 iterations at 20 substeps.
+    #: iterations, then 1 and 4 iterations at the default 40 substeps (a series is the
+    #: points whose other settings are the defaults).
     SWEEP: tuple[Mapping[str, Any], ...] = tuple(
         {"substeps": n, "iterations": k} for n, k in ((40, 2), (80, 2), (20, 2), (10, 2),
-                                                     (20, 1), (20, 4))
+                                                     (40, 1), (40, 4))
     )  # fmt: skip
 
     def __init__(self, name: str = "xpbd", label: str | None = None, default: bool = True,

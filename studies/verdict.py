@@ -52,6 +52,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from reference_fem.options import FemOptions
 from springfem.mechanics.limits import solve_limits
 from springfem.scene import Scene
 
@@ -345,13 +346,16 @@ def verdict(
     # the model error of the linear-tet models: against the same mesh's P1 of the law
     if p1 in names and outcomes[p1].ok:
         u_p1 = outcomes[p1].u
+        scene_order = FemOptions.of(scene).order
         quadratic = {
-            n for n in names if registry.get(n).kind == "fem" and registry.get(n).order == 2
-        }
+            n for n in names
+            if (m := registry.get(n)).kind == "fem" and (m.order or scene_order) == 2
+        }  # fmt: skip
+        same = {n for n in names if alias.get(n, n) == alias.get(p1, p1)}  # p1's own solve
         table.insert(3, f"vs {p1} (same mesh)", [
             metrics.relative_l2_error(outcomes[n].u, u_p1)
-            if outcomes[n].ok and n != p1 and n not in quadratic
-            else (0.0 if n == p1 else float("nan")) for n in names
+            if outcomes[n].ok and n not in same and n not in quadratic
+            else (0.0 if n in same else float("nan")) for n in names
         ])  # fmt: skip
     # the reference competes too (a model within the tolerance but dearer is no answer);
     # the rows that are the same solve as the reference are the reference

@@ -104,7 +104,7 @@ def same_mesh_line(table: pd.DataFrame, ref: str, p1: str, same_as_ref: pd.Serie
     'Against P1-NH on the same mesh (itself 30% off P2-NH): 1. xpbd 2%, 2. P1 40%.'
     """
     col = f"vs {p1} (same mesh)"
-    t = table[~same_as_ref & (table["model"] != p1) & np.isfinite(table[col])]
+    t = table[~same_as_ref & (table[col] > 0) & np.isfinite(table[col])]
     t = t.sort_values(col)
     own = float(table.set_index("model").at[p1, "rel L2 error"])
     parts = [f"{i}. {r['model']} {pct(float(r[col]))}" for i, (_, r) in enumerate(t.iterrows(), 1)]

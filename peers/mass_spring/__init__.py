@@ -6,7 +6,7 @@ Examples
 --------
 >>> from peers.mass_spring.network import CALIBRATIONS
 >>> CALIBRATIONS
-('van-gelder',)
+('van-gelder', 'tensor-fit')
 """
 
 from .network import MassSpring

@@ -18,7 +18,7 @@ Examples
 >>> scene = scene_from_dict({"mesh": {"generator": "box", "size": [1.0, 1.0, 1.0],
 ...     "divisions": [1, 1, 1]}, "material": {"law": "linear", "E": 1.0, "nu": 0.3},
 ...     "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}]})
->>> s = MassSpring(scene)
+>>> s = MassSpring(scene, calibration="van-gelder")
 >>> s.edges.shape[0], round(float(s.k.sum()), 12)  # body diagonal 1/3, faces 6/6, edges 3
 (19, 4.333333333333)
 """
@@ -32,7 +32,7 @@ from springfem.errors import InputError
 from springfem.loads import external_forces, has_follower_loads, lumped_masses
 from springfem.scene import Scene
 
-CALIBRATIONS = ("van-gelder",)
+CALIBRATIONS = ("van-gelder", "tensor-fit")
 #: Laws the network takes (their E sets the springs; nu cannot be matched, see above).
 LAWS = ("linear", "neo-hookean")
 _PAIRS = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
@@ -103,6 +103,58 @@ def van_gelder_stiffness(points: np.ndarray, tets: np.ndarray, E: float) -> np.n
     return E * vol / length2
 
 
+def tensor_fit_stiffness(points: np.ndarray, tets: np.ndarray, lam: float, mu: float) -> np.ndarray:
+    """Per edge, the sum over its tets of the springs that best fit each tet's small-strain
+    elasticity.
+
+    Under a uniform strain ``ε`` a tet's six springs store
+    ``1/2 ε : (Σ_e a_e n_e⊗n_e⊗n_e⊗n_e) : ε`` with ``a_e = k_e l_e²``, the tet
+    ``V/2 ε : C : ε``. The ``a_e`` minimise the Frobenius norm of the difference of the two
+    tensors: the normal equations ``Σ_f (n_e·n_f)⁴ a_f = V n_e⁴ : C = V (λ + 2μ)``; where
+    that gives a negative spring, a non-negative least-squares fit. It matches the element's
+    stiffness in the sense of Lloyd, Székely & Harders 2007 (best-fit constants per element
+    shape); no choice matches exactly (the Cauchy relations, docs/peers.rst#mass-spring).
+    On a regular tetrahedron at ``ν = 1/4`` it gives ``k = (2√2/25) E l``, ``0.96`` times
+    van Gelder's ``E V / l²``.
+
+    Parameters
+    ----------
+    points, tets
+        The mesh at rest.
+    lam, mu
+        The Lamé constants of the isotropic material fitted.
+
+    Returns
+    -------
+    ndarray
+        ``(e,)`` stiffness per edge of :func:`mesh_edges`.
+
+    Examples
+    --------
+    >>> s = np.sqrt(2.0)
+    >>> tet = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]) / s  # edge 2
+    >>> k = tensor_fit_stiffness(tet, np.array([[0, 1, 2, 3]]), 0.4, 0.4)  # E = 1, nu = 1/4
+    >>> np.allclose(k, 2 * s / 25 * 2.0)
+    True
+    """
+    from scipy.optimize import nnls
+
+    points = np.asarray(points, dtype=float)
+    edges, tet_edges = mesh_edges(tets)
+    x = points[np.asarray(tets)]
+    V = np.abs(np.linalg.det(x[:, 1:] - x[:, :1])) / 6.0
+    d = np.stack([x[:, b] - x[:, a] for a, b in _PAIRS], axis=1)  # (m, 6, 3)
+    length2 = np.sum(d * d, axis=2)
+    n = d / np.sqrt(length2)[..., None]
+    G = np.einsum("mei,mfi->mef", n, n) ** 4
+    b = np.repeat((V * (lam + 2 * mu))[:, None], 6, axis=1)
+    a = np.linalg.solve(G, b[..., None])[..., 0]
+    for t in np.flatnonzero((a < 0).any(axis=1)):
+        a[t] = nnls(G[t], b[t])[0]
+    k = a / length2
+    return np.bincount(tet_edges.ravel(), weights=k.ravel(), minlength=edges.shape[0])
+
+
 class MassSpring:
     """The edge mass–spring network of a scene (see the module docstring).
 
@@ -111,7 +163,9 @@ class MassSpring:
     scene
         Mesh, material (its ``E`` and density), supports, loads.
     calibration
-        ``van-gelder``.
+        ``van-gelder`` (:func:`van_gelder_stiffness`, the default) or ``tensor-fit``
+        (:func:`tensor_fit_stiffness`: closer to P1 on cube cells, farther on elongated
+        and jittered ones, docs/peers.rst#mass-spring).
     damping
         ``beta`` (s): the dashpot of a spring is ``beta k_c`` along it (0: none).
     """
@@ -135,7 +189,13 @@ class MassSpring:
         self.edges, _ = mesh_edges(self.tets)
         d = self.x0[self.edges[:, 1]] - self.x0[self.edges[:, 0]]
         self.rest_length = np.linalg.norm(d, axis=1)
-        self.k = van_gelder_stiffness(self.x0, self.tets, scene.material.E)
+        mat = scene.material
+        self.calibration = calibration
+        self.k = (
+            van_gelder_stiffness(self.x0, self.tets, mat.E)
+            if calibration == "van-gelder"
+            else tensor_fit_stiffness(self.x0, self.tets, mat.kappa - 2.0 * mat.mu / 3.0, mat.mu)
+        )
         self.masses = lumped_masses(scene)
         self.fixed_dofs, self._fixed_values = scene.dirichlet()
         self._follower = has_follower_loads(scene)

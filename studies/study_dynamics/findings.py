@@ -41,7 +41,8 @@ def _steps(ok: pd.DataFrame) -> str:
             "small-strain tangent is P1's, so none buys a larger step."
         )
     best = ok.loc[ok["dt (s)"].idxmax()]
-    return f" The largest stable step is {best.model}'s, {spread:.1%} above the smallest."
+    above = float(ok["dt (s)"].max() / ok["dt (s)"].min() - 1.0)
+    return f" The largest stable step is {best.model}'s, {above:.1%} above the smallest."
 
 
 def _peer_notes(ok: pd.DataFrame) -> list[str]:
@@ -63,8 +64,9 @@ def _peer_notes(ok: pd.DataFrame) -> list[str]:
         out.append(
             f"{r.scene}: the mass-spring network's probe error ({_pct(r['static error'])} "
             "static) is its material's, not its time integration's: an edge network obeys the "
-            "Cauchy relations (ν = 1/4 whatever the scene's ν) and van Gelder's stiffness rule "
-            "is not fitted to E (docs/peers.rst)."
+            "Cauchy relations (its ν is not the scene's: 1/4 if isotropic, 5/31 along an axis "
+            "on the six-tet box lattice), so no spring stiffness fits the scene's material "
+            "(docs/peers.rst)."
         )
     return out
 

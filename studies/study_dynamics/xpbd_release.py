@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from springfem.errors import SolverError
+from springfem.mechanics.limits import Deadline, SolveStopped, checkpoint
 from springfem.scene import Scene
 
 from .. import models
@@ -65,7 +66,12 @@ def release_case(case: dict[str, Any], probe_weights) -> dict[str, Any]:
 
     scene = case_scene(case)
     solver, _ = xpbd_solver(scene, case["safety"])
-    static = solver.solve()
+    try:  # the case's time cap holds inside the frames too (checkpoint in XPBD.solve)
+        with Deadline().watch():
+            static = solver.solve()
+    except (SolverError, SolveStopped) as exc:
+        stopped = isinstance(exc, SolveStopped)
+        return {"status": "stopped" if stopped else "failed", "message": str(exc)[:200]}
     if not static.converged:
         return {"status": "failed", "message": f"xpbd: no rest after {static.frames} frames"}
     x = solver.x0 + static.u
@@ -88,15 +94,21 @@ def release_case(case: dict[str, Any], probe_weights) -> dict[str, Any]:
                            "frames_to_rest": static.frames,
                            "substeps_per_frame": s.substeps}  # fmt: skip
     t0 = time.perf_counter()
-    for k in range(1, steps + 1):
-        run.advance(x, v, a)
-        if not np.isfinite(x).all():
-            out.update(status="blew up", message=f"xpbd: positions not finite at substep {k}")
-            break
-        U[k] = w @ (x[nodes] - X)
-        if k % every == 0:
-            et.append(k * h)
-            E.append(0.5 * float(np.sum(m * v * v)) + energy.strain_energy(x))
+    with Deadline().watch():
+        for k in range(1, steps + 1):
+            try:
+                checkpoint()
+            except SolveStopped as exc:
+                out.update(status="stopped", message=f"xpbd: at substep {k}: {exc}"[:200])
+                break
+            run.advance(x, v, a)
+            if not np.isfinite(x).all():
+                out.update(status="blew up", message=f"xpbd: positions not finite at substep {k}")
+                break
+            U[k] = w @ (x[nodes] - X)
+            if k % every == 0:
+                et.append(k * h)
+                E.append(0.5 * float(np.sum(m * v * v)) + energy.strain_energy(x))
     out["seconds"] = time.perf_counter() - t0
     t = np.linspace(0.0, t_end, int(case["samples"]) + 1)
     tk = h * np.arange(steps + 1)

@@ -56,8 +56,10 @@ def _sweep_panel(ax, good: pd.DataFrame, colour: dict) -> bool:
     to draw."""
     from .. import models
 
+    if SAME not in good:  # no P1-NH point finished (or the law has none)
+        return False
     swept = good[(good["method"].str.split().str.len() == 3) & (good[SAME] > 0)]
-    if SAME not in good or len(swept) < 2:
+    if len(swept) < 2:
         return False
     shades = ("-", ":", "-.", "--")
     for j, ((model, factor), grp) in enumerate(

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from springfem.errors import SolverError
+from springfem.mechanics.limits import Deadline, SolveStopped, checkpoint
 from springfem.scene import Scene
 
 from .. import models
@@ -80,6 +81,7 @@ def survives(scene: Scene, method: str, h: float, steps: int, v0: np.ndarray) ->
 
     e0 = total()
     for k in range(1, steps + 1):
+        checkpoint()  # the case's time cap (xpbd_step_case watches it)
         solver.advance(x, v, a)
         if not (np.isfinite(x).all() and np.isfinite(v).all()):
             return f"positions not finite at substep {k}"
@@ -135,7 +137,12 @@ def measure_xpbd_step(scene: Scene, method: str, steps: int, bisections: int) ->
 def xpbd_step_case(case: dict) -> dict[str, Any]:
     """A ``dt`` case of an XPBD variant (:func:`measure_xpbd_step`)."""
     scene = case_scene(case, 0.0)
-    return measure_xpbd_step(scene, case["method"], case["steps"], case["bisections"])
+    try:
+        with Deadline().watch():
+            return measure_xpbd_step(scene, case["method"], case["steps"], case["bisections"])
+    except SolveStopped as exc:  # a missing value, not a lost study
+        nan = float("nan")
+        return {"dt_pred": nan, "dt_measured": nan, "ratio": nan, "failure": str(exc)[:200]}
 
 
 def xpbd_load_case(case: dict) -> dict[str, Any]:
@@ -151,9 +158,12 @@ def xpbd_load_case(case: dict) -> dict[str, Any]:
     own = dict(models.get("xpbd").plugin.settings)
     settings = XPBDSettings(**{**own, **VARIANTS[case["method"]], "max_frames": LOAD_MAX_FRAMES})
     try:
-        out = XPBD(scene, settings).solve()
+        with Deadline().watch():
+            out = XPBD(scene, settings).solve()
     except SolverError as exc:
         return {"status": "diverged", "message": str(exc)[:160], "u/size": float("nan")}
+    except SolveStopped as exc:
+        return {"status": "stopped", "message": str(exc)[:160], "u/size": float("nan")}
     ratio = float(np.linalg.norm(out.u, axis=1).max() / max(extent(scene)))
     if not out.converged:
         msg = f"no rest after {out.frames} frames"

@@ -85,7 +85,7 @@ def test_small_strain_moduli_are_cauchy_born_and_obey_the_cauchy_relations():
     nodes), and C is fully symmetric (C_1122 = C_1212 ...: the Cauchy relations), so no
     spring constants give nu = 0.3 (Poisson's ratio along x here differs from 0.3)."""
     box = {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [4, 4, 4]}
-    s = MassSpring(_scene(box, load=False))
+    s = MassSpring(_scene(box, load=False), calibration="van-gelder")
     C = _lattice_tensor(s.x0, s.tets, 1.0e4)
     interior = np.all((s.x0 > 1e-9) & (s.x0 < 1 - 1e-9), axis=1)
     rng = np.random.default_rng(4)
@@ -118,7 +118,8 @@ def test_van_gelder_rule_on_the_six_tet_lattice_has_its_closed_form_moduli():
     E = 2.0e3
     box = {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [3, 3, 3], "split": "six"}
     fix = [{"region": "x_min", "fix": ["x", "y", "z"]}]
-    s = MassSpring(scene_from_dict({"mesh": box, "material": dict(MATERIAL, E=E), "boundary": fix}))
+    table = {"mesh": box, "material": dict(MATERIAL, E=E), "boundary": fix}
+    s = MassSpring(scene_from_dict(table), calibration="van-gelder")
     t = 1e-6
 
     def modulus(eps):  # 2 W / (V t^2), V = 1
@@ -148,9 +149,67 @@ def test_static_newton_and_explicit_run_on_a_gmsh_mesh(gmsh_scene):
     assert abs(total) < 0.01 * swing
 
 
+def test_tensor_fit_is_the_least_squares_fit_of_each_tet(gmsh_scene):
+    """On a gmsh mesh the fitted springs of every tet are the least-squares optimum: the
+    Frobenius distance of sum_e a_e n_e^4 from V C (computed here from the geometry alone)
+    grows under any small change of the a_e that keeps them non-negative, and it is below
+    van Gelder's a_e = E V for every tet."""
+    from peers.mass_spring.network import tensor_fit_stiffness
+
+    mesh = gmsh_scene.mesh
+    E, nu = MATERIAL["E"], MATERIAL["nu"]
+    lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+    eye = np.eye(3)
+    C = lam * np.einsum("ij,kl->ijkl", eye, eye) + mu * (
+        np.einsum("ik,jl->ijkl", eye, eye) + np.einsum("il,jk->ijkl", eye, eye)
+    )
+    rng = np.random.default_rng(1)
+    pairs = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
+
+    def distance(a, n4, V):
+        return np.linalg.norm(np.einsum("e,eijkl->ijkl", a, n4) - V * C)
+
+    for t in rng.choice(mesh.n_tets, size=20, replace=False):
+        tet = mesh.tets[t : t + 1]
+        x = mesh.points[tet[0]]
+        V = abs(np.linalg.det(x[1:] - x[:1])) / 6
+        d = np.array([x[b] - x[a] for a, b in pairs])
+        l2 = np.sum(d * d, axis=1)
+        n = d / np.sqrt(l2)[:, None]
+        n4 = np.einsum("ei,ej,ek,el->eijkl", n, n, n, n)
+        # one tet alone: its six springs, in mesh_edges' order (sorted node pairs)
+        k = tensor_fit_stiffness(mesh.points, tet, lam, mu)
+        edges = sorted(tuple(sorted((tet[0, a], tet[0, b]))) for a, b in pairs)
+        local = [edges.index(tuple(sorted((tet[0, a], tet[0, b])))) for a, b in pairs]
+        a = k[local] * l2
+        best = distance(a, n4, V)
+        assert best < distance(np.full(6, E * V), n4, V)
+        for _ in range(10):
+            trial = np.maximum(a + 1e-3 * np.abs(a).max() * rng.standard_normal(6), 0.0)
+            assert distance(trial, n4, V) >= best * (1 - 1e-12)
+
+
+def test_tensor_fit_on_a_regular_tet_is_the_closed_form():
+    """A regular tet's six springs store 1/2 eps : a sum n^4 : eps, with sum (n_e . n_f)^4
+    = 1 + 4/16 per row (four neighbours at 60 degrees, one opposite at 90), so the fit is
+    a = V (lambda + 2 mu) / 1.25 for every edge: at nu = 1/4, k = (2 sqrt 2 / 25) E l."""
+    from peers.mass_spring.network import tensor_fit_stiffness
+
+    tet = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], dtype=float) * 0.3
+    length = 0.6 * np.sqrt(2.0)
+    volume = length**3 / (6 * np.sqrt(2.0))
+    E, nu = 5.0e3, 0.25
+    lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+    k = tensor_fit_stiffness(tet, np.array([[0, 1, 2, 3]]), lam, mu)
+    np.testing.assert_allclose(k, volume * (lam + 2 * mu) / 1.25 / length**2, rtol=1e-12)
+    np.testing.assert_allclose(k, 2 * np.sqrt(2.0) / 25 * E * length, rtol=1e-12)
+
+
 def test_bad_input_gives_one_line():
     box = {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [1, 1, 1]}
-    with pytest.raises(InputError, match="calibration 'lloyd' is not one of van-gelder"):
+    with pytest.raises(
+        InputError, match="calibration 'lloyd' is not one of van-gelder, tensor-fit"
+    ):
         MassSpring(_scene(box), calibration="lloyd")
     with pytest.raises(InputError, match="damping"):
         MassSpring(_scene(box), damping=-1.0)
