@@ -99,7 +99,7 @@ class XPBDSettings:
     damping: float | Literal["auto", "kinetic"] = "auto"
     rest_tol: float = 1e-6
     rest_frames: int = 2
-    max_frames: int = 20_000
+    max_frames: int = 1_000
 
     def __post_init__(self):
         if not (self.dt > 0 and self.substeps >= 1 and self.iterations >= 1):

@@ -105,11 +105,20 @@ def survival_figure(ctx: StudyContext, sv: pd.DataFrame, dt: pd.DataFrame) -> Fi
     plain_log_ticks(ax[0].xaxis)
     ax[0].set_xlabel("largest stable step (s): explicit step; XPBD: substep")
     ax[0].set_title(f"largest step ({sv['dt scene'].iloc[0]})")
-    ax[1].scatter(load, y, c=colours, s=40, zorder=3)
+    solved = np.where(load > 0, load, np.nan)  # 0: failed at every factor (no log position)
+    ax[1].scatter(solved, y, c=colours, s=40, zorder=3)
     for i, (v, bad) in enumerate(zip(load, sv["first failing factor"])):
-        text = ("≥ " if bad != bad else "") + f"{v:g}" if v == v else "not in this series"
-        ax[1].annotate(text, (v if v == v else np.nanmin(load), i), xytext=(6, -3),
-                       textcoords="offset points", fontsize=8)  # fmt: skip
+        if v != v:
+            where = ("axes fraction", "data")
+            ax[1].annotate("not in this series", (0.02, i), xytext=(0, -3), fontsize=8,
+                           xycoords=where, textcoords="offset points")  # fmt: skip
+            continue
+        if v <= 0:
+            ax[1].scatter([bad], [i], marker="x", c=[colours[i]], s=40, zorder=3)
+            text, at = f"fails at every factor (first: {bad:g})", bad
+        else:
+            text, at = ("≥ " if bad != bad else "") + f"{v:g}", v
+        ax[1].annotate(text, (at, i), xytext=(6, -3), textcoords="offset points", fontsize=8)
     ax[1].set_xscale("log")
     ax[1].set_xlabel("largest load factor solved without failure (≥: none of the series failed)")
     ax[1].set_title(f"largest load ({sv['load scene'].iloc[0]})")
