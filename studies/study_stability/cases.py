@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from springfem.errors import SolverError
+from springfem.mechanics.limits import SolveStopped
 from springfem.scene import Scene
 
 from .. import models
@@ -193,7 +194,11 @@ def critical_step_case(case: dict) -> dict:
         return xpbd_step_case(case)
     scene = case_scene(case, 0.0)
     system = models.get(case["method"]).system(scene)
-    dt_pred, omega, ratio = measure_critical_step(system, case["steps"], case["bisections"])
+    try:
+        dt_pred, omega, ratio = measure_critical_step(system, case["steps"], case["bisections"])
+    except SolveStopped as exc:  # the time cap or the study's budget: a missing value
+        nan = float("nan")
+        return {"dt_pred": nan, "dt_measured": nan, "ratio": nan, "failure": str(exc)[:160]}
     out = {"dt_pred": dt_pred, "dt_measured": ratio * dt_pred, "ratio": ratio}
     if ratio == 2.0:
         out["bounded"] = True
@@ -256,10 +261,10 @@ def failure_map_case(case: dict) -> dict:
 
     scene = case_scene(case, case["factor"])
     system = models.get(case["method"]).system(scene)
-    dt_crit, omega = stable_time_step(system)
-    # critical damping of the lowest bending mode is far below omega_max; a mass damping
-    # of ~omega_max/200 brings the bar near rest within the run
     try:
+        dt_crit, omega = stable_time_step(system)
+        # critical damping of the lowest bending mode is far below omega_max; a mass
+        # damping of ~omega_max/200 brings the bar near rest within the run
         traj = explicit(
             system,
             dt=case["dt_factor"] * dt_crit,
@@ -270,6 +275,8 @@ def failure_map_case(case: dict) -> dict:
     except SolverError as exc:
         status = "inverted" if "inverted" in str(exc) else "blew up"
         return {"status": status, "message": str(exc)[:160]}
+    except SolveStopped as exc:  # the time cap or the study's budget: no verdict on the cell
+        return {"status": "stopped", "message": str(exc)[:160]}
     inv = _inverted(scene, traj.x - system.x0)
     return {"status": "inverted" if inv else "ok", "inverted": inv}
 

@@ -50,19 +50,22 @@ def failure_map_figure(
 
     lf, df_ = list(q.map_loads), list(q.map_dt_factors)
     mmethods = [m for m in methods if m in set(dm.method)]
-    codes = {"ok": 0, "inverted": 1, "blew up": 2}
+    codes = {"ok": 0, "inverted": 1, "blew up": 2, "not run": 3}  # not run: stopped, skipped
     fig, axes = plt.subplots(1, len(mmethods), figsize=(4.2 * len(mmethods), 3.8), sharey=True)
     axes = np.atleast_1d(axes)
-    cmap = ListedColormap(["#4caf50", "#ff9800", "#d32f2f"])
+    cmap = ListedColormap(["#4caf50", "#ff9800", "#d32f2f", "#bdbdbd"])
     for a, m in zip(axes, mmethods):
         g = dm[dm.method == m]
         grid = np.array(
             [
-                [codes[g[(g.load_factor == f) & (g.dt_factor == d)].status.iloc[0]] for d in df_]
+                [
+                    codes.get(g[(g.load_factor == f) & (g.dt_factor == d)].status.iloc[0], 3)
+                    for d in df_
+                ]
                 for f in lf
             ]
         )
-        a.imshow(grid, cmap=cmap, vmin=0, vmax=2, origin="lower", aspect="auto")
+        a.imshow(grid, cmap=cmap, vmin=0, vmax=3, origin="lower", aspect="auto")
         a.set_xticks(range(len(df_)), [f"{d:g}" for d in df_])
         a.set_yticks(range(len(lf)), [f"{f:g}" for f in lf])
         a.set_xlabel("dt / dt_crit (predicted)")
@@ -71,12 +74,14 @@ def failure_map_figure(
             for j in range(len(df_)):
                 a.text(j, i, list(codes)[grid[i, j]], ha="center", va="center", fontsize=7)
     axes[0].set_ylabel("load factor")
-    ok_share = dm.groupby("method")["status"].apply(lambda s: float((s == "ok").mean()))
+    ran = dm[dm["status"].isin(codes) & (dm["status"] != "not run")]
+    ok_share = ran.groupby("method")["status"].apply(lambda s: float((s == "ok").mean()))
     return ctx.figure(
         fig,
         "failure_map.png",
-        "Failure map (green ok, orange inverted elements, red blew up) of "
-        "explicit damped runs; share of the grid that runs ok: "
+        "Failure map (green ok, orange inverted elements, red blew up, grey not run: the "
+        "budget stopped or skipped it) of "
+        "explicit damped runs; share of the cells that ran that run ok: "
         + ", ".join(f"{m} {v:.0%}" for m, v in ok_share.items())
         + ".",
     )

@@ -6,6 +6,9 @@ import pandas as pd
 
 from .cases import LOCK_METHODS, UNPHYSICAL, Settings
 
+#: Failure-map statuses of a run that ended (not stopped or skipped by the budget).
+RAN = ("ok", "inverted", "blew up")
+
 
 def report_findings(f: dict[str, pd.DataFrame], q: Settings) -> tuple[list[str], dict[str, float]]:
     """One finding per series that ran, and the headline: the median measured/predicted step
@@ -56,13 +59,18 @@ def report_findings(f: dict[str, pd.DataFrame], q: Settings) -> tuple[list[str],
             "P1 — the freedom from locking of the specification's element is its calibration "
             "error, not a virtue of springs."
         )
-    if len(f["map"]):
-        share = f["map"].groupby("method", sort=False)["status"].apply(lambda s: (s == "ok").mean())
+    ran = f["map"][f["map"]["status"].isin(RAN)] if len(f["map"]) else f["map"]
+    if len(ran):  # the cells the budget stopped or skipped are no verdict either way
+        share = ran.groupby("method", sort=False)["status"].apply(lambda s: (s == "ok").mean())
+        missing = len(f["map"]) - len(ran)
         findings.append(
             "Share of the load × time-step grid that runs ok in damped explicit dynamics: "
             + ", ".join(f"{m} {v:.0%}" for m, v in share.items())
+            + (f" ({missing} cells not run: the budget stopped or skipped them)" if missing else "")
             + "."
         )
+    elif len(f["map"]):
+        findings.append("No cell of the failure map ran within the budget.")
     return findings, headline
 
 

@@ -125,3 +125,21 @@ def test_jacobi_run_to_rest_fails_where_its_substep_is_past_its_limit():
         except SolverError:  # positions no longer finite
             rests = False
         assert rests == fits
+
+
+def test_a_case_the_budget_stops_is_a_row_not_a_lost_study():
+    """A failure-map cell or a critical-step case whose solve meets the cap (the study's
+    budget ran out: it runs with no time) is recorded as stopped, never raised."""
+    from springfem.mechanics.limits import solve_limits
+    from studies.study_stability.cases import failure_map_case
+
+    sc = bar(10, 1, ("dt", "map"))
+    cell = sc.case("t", VERSION, kind="map", method="P1-NH", factor=1.0, dt_factor=0.5,
+                   steps=200)  # fmt: skip
+    step = sc.case("t", VERSION, kind="dt", method="P1-NH", steps=200, bisections=3)
+    with solve_limits(max_time=1e-9):
+        got = failure_map_case(cell)
+        dt = critical_step_case(step)
+    assert got["status"] == "stopped" and "stopped" in got["message"], got
+    assert np.isnan(dt["ratio"]) and "stopped" in dt["failure"], dt
+    assert failure_map_case(cell)["status"] == "ok"  # uncapped, the same cell runs
