@@ -125,11 +125,10 @@ class CaseRun:
         What the cap is, for the message of a stopped solve (``None``: the ``--max-time``
         cap).
 
-    Returns (when called)
-    ---------------------
-    tuple
-        ``(result, seconds, lines)``: ``lines`` maps a stderr line or warning message to how
-        many times it came.
+    Notes
+    -----
+    Called with a case, it returns ``(result, seconds, lines)``: ``lines`` maps a stderr
+    line or warning message to how many times it came.
     """
 
     work: Callable[[dict[str, Any]], dict[str, Any]]
