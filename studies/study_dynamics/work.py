@@ -29,7 +29,7 @@ from springfem.scene import Scene
 from .. import models
 from ..scenes import case_scene
 from . import xpbd_release
-from .cases import OWN_DYNAMICS
+from .cases import OWN_DYNAMICS, resampled
 
 #: Static Newton of the preload: relative tolerance, iterations per load step.
 NEWTON_TOL, NEWTON_ITER = 1e-10, 40
@@ -140,13 +140,7 @@ def release_case(case: dict[str, Any]) -> dict[str, Any]:
         out.update(status="blew up", message=str(exc)[:200])
         traj = None
     out["seconds"] = time.perf_counter() - t0
-    t = np.linspace(0.0, t_end, int(case["samples"]) + 1)
-    tk = dt * np.arange(steps + 1)
-    ok = np.isfinite(U[:, 0])
-    out["t"] = t.tolist()
-    out["u"] = np.column_stack(
-        [np.interp(t, tk[ok], U[ok, i], right=np.nan) for i in range(3)]
-    ).tolist()
+    out["t"], out["u"] = resampled(U, dt, t_end, case["samples"])
     if traj is not None:
         out["energy_t"] = traj.times.tolist()
         out["energy"] = (traj.kinetic + traj.potential).tolist()

@@ -35,6 +35,7 @@ from springfem.scene import Scene
 
 from .. import models
 from ..scenes import case_scene
+from .cases import resampled
 
 
 def substeps_for(dt: float, substeps: int, h_max: float) -> int:
@@ -110,13 +111,7 @@ def release_case(case: dict[str, Any], probe_weights) -> dict[str, Any]:
                 et.append(k * h)
                 E.append(0.5 * float(np.sum(m * v * v)) + energy.strain_energy(x))
     out["seconds"] = time.perf_counter() - t0
-    t = np.linspace(0.0, t_end, int(case["samples"]) + 1)
-    tk = h * np.arange(steps + 1)
-    ok = np.isfinite(U[:, 0])
-    out["t"] = t.tolist()
-    out["u"] = np.column_stack(
-        [np.interp(t, tk[ok], U[ok, i], right=np.nan) for i in range(3)]
-    ).tolist()
+    out["t"], out["u"] = resampled(U, h, t_end, case["samples"])
     if out["status"] == "ok":
         out["energy_t"], out["energy"] = et, E
     return out
