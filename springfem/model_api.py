@@ -193,7 +193,8 @@ class SystemModel:
         ``build(scene, **settings) -> MechanicalSystem``: the model's system on a scene
         (raise :class:`~springfem.errors.InputError` when the scene does not fit it).
     element, law
-        The result's ``element`` label and ``law`` (default: the scene's law).
+        The result's ``element`` label and ``law`` (default: the scene's law); both are
+        attributes too (``law`` ``None``: the scene's).
     default
         See :class:`ModelPlugin`.
     applies
@@ -223,7 +224,7 @@ class SystemModel:
         self.default = default
         self.settings: Mapping[str, Any] = dict(settings)
         self.element = element
-        self._law = law
+        self.law = law
         self._build = build
         self._applies = applies
         self._static = dict(static or {})
@@ -260,7 +261,7 @@ class SystemModel:
         return ModelSolution(
             model_result(
                 scene, u, model=self.name, element=self.element,
-                law=self._law or scene.material.law, wall_time=time.perf_counter() - t0,
+                law=self.law or scene.material.law, wall_time=time.perf_counter() - t0,
                 converged=info.converged, iterations=info.iterations,
                 residual=system.forces(info.x, None),
                 info={"method": info.method, "jacobian": info.jacobian,
@@ -303,7 +304,7 @@ class SystemModel:
         return ModelSolution(
             model_result(
                 scene, u, model=self.name, element=self.element,
-                law=self._law or scene.material.law, wall_time=time.perf_counter() - t0,
+                law=self.law or scene.material.law, wall_time=time.perf_counter() - t0,
                 converged=False, iterations=steps, residual=system.forces(traj.x, None),
                 info={"dt": dt, "steps": steps, "settings": dict(self.settings)},
                 status=f"end of run at t = {t:.4g} s after {steps} steps",

@@ -266,7 +266,7 @@ def law_versus(scene: Scene, name: str, reference_law: str) -> str:
             return "same law"
         return "small-strain calibration" if opts.stiffening == "off" else "stiffened calibration"
     if m.kind == "plugin":  # its own law (a plug-in's ``law``, when it names one)
-        own = getattr(m.plugin, "law", None) or getattr(m.plugin, "_law", None)
+        own = getattr(m.plugin, "law", None)
         return "same law" if own == ref else f"own law ({own})" if own else "own law"
     fem_scene, _, law = m.fem_settings(scene)
     law = (law or fem_scene.material.law).split("/")[0]
