@@ -105,7 +105,7 @@ def resolve_region(mesh: TetMesh, spec: str | dict, where: str = "region") -> Re
             nodes = np.flatnonzero(on)
             facets = bf[on[bf].all(axis=1)]
         elif spec in mesh.facet_sets:
-            facets = mesh.facet_sets[spec]
+            facets = outward_facets(mesh.facet_sets[spec], bf)
             nodes = np.unique(facets)
         elif spec in mesh.node_sets:
             nodes = np.unique(mesh.node_sets[spec])
@@ -140,6 +140,52 @@ def resolve_region(mesh: TetMesh, spec: str | dict, where: str = "region") -> Re
     if nodes.size == 0:
         raise InputError(f"{where}: region {label} selects no nodes")
     return Region(name=label, nodes=nodes.astype(np.int64), facets=np.asarray(facets, np.int64))
+
+
+def outward_facets(facets: np.ndarray, boundary: np.ndarray) -> np.ndarray:
+    """A facet set with each boundary triangle in the outward order of ``boundary``.
+
+    A mesh file's facet set keeps the file's vertex order, which need not point out of the
+    body (cardiac-geometries' gmsh ventricle orders every facet inward). A pressure's
+    direction follows the order (:func:`springfem.loads.external_forces`), so each facet of
+    the set that lies on the boundary takes the order of its boundary facet; the others keep
+    theirs.
+
+    Parameters
+    ----------
+    facets
+        Triangles ``(k, 3)`` in any order.
+    boundary
+        The mesh's outward boundary facets (:meth:`~springfem.mesh.TetMesh.boundary_facets`).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(k, 3)``: the same triangles, boundary ones outward.
+
+    Examples
+    --------
+    >>> from springfem.mesh import box_mesh
+    >>> m = box_mesh((1.0, 1.0, 1.0), (1, 1, 1))
+    >>> bf = m.boundary_facets()
+    >>> bool((outward_facets(bf[:, ::-1], bf) == bf).all())
+    True
+    """
+    facets = np.asarray(facets, dtype=np.int64).reshape(-1, 3)
+    boundary = np.asarray(boundary, dtype=np.int64).reshape(-1, 3)
+    if len(facets) == 0 or len(boundary) == 0:
+        return facets
+
+    both = np.sort(np.concatenate([boundary, facets]), axis=1)
+    _, ids = np.unique(both, axis=0, return_inverse=True)
+    ids = ids.ravel()
+    kb, kf = ids[: len(boundary)], ids[len(boundary) :]
+    order = np.argsort(kb)
+    at = order[np.minimum(np.searchsorted(kb, kf, sorter=order), len(kb) - 1)]
+    on = kb[at] == kf
+    out = facets.copy()
+    out[on] = boundary[at[on]]
+    return out
 
 
 def facet_areas_normals(points: np.ndarray, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -58,3 +58,39 @@ def test_reactions_balance_the_load():
     r[left] = [1.0, -2.0, 0.5]
     out = reactions(s, r)
     np.testing.assert_allclose(out["x_min"], -len(left) * np.array([1.0, -2.0, 0.5]))
+
+
+@pytest.mark.parametrize("reverse", [False, True])
+def test_pressure_on_a_file_facet_set_pushes_into_the_body_in_any_vertex_order(tmp_path, reverse):
+    # a mesh file's facet set keeps the file's vertex order; cardiac-geometries' gmsh ventricle
+    # orders every facet inward, which once turned the spring model's pressure around
+    import meshio
+
+    from springfem.mesh import boundary_facets, box_mesh
+    from springfem.scene import load_scene
+
+    m = box_mesh((0.2, 0.1, 0.05), (4, 3, 2), "five")
+    bf = boundary_facets(m.tets)
+    top = bf[np.isclose(m.points[bf][:, :, 1], 0.1).all(1)]
+    top = top[:, ::-1] if reverse else top
+    top[::2] = top[::2, [1, 2, 0]]  # a cyclic shift keeps the orientation
+    mesh = meshio.Mesh(
+        m.points,
+        [("triangle", top), ("tetra", m.tets)],
+        cell_data={
+            "gmsh:physical": [np.full(len(top), 7), np.full(m.n_tets, 3)],
+            "gmsh:geometrical": [np.full(len(top), 1), np.full(m.n_tets, 1)],
+        },
+        field_data={"top": np.array([7, 2]), "body": np.array([3, 3])},
+    )
+    meshio.write(tmp_path / "block.msh", mesh, file_format="gmsh22", binary=False)
+    (tmp_path / "s.toml").write_text(
+        '[mesh]\nfile = "block.msh"\n[material]\nlaw = "linear"\nE = 1e3\nnu = 0.3\n'
+        '[[boundary]]\nregion = "x_min"\nfix = ["x", "y", "z"]\n'
+        '[[load]]\ntype = "pressure"\nregion = "top"\nvalue = 10.0\n'
+    )
+    s = load_scene(tmp_path / "s.toml")
+    f = external_forces(s)
+    # -p n A with the outward n = +y, as on the box face y_max (test above)
+    np.testing.assert_allclose(f.sum(0), [0, -10.0 * 0.2 * 0.05, 0], atol=1e-15)
+    assert (f[:, 1] <= 1e-15).all()
