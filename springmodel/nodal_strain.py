@@ -48,6 +48,18 @@ import scipy.sparse as sp
 
 from springfem.mesh import tet_volumes
 
+from .nodal_groups import (
+    GROUP_TOLERANCE,
+    copy_stresses,
+    element_classes,
+    group_pairs,
+    nodal_moduli,
+    nodal_stresses,
+    probe_gradients,
+    subset,
+    virtual_positions,
+)
+
 #: Virtual elements per block of the tissue pass's element matrices (bounds their memory).
 CHUNK = 16384
 
@@ -189,8 +201,54 @@ def virtual_elements(elements):
     return replace(elements, tets=tets, n_points=16 * m, **changes)
 
 
+class _Energy:
+    """The energy of a set of (virtual) elements: the tissue pass, or the spring kernel with
+    its Hessian and the exponential stiffening."""
+
+    def __init__(self, elements, options, modulus: float | None, tissue):
+        from .hessian import SpringHessian
+        from .spring_kernel import SpringKernel
+        from .stiffening import StiffeningPart
+        from .tissue_element import TissuePart
+
+        self.elements = elements
+        opts = replace(options, volume_average="element", volume_stabilisation=None)
+        self.tissue = None if tissue is None else TissuePart(elements, tissue)
+        self.kernel = self.hessian = self.stiffening = None
+        if self.tissue is None:
+            self.kernel = SpringKernel(elements, opts, parallel=None)
+            self.hessian = SpringHessian(elements, opts)
+            if modulus is not None and options.stiffening != "off":
+                self.stiffening = StiffeningPart(elements, opts, modulus)
+
+    def energy(self, y: np.ndarray) -> float:
+        if self.tissue is not None:
+            return self.tissue.energy(y)
+        W = self.kernel.energy(y)
+        return W if self.stiffening is None else W + self.stiffening.energy(y)
+
+    def forces(self, y: np.ndarray) -> np.ndarray:
+        if self.tissue is not None:
+            return self.tissue.forces(y)
+        fy = self.kernel.forces(y)
+        return fy if self.stiffening is None else fy + self.stiffening.forces(y)
+
+    def element_matrices(self, y: np.ndarray, lo: int, hi: int) -> np.ndarray:
+        if self.tissue is not None:
+            return self.tissue.element_matrices(y, lo, hi)
+        K = self.hessian.element_matrices(y, lo=lo, hi=hi)
+        if self.stiffening is None:
+            return K
+        return K + self.stiffening.element_matrices(y, lo, hi)
+
+
 class NodalStrainPart:
     """The nodal-strain springs of a :class:`~springmodel.model.SpringModel` (module text).
+
+    The virtual elements are grouped by node and element class (:mod:`springmodel.nodal_groups`:
+    about one per node when the elements share one law per volume), and ``Fbar = B x``,
+    ``B^T T`` and ``B^T diag(A) B`` run on the mesh's
+    :class:`~springfem.mesh.nodal_average.NodalAverage`.
 
     Parameters
     ----------
@@ -209,39 +267,57 @@ class NodalStrainPart:
         :class:`~springmodel.tissue_element.TissueLawParameters`; the virtual elements then
         run the tissue pass (:class:`~springmodel.tissue_element.TissuePart`) in place of the
         spring kernel and the stiffening.
+    group
+        Group the copies by node and class (default); ``False``: one virtual element per
+        copy, ``4 m`` of them (the reference the grouping is tested against).
     """
 
-    def __init__(self, X, tets, elements, options, modulus: float | None = None, tissue=None):
-        from .hessian import SpringHessian
-        from .spring_kernel import SpringKernel
-        from .stiffening import StiffeningPart
-        from .tissue_element import TissuePart
+    def __init__(self, X, tets, elements, options, modulus: float | None = None, tissue=None,
+                 group: bool = True):  # fmt: skip
+        from .nodal_groups import mesh_average
 
         self.X = np.asarray(X, float)
         self.tets = np.asarray(tets, np.int64)
         self.n = self.X.shape[0]
-        self.Gb = nodal_gradients(self.X, self.tets)
-        self.node = self.tets.ravel()  # the vertex a of virtual element 4 e + p
-        k = self.node.size  # the sum over the copies of each vertex, (n, 4 m)
-        self._to_nodes = sp.csr_matrix((np.ones(k), (self.node, np.arange(k))), (self.n, k))
-        self.Xv = np.repeat(self.X[self.tets], 4, axis=0)  # (4m, 4, 3): X_i of its element
-        opts = replace(options, volume_average="element", volume_stabilisation=None)
-        self.elements = virtual_elements(elements)
-        # the virtual elements' energy: the tissue pass, or the spring kernel (+ stiffening)
-        self.tissue = None if tissue is None else TissuePart(self.elements, tissue)
-        self.kernel = self.hessian = self.stiffening = None
-        if self.tissue is None:
-            self.kernel = SpringKernel(self.elements, opts, parallel=None)
-            self.hessian = SpringHessian(self.elements, opts)
-            if modulus is not None and options.stiffening != "off":
-                self.stiffening = StiffeningPart(self.elements, opts, modulus)
-        B = []  # rows 9 a + 3 alpha + beta, columns 3 j + alpha
-        for beta in range(3):
-            coo = self.Gb[beta].tocoo()
-            for alpha in range(3):
-                B.append((9 * coo.row + 3 * alpha + beta, 3 * coo.col + alpha, coo.data))
-        r, c, v = (np.concatenate(t) for t in zip(*B, strict=True))
-        self.B = sp.csr_matrix((v, (r, c)), shape=(9 * self.n, 3 * self.n))
+        self.average = mesh_average(X, tets)
+        m = self.tets.shape[0]
+        V = np.asarray(elements.V0, dtype=float)
+        cls = np.arange(m)
+        if group:
+            cls = self._classes(elements, options, modulus, tissue)
+        self.nodes, rep, scale = group_pairs(self.tets, cls, V)
+        self.Xg = np.ascontiguousarray(self.X[self.tets[rep]])  # (g, 4, 3)
+        self.elements = subset(elements, rep, scale)
+        self.part = _Energy(self.elements, options, modulus, tissue)
+        self.tissue = self.part.tissue
+        self.grouped = bool(cls.max(initial=0) + 1 < m)
+        self._y = np.empty((4 * self.nodes.size, 3))
+        self._T = np.empty((self.n, 3, 3))
+
+    def _classes(self, elements, options, modulus, tissue) -> np.ndarray:
+        """Element classes, or one per element when the grouped sum misses (module text of
+        :mod:`springmodel.nodal_groups`)."""
+        m = self.tets.shape[0]
+        V = np.asarray(elements.V0, dtype=float)
+        copies = _Energy(subset(elements, np.arange(m)), options, modulus, tissue)
+        F = probe_gradients()
+        with np.errstate(all="ignore"):
+            T = np.stack([copy_stresses(copies, self.X, self.tets, Ft) for Ft in F])
+        if not np.isfinite(T).all():
+            return np.arange(m)
+        cls = element_classes(T[:2], V)
+        k = int(cls.max(initial=0)) + 1
+        if k == m:
+            return cls
+        first = np.full(k, m, dtype=np.int64)
+        np.minimum.at(first, cls, np.arange(m))
+        grouped = np.zeros((k, 3, 3))  # the third gradient: sum over each class, both ways
+        np.add.at(grouped, cls, T[2])
+        scale = np.bincount(cls, V, k) / V[first]
+        rep = scale[:, None, None] * T[2][first]
+        if np.abs(rep - grouped).max() > GROUP_TOLERANCE * np.abs(grouped).max():
+            return np.arange(m)
+        return cls
 
     @classmethod
     def split(cls, mesh, elements, options, modulus: float | None = None, tissue=None):
@@ -280,54 +356,39 @@ class NodalStrainPart:
         return part, replace(elements, k_axial=zero, k_torsion=zero, k_coupling=zero)
 
     def virtual_positions(self, x: np.ndarray) -> np.ndarray:
-        """``y = Fbar_a X_i`` of every virtual element's vertices, ``(16 m, 3)``."""
-        F = nodal_deformation_gradients(self.Gb, np.asarray(x, float).reshape(-1, 3))
-        return np.einsum("kab,kib->kia", F[self.node], self.Xv).reshape(-1, 3)
-
-    def _energy(self, y: np.ndarray) -> float:
-        if self.tissue is not None:
-            return self.tissue.energy(y)
-        W = self.kernel.energy(y)
-        return W if self.stiffening is None else W + self.stiffening.energy(y)
-
-    def _forces(self, y: np.ndarray) -> np.ndarray:
-        if self.tissue is not None:
-            return self.tissue.forces(y)
-        fy = self.kernel.forces(y)
-        return fy if self.stiffening is None else fy + self.stiffening.forces(y)
-
-    def _element_matrices(self, y: np.ndarray) -> np.ndarray:
-        if self.tissue is not None:
-            k = self.elements.n_elements
-            return np.concatenate([
-                self.tissue.element_matrices(y, lo, min(lo + CHUNK, k))
-                for lo in range(0, k, CHUNK)
-            ])  # fmt: skip
-        K = self.hessian.element_matrices(y)
-        return K if self.stiffening is None else K + self.stiffening.element_matrices(y)
+        """``y = Fbar_a X_i`` of every virtual element's vertices, ``(4 g, 3)``."""
+        F = self.average.gradients(np.asarray(x, float).reshape(-1, 3))
+        virtual_positions(F, self.nodes, self.Xg, self._y)
+        return self._y
 
     def energy(self, x: np.ndarray) -> float:
         """``sum_e (1 - alpha)/4 sum_a W_e(Fbar_a)`` (J)."""
-        return self._energy(self.virtual_positions(x))
+        return self.part.energy(self.virtual_positions(x))
 
-    def forces(self, x: np.ndarray) -> np.ndarray:
-        """Nodal forces ``-dW/dx`` ``(n, 3)`` (N): ``B^T T``."""
-        fy = self._forces(self.virtual_positions(x))
-        T = np.einsum("kia,kib->kab", fy.reshape(-1, 4, 3), self.Xv)  # -dW/dFbar per copy
-        Ta = self._to_nodes @ T.reshape(-1, 9)
-        return (self.B.T @ Ta.reshape(-1)).reshape(-1, 3)
+    def stresses(self, x: np.ndarray) -> np.ndarray:
+        """Nodal stresses ``T_a = -dW/dFbar_a`` ``(n, 3, 3)``."""
+        fy = self.part.forces(self.virtual_positions(x))
+        nodal_stresses(np.ascontiguousarray(fy, dtype=float), self.Xg, self.nodes, self._T)
+        return self._T
+
+    def forces(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """Nodal forces ``-dW/dx`` ``(n, 3)`` (N): ``B^T T`` (added to ``out`` if given)."""
+        return self.average.transpose(self.stresses(x), out)
 
     def moduli(self, x: np.ndarray) -> np.ndarray:
         """``A_a = d^2 W / dFbar_a^2`` of every node, ``(n, 9, 9)`` (rows ``3 alpha + beta``)."""
-        K = self._element_matrices(self.virtual_positions(x))
-        K = K.reshape(-1, 4, 3, 4, 3).transpose(0, 2, 4, 1, 3)  # [k, alpha, gamma, i, j]
-        Xv = self.Xv[:, None, None]
-        A = Xv.transpose(0, 1, 2, 4, 3) @ K @ Xv  # [k, alpha, gamma, beta, delta]
-        A = A.transpose(0, 1, 3, 2, 4).reshape(-1, 9, 9)
-        return (self._to_nodes @ A.reshape(-1, 81)).reshape(-1, 9, 9)
+        y = self.virtual_positions(x)
+        A = np.zeros((self.n, 9, 9))
+        k = self.elements.n_elements
+        for lo in range(0, k, CHUNK):
+            K = self.part.element_matrices(y, lo, min(lo + CHUNK, k))
+            nodal_moduli(np.ascontiguousarray(K), self.Xg, self.nodes, lo, A)
+        return A
+
+    def add_tangent(self, x: np.ndarray, data: np.ndarray) -> np.ndarray:
+        """``data += B^T diag(A_a) B`` on the pattern of :attr:`average`."""
+        return self.average.add_tangent(self.moduli(x), data)
 
     def tangent(self, x: np.ndarray) -> sp.csr_matrix:
-        """Tangent ``B^T diag(A_a) B`` ``(3n, 3n)`` (CSR, symmetric)."""
-        Aa = self.moduli(x)
-        A = sp.bsr_matrix((Aa, np.arange(self.n), np.arange(self.n + 1)), shape=(9 * self.n,) * 2)
-        return (self.B.T @ A.tocsr() @ self.B).tocsr()
+        """Tangent ``B^T diag(A_a) B`` ``(3n, 3n)`` (CSR, symmetric, the two-ring pattern)."""
+        return self.average.matrix(self.add_tangent(x, self.average.zeros()))

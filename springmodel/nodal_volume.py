@@ -37,7 +37,12 @@ import scipy.sparse as sp
 from springfem.mesh import tet_volumes
 from springfem.volumetric import volumetric_energy
 
-from .springs.points import scatter
+from .nodal_volume_kernels import (
+    add_volume_hessians,
+    nodal_volumes,
+    volume_forces,
+    volume_gradients,
+)
 
 # a = x1 - x0, b = x2 - x0, c = x3 - x0 from the nodes: edge = _T @ nodes
 _T = np.array([[-1.0, 1, 0, 0], [-1, 0, 1, 0], [-1, 0, 0, 1]])
@@ -114,13 +119,21 @@ class NodalVolume:
     """
 
     def __init__(self, X: np.ndarray, tets: np.ndarray, kappa: np.ndarray, kind: str = "quadratic"):
-        tets = np.array(tets, dtype=np.int64)
+        from .nodal_groups import mesh_average
+
+        given = tets
+        tets = np.asarray(tets, dtype=np.int64)
         self.n = int(np.asarray(X).shape[0])
         self.kind = kind
         V0 = tet_volumes(np.asarray(X, float), tets)
         flip = V0 < 0  # orient every tet positively (the volume measure is signed)
-        tets[flip] = tets[flip][:, [0, 2, 1, 3]]
-        self.tets = tets
+        if flip.any():
+            tets = tets.copy()
+            tets[flip] = tets[flip][:, [0, 2, 1, 3]]
+            given = tets
+        self.tets = np.ascontiguousarray(tets)
+        # the nodal average of the mesh (shared with the nodal strain): its tangent pattern
+        self.average = mesh_average(X, given)
         V0 = np.abs(V0)
         self.Va0 = self._to_nodes(V0 / 4.0)
         kV = self._to_nodes(np.asarray(kappa, float) * V0 / 4.0)
@@ -133,33 +146,53 @@ class NodalVolume:
         """Sum ``per_element (m,)`` into each of the element's four nodes, ``(n,)``."""
         return np.bincount(self.tets.ravel(), np.repeat(per_element, 4), minlength=self.n)
 
+    def _ratios_of_nodal(self, Vn: np.ndarray) -> np.ndarray:
+        """``J_a`` from the nodal volumes ``Vn (n,)``."""
+        return np.where(self.Va0 > 0, Vn / self.Va0_safe, 1.0)
+
     def _ratios_of(self, V: np.ndarray) -> np.ndarray:
         """``J_a`` from the element volumes ``V (m,)``."""
-        return np.where(self.Va0 > 0, self._to_nodes(V / 4.0) / self.Va0_safe, 1.0)
+        return self._ratios_of_nodal(self._to_nodes(V / 4.0))
 
     def ratios(self, x: np.ndarray) -> np.ndarray:
         """Nodal volume ratios ``J_a = V_a / V_a0`` ``(n,)`` (1 for nodes in no element)."""
-        return self._ratios_of(tet_volumes(np.asarray(x, float), self.tets))
+        Vn = np.zeros(self.n)
+        nodal_volumes(np.ascontiguousarray(x, dtype=float).reshape(-1, 3), self.tets, Vn)
+        return self._ratios_of_nodal(Vn)
 
     def _state(self, x):
-        V, dV = tet_volumes_and_gradients(np.asarray(x, float), self.tets)
-        J = self._ratios_of(V)
-        U, dU, d2U = volumetric_energy(J, self.kappa, self.kind)
-        return dV, U, dU, d2U
+        U, dU, d2U = volumetric_energy(self.ratios(x), self.kappa, self.kind)
+        return U, dU, d2U
 
     def energy(self, x: np.ndarray) -> float:
         """``sum_a V_a0 U_a(J_a)`` (J)."""
-        _, U, _, _ = self._state(x)
+        U, _, _ = self._state(x)
         return float(np.dot(self.Va0, U))
 
-    def forces(self, x: np.ndarray) -> np.ndarray:
-        """Nodal forces ``-dW/dx`` ``(n, 3)`` (N)."""
-        dV, _, dU, _ = self._state(x)
-        pbar = dU[self.tets].mean(axis=1)
-        return scatter(-pbar[:, None, None] * dV, self.tets, self.n)
+    def forces(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """Nodal forces ``-dW/dx`` ``(n, 3)`` (N) (added to ``out`` when given)."""
+        x = np.ascontiguousarray(x, dtype=float).reshape(-1, 3)
+        _, dU, _ = self._state(x)
+        out = np.zeros((self.n, 3)) if out is None else out
+        volume_forces(x, self.tets, np.ascontiguousarray(dU, dtype=float), out)
+        return out
+
+    def add_tangent(self, x: np.ndarray, data: np.ndarray) -> np.ndarray:
+        """``data +=`` the tangent on the two-ring pattern of :attr:`average`."""
+        x = np.ascontiguousarray(x, dtype=float).reshape(-1, 3)
+        _, dU, d2U = self._state(x)
+        op = self.average
+        dV = np.empty((self.tets.shape[0], 4, 3))
+        volume_gradients(x, self.tets, dV)
+        G = op.row_entries(dV, 0.25)  # g_a = sum_{e ni a} dV_e / 4
+        w = np.where(self.Va0 > 0, d2U / self.Va0_safe, 0.0)
+        op.add_outer(w, G, data)
+        pbar = 0.25 * dU[self.tets].sum(axis=1)
+        add_volume_hessians(x, self.tets, pbar, op.pattern[7], data)
+        return data
 
     def tangent(self, x: np.ndarray) -> sp.csr_matrix:
-        """Tangent ``d^2W/dx^2`` ``(3n, 3n)`` (CSR, symmetric).
+        """Tangent ``d^2W/dx^2`` ``(3n, 3n)`` (CSR, symmetric, the two-ring pattern).
 
         Parameters
         ----------
@@ -171,8 +204,13 @@ class NodalVolume:
         scipy.sparse.csr_matrix
             ``G^T diag(U''/V_a0) G + sum_e pbar_e d^2V_e/dx^2``.
         """
+        return self.average.matrix(self.add_tangent(x, self.average.zeros()))
+
+    def reference_tangent(self, x: np.ndarray) -> sp.csr_matrix:
+        """:meth:`tangent` by numpy and scipy products (the reference the tests compare)."""
         x = np.asarray(x, float)
-        dV, _, dU, d2U = self._state(x)
+        V, dV = tet_volumes_and_gradients(x, self.tets)
+        U, dU, d2U = volumetric_energy(self._ratios_of(V), self.kappa, self.kind)
         m = self.tets.shape[0]
         cols = (3 * self.tets[:, :, None] + np.arange(3)).reshape(m, 12)  # (m, 12)
         # G[a, :] = sum_{e ni a} dV_e / 4: row a = tets[e, p] for every p, all 12 columns
@@ -234,6 +272,14 @@ class NodalPart:
         self.stabilisation = float(stabilisation)
         self.term = NodalVolume(X, tets, self.fraction * elements.k_axis_volume, kind)
         self._coloured = None
+        self._same: bool | None = None
+
+    def _same_tets(self, hessian) -> bool:
+        """Whether the Hessian's elements are the term's tets in its order (their element
+        matrices then sum into the two-ring pattern directly)."""
+        if self._same is None:
+            self._same = bool(np.array_equal(hessian.elements.tets, self.term.tets))
+        return self._same
 
     @classmethod
     def split(cls, mesh, elements, options, material=None) -> tuple[NodalPart | None, object]:
@@ -296,6 +342,14 @@ class NodalPart:
         scipy.sparse.csr_matrix
             ``K = -d f / dx`` ``(3n, 3n)``.
         """
+        if hessian is not None and self._same_tets(hessian):
+            op = self.term.average
+            data = op.zeros()
+            m = hessian.elements.n_elements
+            for lo in range(0, m, hessian.chunk):  # bounded memory, as SpringHessian.matrix
+                hi = min(lo + hessian.chunk, m)
+                op.add_elements(hessian.element_matrices(x, lo=lo, hi=hi), data, lo)
+            return op.matrix(self.term.add_tangent(x, data))
         if hessian is not None:
             K = hessian.matrix(x)
         else:
