@@ -115,6 +115,50 @@ def read_outputs(root: Path) -> list[tuple[Path, dict]]:
     return sorted(found, key=lambda x: (order.get(x[1].get("name"), len(order)), x[0].name))
 
 
+#: Sections of a report folder that a command other than ``springfem report`` writes
+#: (``springfem bench scale`` into ``reports/scale/``): the report shows them as they are when
+#: they are there, and never re-runs them (they take too long).
+STATIC_SECTIONS = ("scale",)
+
+
+def static_markdown(root: Path) -> list[str]:
+    """The Markdown lines of the :data:`STATIC_SECTIONS` found under ``root``: title, the
+    command that regenerates it, findings, tables (their ``.md``) and figures, with paths
+    relative to ``root``. The HTML page shows them as any study (:func:`read_outputs`).
+
+    Parameters
+    ----------
+    root
+        A report folder.
+
+    Returns
+    -------
+    list of str
+    """
+    lines: list[str] = []
+    for name in STATIC_SECTIONS:
+        try:
+            d = json.loads((Path(root) / name / OUTPUT_FILE).read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            continue
+        lines += ["", f"## {d['title']}", "",
+                  f"Regenerate: `{d['command']}` ({d.get('seconds', 0):.0f} s; "
+                  "`springfem report` shows this section as written, it does not re-run it).",
+                  ""]  # fmt: skip
+        lines += [f"- {f}" for f in d.get("findings", [])]
+        for t in d.get("tables", []):
+            md = Path(root) / name / t["path"]
+            try:
+                body = md.read_text(encoding="utf-8").rstrip()
+            except OSError:
+                body = f"*table {t['path']} is missing*"
+            lines += ["", f"**Table.** {t['caption']} (`{name}/{t['path']}`, CSV beside it)", "",
+                      body]  # fmt: skip
+        for f in d.get("figures", []):
+            lines += ["", f"![{name}]({name}/{f['path']})", "", f"*Figure.* {f['caption']}"]
+    return lines
+
+
 def _table_html(folder: Path, table: dict) -> str:
     csv = (folder / table["path"]).with_suffix(".csv")
     try:

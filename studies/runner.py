@@ -18,7 +18,7 @@ from springfem.files import jsonable as _jsonable
 
 from .budget import Budget, skipped_finding, skipped_table
 from .cache import CaseCache, source_fingerprint
-from .html import write_index, write_output
+from .html import static_markdown, write_index, write_output
 from .registry import REGISTRY, StudyContext, StudyOutput, get_study
 from .scenes import StudyScene
 
@@ -205,6 +205,7 @@ def write_report(outputs: list[StudyOutput], root: Path, quick: bool) -> Path:
             lines.append(Path(t.path).read_text().rstrip())
         for fig in o.figures:
             lines += ["", f"![{o.name}]({_rel(fig.path, root)})", "", f"*Figure.* {fig.caption}"]
+    lines += static_markdown(root)  # e.g. the scale benchmark's, when reports/scale/ holds it
     path = root / "REPORT.md"
     atomic_write_text(path, "\n".join(lines) + "\n")
     headline = {o.name: o.headline for o in outputs}

@@ -240,7 +240,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser(
         "bench", help="benchmarks: spring force kernel, threads rule, FEM, steps, tissue solves"
     )
-    p.add_argument("what", choices=("forces", "fem", "step", "threads", "tissue"))
+    p.add_argument("what", choices=("forces", "fem", "step", "threads", "tissue", "scale"))
     p.add_argument("--tets", type=int, default=None, help="approximate number of tets")
     p.add_argument("--repeats", type=int, default=None,
                    help="repeats (median reported; default 7, tissue 3)")  # fmt: skip
@@ -252,8 +252,60 @@ def build_parser() -> argparse.ArgumentParser:
                    help="tissue: ventricle element size in mm (default 4)")  # fmt: skip
     p.add_argument("--divisions", default=None, metavar="NX,NY,NZ",
                    help="tissue: beam divisions (default 30,3,3)")  # fmt: skip
+    _scale_options(p)
     p.set_defaults(func=_subcommand("studies.cli.bench", "cmd_bench"))
     return parser
+
+
+def _scale_options(p: argparse.ArgumentParser) -> None:
+    """The options of ``springfem bench scale`` (:mod:`studies.bench_scale`)."""
+    g = p.add_argument_group("scale (organ meshes, one process per model and size)")
+    g.add_argument(
+        "--sizes",
+        default=None,
+        metavar="N,N,...",
+        help="organ sizes in tets (default 5000,30000,120000,500000)",
+    )
+    g.add_argument("--quick", action="store_true", help="scale: sizes 2000,8000")
+    g.add_argument(
+        "--models",
+        default=None,
+        metavar="M,M,...",
+        help="scale: models (default: the verdict's on the organ)",
+    )
+    g.add_argument(
+        "--max-time",
+        type=_positive_float,
+        default=None,
+        metavar="S",
+        help="scale: seconds per static solve (default 120)",
+    )
+    g.add_argument(
+        "--max-memory",
+        type=_positive_float,
+        default=None,
+        metavar="GB",
+        help="scale: GB of address space per case (default 14)",
+    )
+    g.add_argument(
+        "--budget",
+        type=_positive_float,
+        default=None,
+        metavar="S",
+        help="scale: seconds for the whole run (cases that would not fit are not started)",
+    )
+    g.add_argument("--out", default=None, help="scale: output folder (default reports/scale)")
+    g.add_argument(
+        "--meshes",
+        default=None,
+        help="scale: folder of the organ meshes (default out/organ-meshes)",
+    )
+    g.add_argument(
+        "--cost-laws",
+        default=None,
+        metavar="PATH",
+        help="scale: also write the fitted laws (the cost model's JSON) here",
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:

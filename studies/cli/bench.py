@@ -1,4 +1,4 @@
-"""``springfem bench forces|fem|step|threads|tissue``: interleaved benchmarks (medians, ratios)."""
+"""``springfem bench forces|fem|step|threads|tissue|scale``: benchmarks (medians, ratios, laws)."""
 
 from __future__ import annotations
 
@@ -19,6 +19,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     what = args.what
     if what == "tissue":
         return _bench_tissue(args)
+    if what == "scale":
+        return _bench_scale(args)
     n = args.tets if args.tets is not None else DEFAULT_TETS[what]
     repeats = int(getattr(args, "repeats", None) or 7)
     if n < 6:
@@ -96,4 +98,52 @@ def _bench_tissue(args: argparse.Namespace) -> int:
         _print_json(res)
     else:
         print_tissue(res)
+    return 0
+
+
+def _bench_scale(args: argparse.Namespace) -> int:
+    """``springfem bench scale`` (:mod:`studies.bench_scale`)."""
+    from pathlib import Path
+
+    from springfem.errors import InputError
+
+    from ..bench_scale import (
+        DEFAULT_MAX_MEMORY,
+        DEFAULT_MAX_TIME,
+        DEFAULT_MESHES,
+        DEFAULT_OUT,
+        DEFAULT_SIZES,
+        QUICK_SIZES,
+        ScaleSettings,
+        bench_scale,
+    )
+
+    if args.tets is not None:
+        raise InputError("bench scale: --tets does not apply; use --sizes N,N,...")
+    sizes: tuple[int, ...] = QUICK_SIZES if args.quick else DEFAULT_SIZES
+    if args.sizes is not None:
+        try:
+            sizes = tuple(int(float(s)) for s in str(args.sizes).split(",") if s.strip())
+        except ValueError:
+            sizes = ()
+        if not sizes or min(sizes) < 100:
+            raise InputError(f"--sizes must be tet counts of at least 100, got {args.sizes!r}")
+    models = None
+    if args.models:
+        from .. import models as registry
+
+        models = [registry.get(m.strip()).name for m in str(args.models).split(",") if m.strip()]
+    settings = ScaleSettings(
+        sizes=sorted(set(sizes)),
+        models=models,
+        max_time=DEFAULT_MAX_TIME if args.max_time is None else float(args.max_time),
+        max_memory=DEFAULT_MAX_MEMORY if args.max_memory is None else args.max_memory * 1e9,
+        budget=args.budget,
+        meshes=Path(args.meshes) if args.meshes else DEFAULT_MESHES,
+        out=Path(args.out) if args.out else DEFAULT_OUT,
+        cost_laws=Path(args.cost_laws) if args.cost_laws else None,
+    )
+    bench_scale(settings, log=lambda line: print(line, flush=True))
+    print(f"wrote {settings.out}/laws.md, cases.md, scale.png, cost_laws.json"
+          + (f" and {settings.cost_laws}" if settings.cost_laws else ""))  # fmt: skip
     return 0

@@ -1,0 +1,506 @@
+"""``springfem bench scale``: every model of the verdict on a family of organ meshes.
+
+For each size of the family (:data:`DEFAULT_SIZES`; ``--quick``: :data:`QUICK_SIZES`) the
+liver-shaped organ of :func:`springfem.mesh.organ.organ_scene` (neo-Hookean, ν = 0.49,
+hanging under gravity from its flat cut) is solved by each model the verdict weighs on it
+(:func:`scale_models`), and three things are measured:
+
+- the wall time of the static solve (warm: the case's process solves a small organ with the
+  model first, so imports and compiled kernels are not timed);
+- for a model with an explicit form, one explicit force pass, as the verdict times its
+  explicit step (:mod:`studies.bench_scale_case`);
+- the peak resident memory (RSS) of the case.
+
+Each case runs in its own process (:func:`run_case`), so its peak RSS is its own
+(``os.wait4`` reads it), under a time cap (``--max-time``, per static solve) and a memory cap
+(``--max-memory``: ``RLIMIT_AS``, the address space, which is a little above the RSS). The
+cases run one at a time, smallest size first, every model at a size before the next size. A
+model stops at the first size it does not fit or fails; the larger sizes say so. A case
+whose predicted time or memory (:func:`predict`, from the model's smaller sizes) is over a
+cap is not tried and is recorded as not fitting, with the prediction. ``--budget`` bounds the
+whole run: a case whose predicted time does not fit in what is left is not started.
+
+The laws, tables, figure and JSON are written by :mod:`studies.bench_scale_output` after
+every size, so a run stopped part way leaves what it measured.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .bench_scale_fit import SOLVED, power_law
+
+#: The organ family (tets) of the full benchmark and of ``--quick``.
+DEFAULT_SIZES = (5_000, 30_000, 120_000, 500_000)
+QUICK_SIZES = (2_000, 8_000)
+#: Tets of the warm-up organ every case solves first (not timed).
+WARMUP_TETS = 300
+#: Default caps of one case: seconds of its static solve, bytes of its address space.
+DEFAULT_MAX_TIME = 120.0
+DEFAULT_MAX_MEMORY = 14e9
+#: Seconds a case may take to start, warm up and load its mesh beyond its time cap, and
+#: to time its explicit step and stop after the cap.
+SETUP_SECONDS = 180.0
+GRACE_SECONDS = 60.0
+#: Exponents a prediction from one size assumes (time of a static solve, memory above
+#: the baseline); a fitted exponent below 1 is raised to 1 (no cost grows slower than the
+#: mesh it reads).
+ONE_SIZE_TIME_EXPONENT = 1.5
+MIN_EXPONENT = 1.0
+#: The default output folder and meshes folder.
+DEFAULT_OUT = Path("reports") / "scale"
+DEFAULT_MESHES = Path("out") / "organ-meshes"
+#: Case statuses that are not measurements of a solve.
+DID_NOT_FIT = "did not fit"
+
+
+@dataclass
+class ScaleSettings:
+    """What ``springfem bench scale`` runs.
+
+    Attributes
+    ----------
+    sizes
+        Tets of the organ family (increasing).
+    models
+        Models (default :func:`scale_models` of the first organ).
+    max_time
+        Seconds a static solve may take.
+    max_memory
+        Bytes of address space a case may use.
+    budget
+        Seconds for the whole run (``None``: no bound).
+    meshes
+        Folder of the organ meshes (made once, reused).
+    out
+        Output folder.
+    cost_laws
+        Also write the cost laws here (:func:`studies.bench_scale_fit.cost_laws_document`).
+    notes
+        Lines for the findings (which models are the same solve, e.g.).
+    """
+
+    sizes: Sequence[int] = DEFAULT_SIZES
+    models: Sequence[str] | None = None
+    max_time: float = DEFAULT_MAX_TIME
+    max_memory: float = DEFAULT_MAX_MEMORY
+    budget: float | None = None
+    meshes: Path = DEFAULT_MESHES
+    out: Path = DEFAULT_OUT
+    cost_laws: Path | None = None
+    notes: list[str] = field(default_factory=list)
+
+
+def scale_models(scene) -> tuple[list[str], list[str]]:
+    """The models the verdict weighs on ``scene`` and its reference
+    (:func:`studies.verdict.candidate_models`), each solve once: a model that is the same
+    solve as another (:func:`studies.model_set.same_solves`) is left out, the named one
+    kept; and notes saying which.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+
+    Returns
+    -------
+    tuple of (list of str, list of str)
+    """
+    from . import model_set
+    from .verdict import candidate_models
+
+    names = candidate_models(scene)
+    mixed = model_set.mixed_reference(scene)
+    if mixed and mixed not in names:
+        names.append(mixed)
+    # the scene's own spring model last, so that a named variant of the same solve is kept
+    names = [n for n in names if n != "spring"] + (["spring"] if "spring" in names else [])
+    alias = model_set.same_solves(scene, names)
+    notes = [f"{n} is the same solve as {first} on the organ: measured once as {first}"
+             for n, first in alias.items()]  # fmt: skip
+    return [n for n in names if n not in alias], notes
+
+
+def organ_scene_file(folder: Path, tets: int, max_memory: float) -> Path:
+    """The organ scene of about ``tets`` tets in ``folder`` (made in a child process under
+    the memory cap when it is not there yet).
+
+    Parameters
+    ----------
+    folder
+        The meshes folder.
+    tets
+        Tets asked for.
+    max_memory
+        Bytes of address space gmsh may use.
+
+    Returns
+    -------
+    Path
+    """
+    folder = Path(folder)
+    path = folder / f"organ-{tets}.toml"
+    if path.exists() and (folder / f"organ-{tets}.msh").exists():
+        return path
+    folder.mkdir(parents=True, exist_ok=True)
+    code = (
+        "import sys; from springfem.mesh.organ import organ_scene; "
+        "organ_scene(sys.argv[1], tets=int(sys.argv[2]))"
+    )
+    subprocess.run([sys.executable, "-c", code, str(folder), str(tets)], env=_child_env(),
+                   check=True, preexec_fn=_limit(max_memory), timeout=1800)  # fmt: skip
+    return path
+
+
+def _child_env() -> dict[str, str]:
+    """The environment of a child: this checkout first on the path, one BLAS thread."""
+    env = dict(os.environ)
+    root = str(Path(__file__).resolve().parents[1])
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+    env.setdefault("OPENBLAS_NUM_THREADS", "1")
+    env.setdefault("OMP_WAIT_POLICY", "passive")
+    env.setdefault("MPLBACKEND", "Agg")
+    return env
+
+
+def _limit(max_memory: float) -> Callable[[], None]:
+    def set_limit() -> None:
+        cap = int(max_memory)
+        resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+
+    return set_limit
+
+
+@dataclass
+class CaseResult:
+    """What :func:`run_case` got from the child: its stage lines, exit, peak RSS, and whether
+    it was stopped for time."""
+
+    stages: dict[str, dict]
+    returncode: int
+    peak_rss: int
+    killed_for_time: bool
+    stderr_tail: str
+    wall: float
+
+
+def run_case(
+    scene: Path,
+    model: str,
+    warmup: Path | None,
+    max_time: float,
+    max_memory: float,
+) -> CaseResult:
+    """Run one case (:mod:`studies.bench_scale_case`) in a child process under the caps.
+
+    The child's static solve stops itself at ``max_time``
+    (:func:`~springfem.mechanics.limits.solve_limits`); it is killed when it has not started
+    within :data:`SETUP_SECONDS` beyond that, or has not ended :data:`GRACE_SECONDS` past it.
+
+    Parameters
+    ----------
+    scene
+        The case's scene file.
+    model
+        The model.
+    warmup
+        The warm-up scene.
+    max_time
+        Seconds of the static solve.
+    max_memory
+        Bytes of address space (``RLIMIT_AS``).
+
+    Returns
+    -------
+    CaseResult
+    """
+    import json
+
+    cmd = [sys.executable, "-m", "studies.bench_scale_case", str(scene), model,
+           "--cap", f"{max_time:g}"] + (["--warmup", str(warmup)] if warmup else [])  # fmt: skip
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=_child_env(), preexec_fn=_limit(max_memory),
+                            start_new_session=True)  # fmt: skip
+    stages: dict[str, dict] = {}
+    tail: list[str] = []
+
+    def read_out() -> None:
+        assert proc.stdout is not None
+        for line in proc.stdout:
+            try:
+                rec = json.loads(line)
+                stages[rec.pop("stage")] = {**rec, "at": time.perf_counter()}
+            except (ValueError, KeyError, AttributeError):
+                continue
+
+    def read_err() -> None:
+        assert proc.stderr is not None
+        for line in proc.stderr:
+            tail.append(line.rstrip())
+            del tail[:-20]
+
+    readers = [threading.Thread(target=f, daemon=True) for f in (read_out, read_err)]
+    for r in readers:
+        r.start()
+    killed = False
+    status = 0
+    usage = None
+    while True:
+        pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
+        if pid:
+            break
+        now = time.perf_counter()
+        ready = stages.get("ready", {}).get("at")
+        late = (now - t0 > max_time + SETUP_SECONDS) if ready is None else (
+            now - ready > max_time + GRACE_SECONDS)  # fmt: skip
+        if late and not killed:
+            killed = True
+            os.killpg(proc.pid, signal.SIGKILL)
+        time.sleep(0.1)
+    for r in readers:
+        r.join(timeout=5)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    return CaseResult(stages, proc.returncode, int(usage.ru_maxrss) * 1024, killed,
+                      "\n".join(tail[-5:]), time.perf_counter() - t0)  # fmt: skip
+
+
+def classify(res: CaseResult, max_time: float, max_memory: float) -> tuple[str, str]:
+    """A case's status and message from what its child left.
+
+    ``ok``, ``implausible``, ``partial`` or ``failed`` as :func:`studies.models.run` gives it;
+    ``did not fit: time`` when the static solve was stopped at (or killed past) the time
+    cap; ``did not fit: memory`` when the child ran out of memory (a ``MemoryError``, or a
+    crash with its peak RSS near the cap or an allocation failure on stderr).
+
+    Parameters
+    ----------
+    res
+        The child's result.
+    max_time, max_memory
+        The caps.
+
+    Returns
+    -------
+    tuple of (str, str)
+    """
+    static = res.stages.get("static")
+    if static is not None:
+        if static["status"] in SOLVED:
+            return static["status"], static.get("message", "")
+        if static["seconds"] >= 0.9 * max_time:
+            return f"{DID_NOT_FIT}: time", f"stopped at the {max_time:g} s cap"
+        return static["status"], static.get("message", "")
+    if res.killed_for_time:
+        where = "static solve" if "ready" in res.stages else "set-up"
+        return f"{DID_NOT_FIT}: time", f"killed past the {max_time:g} s cap in its {where}"
+    err = res.stderr_tail.lower()
+    memory_words = ("memoryerror", "cannot allocate", "bad_alloc", "out of memory",
+                    "unable to allocate", "failed to allocate")  # fmt: skip
+    if ("error" in res.stages and res.stages["error"].get("kind") == "memory") or any(
+        w in err for w in memory_words
+    ):
+        return f"{DID_NOT_FIT}: memory", f"out of memory under the {max_memory / 1e9:g} GB cap"
+    if res.returncode < 0 and res.peak_rss >= 0.7 * max_memory:
+        return f"{DID_NOT_FIT}: memory", (
+            f"killed by signal {-res.returncode} at {res.peak_rss / 1e9:.3g} GB "
+            f"(cap {max_memory / 1e9:g} GB)"
+        )
+    last = res.stderr_tail.splitlines()[-1] if res.stderr_tail else ""
+    return "failed", f"exit {res.returncode}: {last}"[:300]
+
+
+def predict(rows: list[dict], tets: float) -> tuple[float, float]:
+    """The static time (s) and peak memory (bytes) of a model at ``tets`` from its solved
+    smaller sizes (``nan``: none solved).
+
+    Time: the power law of the sizes solved (:func:`~studies.bench_scale_fit.power_law`),
+    its exponent at least :data:`MIN_EXPONENT`; from one size, exponent
+    :data:`ONE_SIZE_TIME_EXPONENT`. Memory: the last size's baseline plus the power law of
+    the memory above it, exponent at least :data:`MIN_EXPONENT` (one size: that).
+
+    Parameters
+    ----------
+    rows
+        The model's cases so far (``tets``, ``status``, ``static (s)``,
+        ``peak memory (bytes)``, ``baseline (bytes)``).
+    tets
+        The size.
+
+    Returns
+    -------
+    tuple of float
+
+    Examples
+    --------
+    >>> rows = [{"tets": 1e4, "status": "ok", "static (s)": 2.0,
+    ...          "peak memory (bytes)": 3e8, "baseline (bytes)": 2e8}]
+    >>> t, m = predict(rows, 4e4)
+    >>> round(t, 6), round(m / 1e8, 6)  # 2 * 4^1.5, 2e8 + 1e8 * 4
+    (16.0, 6.0)
+    """
+    solved = [r for r in rows if r["status"] in SOLVED]
+    if not solved:
+        return float("nan"), float("nan")
+    last = max(solved, key=lambda r: r["tets"])
+    n = np.array([r["tets"] for r in solved], dtype=float)
+    t = np.array([r["static (s)"] for r in solved], dtype=float)
+    base = float(last["baseline (bytes)"])
+    above = np.array([r["peak memory (bytes)"] for r in solved], dtype=float) - base
+    if len(np.unique(n)) >= 2 and np.all(t > 0):
+        b = max(power_law(n, t)[1], MIN_EXPONENT)
+    else:
+        b = ONE_SIZE_TIME_EXPONENT
+    time_at = float(last["static (s)"]) * (tets / last["tets"]) ** b
+    ok = above > 0
+    d = MIN_EXPONENT
+    if len(np.unique(n[ok])) >= 2:
+        d = max(power_law(n[ok], above[ok])[1], MIN_EXPONENT)
+    top = max(float(last["peak memory (bytes)"]) - base, 0.0)
+    return time_at, base + top * (tets / last["tets"]) ** d
+
+
+def _row(model: str, size: int, tets: float, status: str, message: str, **values) -> dict:
+    row = {"model": model, "size": size, "tets": tets, "status": status,
+           "static (s)": np.nan, "step (s)": np.nan, "peak memory (bytes)": np.nan,
+           "baseline (bytes)": np.nan, "predicted static (s)": np.nan,
+           "predicted memory (bytes)": np.nan, "load average": np.nan,
+           "case wall (s)": np.nan, "message": message}  # fmt: skip
+    row.update(values)
+    return row
+
+
+def measured_row(model: str, size: int, res: CaseResult, max_time: float,
+                 max_memory: float, predicted: tuple[float, float]) -> dict:  # fmt: skip
+    """The table row of a case that ran."""
+    status, message = classify(res, max_time, max_memory)
+    ready = res.stages.get("ready", {})
+    static = res.stages.get("static", {})
+    step = res.stages.get("step", {})
+    load = static.get("load_average") or ready.get("load_average") or [np.nan]
+    return _row(
+        model, size, float(ready.get("tets", size)), status, message,
+        **{"static (s)": static.get("seconds", np.nan) if status in SOLVED else np.nan,
+           "step (s)": step.get("seconds", np.nan), "peak memory (bytes)": res.peak_rss,
+           "baseline (bytes)": res.stages.get("warmup", ready).get("rss", np.nan),
+           "predicted static (s)": predicted[0], "predicted memory (bytes)": predicted[1],
+           "load average": load[0], "case wall (s)": res.wall},
+    )  # fmt: skip
+
+
+def bench_scale(settings: ScaleSettings, log: Callable[[str], None] = print) -> pd.DataFrame:
+    """Run the benchmark (see the module docstring) and write its outputs.
+
+    Parameters
+    ----------
+    settings
+        What to run.
+    log
+        Called with one line per case.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per model and size (:func:`measured_row`, or a case not run and why).
+    """
+    from springfem.scene import load_scene
+
+    from .bench_scale_output import write_outputs
+
+    t0 = time.perf_counter()
+    sizes = sorted(int(s) for s in settings.sizes)
+    log(f"bench scale: sizes {sizes}, cap {settings.max_time:g} s and "
+        f"{settings.max_memory / 1e9:g} GB per case, load average {_load()}")  # fmt: skip
+    warmup = organ_scene_file(settings.meshes, WARMUP_TETS, settings.max_memory)
+    names = list(settings.models or [])
+    notes = settings.notes
+    if not names:
+        names, alias_notes = scale_models(load_scene(warmup))
+        notes += alias_notes
+    rows: list[dict] = []
+    stopped: dict[str, str] = {}
+    for size in sizes:
+        scene = None
+        for name in names:
+            mine = [r for r in rows if r["model"] == name]
+            if name in stopped:
+                rows.append(_row(name, size, size, stopped[name], "a smaller size did not"))
+                continue
+            predicted = predict(mine, size)
+            over = _over(predicted, settings)
+            left = None if settings.budget is None else settings.budget - (time.perf_counter() - t0)
+            if over:
+                rows.append(_row(name, size, size, f"{DID_NOT_FIT}: predicted", over,
+                                 **{"predicted static (s)": predicted[0],
+                                    "predicted memory (bytes)": predicted[1]}))  # fmt: skip
+                stopped[name] = f"{DID_NOT_FIT}: predicted"
+                log(f"  {size:>8} {name:<22} skipped: {over}")
+                continue
+            overhead = (
+                np.nan_to_num(mine[-1]["case wall (s)"]) - np.nan_to_num(mine[-1]["static (s)"])
+                if mine else 30.0
+            )  # fmt: skip
+            need = np.nan_to_num(predicted[0]) + overhead
+            if left is not None and need > left:
+                rows.append(
+                    _row(
+                        name,
+                        size,
+                        size,
+                        "not run: budget",
+                        f"needs about {need:.0f} s, {left:.0f} s of the budget left",
+                    )
+                )
+                log(f"  {size:>8} {name:<22} not run: budget ({left:.0f} s left)")
+                continue
+            if scene is None:
+                scene = organ_scene_file(settings.meshes, size, settings.max_memory)
+            res = run_case(scene, name, warmup, settings.max_time, settings.max_memory)
+            row = measured_row(name, size, res, settings.max_time, settings.max_memory,
+                               predicted)  # fmt: skip
+            rows.append(row)
+            if row["status"] not in SOLVED:
+                stopped[name] = (row["status"] if row["status"].startswith(DID_NOT_FIT)
+                                 else "not run: failed at a smaller size")  # fmt: skip
+            log(_case_line(row))
+        write_outputs(pd.DataFrame(rows), settings, time.perf_counter() - t0)
+    log(f"bench scale: {time.perf_counter() - t0:.0f} s, load average {_load()}")
+    return pd.DataFrame(rows)
+
+
+def _over(predicted: tuple[float, float], settings: ScaleSettings) -> str:
+    t, m = predicted
+    if np.isfinite(m) and m > settings.max_memory:
+        return f"predicted {m / 1e9:.3g} GB > the {settings.max_memory / 1e9:g} GB cap"
+    if np.isfinite(t) and t > settings.max_time:
+        return f"predicted {t:.3g} s > the {settings.max_time:g} s cap"
+    return ""
+
+
+def _load() -> str:
+    return " ".join(f"{v:.2f}" for v in os.getloadavg())
+
+
+def _case_line(row: dict) -> str:
+    step = row["step (s)"]
+    step_text = f"step {step * 1e3:8.3f} ms" if np.isfinite(step) else " " * 16
+    static = row["static (s)"]
+    static_text = f"static {static:8.2f} s" if np.isfinite(static) else " " * 17
+    return (
+        f"  {int(row['tets']):>8} {row['model']:<22} {row['status']:<22} {static_text} "
+        f"{step_text} peak {row['peak memory (bytes)'] / 1e9:6.2f} GB  "
+        f"load {row['load average']:.2f}  ({row['case wall (s)']:.0f} s)"
+        + (f"  {row['message'][:80]}" if row["status"] not in SOLVED else "")
+    )
