@@ -53,6 +53,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from springfem.errors import InputError
+from springfem.mesh.nodal_average import NodalAverage
 from springfem.scene import Scene
 
 from .hyperelastic import _det
@@ -95,7 +96,8 @@ class NodalStrainProblem(NodalVolumeProblem):
             self.fraction = self.default_share()
         self.law_name = self.law_name.replace("/nodal-volume", "/nodal-strain")
         tets, n = self.space.element_nodes, self.space.n_nodes
-        self.B_strain = strain_gradient(tets, self.V0, self.G, n)
+        # Fbar = I + B u, B^T T and B^T diag(A) B on a pattern built once
+        self.average = NodalAverage(tets, self.G, self.V0, n)
         # the pairs (e, a): element e's part measured at its vertex a, weight V_e / 4; pairs
         # of one node with equal frames (all of them for an isotropic law) are one evaluation
         self._pair_nodes, self._pair_weight, first = frame_pairs(tets, self.V0, self.frames)
@@ -116,9 +118,15 @@ class NodalStrainProblem(NodalVolumeProblem):
         kappa = self.split.kappa if self.split is not None else mat.lam + 2.0 * mat.mu / 3.0
         return min(1.0, self.alpha * mat.mu / kappa) if kappa > 0 else 1.0
 
+    @cached_property
+    def B_strain(self) -> sp.csr_matrix:
+        """The nodal strain operator ``B`` as a sparse matrix (:func:`strain_gradient`); the
+        solves use :attr:`average`, its compiled form."""
+        return strain_gradient(self.space.element_nodes, self.V0, self.G, self.space.n_nodes)
+
     def nodal_deformation_gradients(self, u: np.ndarray) -> np.ndarray:
         """``Fbar_a``, the patch-averaged deformation gradient of each node, ``(n, 3, 3)``."""
-        return (self.B_strain @ np.asarray(u, dtype=float)).reshape(-1, 3, 3) + np.eye(3)
+        return self.average.gradients(np.asarray(u, dtype=float).reshape(-1, 3)) + np.eye(3)
 
     def _nodal_sum(self, values: np.ndarray) -> np.ndarray:
         """Sum weighted pair values into their nodes: ``(n, ...)``."""
@@ -148,10 +156,9 @@ class NodalStrainProblem(NodalVolumeProblem):
         return (K + self._nodal_tangent(patch[:, None, None] * A)).tocsr()
 
     def _nodal_tangent(self, A: np.ndarray) -> sp.csr_matrix:
-        """``B^T diag(A_a) B`` for nodal moduli ``A`` of shape ``(n, 9, 9)``."""
-        n = len(A)
-        D = sp.bsr_matrix((A, np.arange(n), np.arange(n + 1)), shape=(9 * n, 9 * n))
-        return (self.B_strain.T @ (D.tocsr() @ self.B_strain)).tocsr()
+        """``B^T diag(A_a) B`` for nodal moduli ``A`` of shape ``(n, 9, 9)`` (the two-ring
+        pattern of :attr:`average`)."""
+        return self.average.tangent(A)
 
     # -- the NonlinearProblem protocol ---------------------------------------------------------
     def internal_force(self, u: np.ndarray, tangent: bool = False, scale: float = 1.0):
@@ -171,7 +178,7 @@ class NodalStrainProblem(NodalVolumeProblem):
         else:
             P, A = base.stress(Fp, frames=self._pair_frames), None
         T = (1.0 - alpha) * self._nodal_sum(P)
-        fi = fi + self.B_strain.T @ T.ravel()
+        fi = fi + self.average.transpose(T).ravel()
         if not tangent:
             return fi, None
         An = (1.0 - alpha) * self._nodal_sum(A.reshape(-1, 9, 9))
