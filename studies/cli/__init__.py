@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import time
 
 # One BLAS thread: multithreaded OpenBLAS on a busy 2-core machine is many times slower
 # for the small dense factorisations of the solvers (set before numpy is imported).
@@ -29,6 +30,7 @@ from springfem.warning_count import counted_warnings
 from springfem.warning_count import summary as warnings_summary
 
 from ..overrides import add_set_option
+from .common import args_started
 
 
 def _subcommand(module: str, func: str) -> Callable[[argparse.Namespace], int]:
@@ -310,6 +312,7 @@ def _scale_options(p: argparse.ArgumentParser) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``springfem`` console script."""
+    args_started(time.perf_counter())
     os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
     os.environ.setdefault("MPLBACKEND", "Agg")
     parser = build_parser()

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -93,3 +94,17 @@ def print_payload(payload: dict[str, Any]) -> None:
     }
     """
     print(json.dumps(jsonable(payload), indent=2))
+
+
+_STARTED: list[float] = []
+
+
+def args_started(when: float) -> None:
+    """Record when the command started (:func:`command_seconds` counts from it)."""
+    _STARTED[:] = [when]
+
+
+def command_seconds() -> float:
+    """Wall seconds since the command started (its scene's loading counts against a budget;
+    0 when no command is running)."""
+    return max(time.perf_counter() - _STARTED[0], 0.0) if _STARTED else 0.0

@@ -9,7 +9,7 @@ from ..compare_output import printable
 from ..guards import size_warning
 from ..tables import write_table
 from ..verdict import verdict, write_verdict_markdown
-from .common import out_folder, print_payload, progress_log, scene_of
+from .common import command_seconds, out_folder, print_payload, progress_log, scene_of
 
 
 def cmd_verdict(args: argparse.Namespace) -> int:
@@ -33,9 +33,14 @@ def cmd_verdict(args: argparse.Namespace) -> int:
     if warning is not None:
         print(f"warning: {warning}", file=sys.stderr)
     log(f"{scene.name}: {scene.mesh.n_tets} tets, law {scene.material.law}")
-    v = verdict(scene, args.tolerance, args.budget, args.models, log=log)
     out = out_folder(args, "verdict", scene.name)
-    md = write_verdict_markdown(v, write_table(v.table, out / "verdict"))
+
+    def keep(v) -> None:  # the table of the models done so far, after every model
+        write_verdict_markdown(v, write_table(v.table, out / "verdict"))
+
+    v = verdict(scene, args.tolerance, args.budget, args.models, log=log, on_update=keep,
+                spent=command_seconds())  # fmt: skip
+    md = out / "verdict.md"
     if quiet:
         payload = {
             "scene": v.scene,
