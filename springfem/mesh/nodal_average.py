@@ -15,8 +15,10 @@ once, so a Newton step only sums numbers into a fixed ``data`` array. Element ma
 (``12 x 12``) sum into the same pattern (:meth:`NodalAverage.add_elements`): the spring model
 and the FEM add their element and nodal-volume parts there and build one matrix.
 
-The element passes scatter into the nodes serially (deterministic, in element order); the
-pattern is the canonical CSR (sorted, no duplicates) of the ``3n x 3n`` matrix.
+``B x`` and ``B^T T`` run row by row over the nodes (each row writes only its own node: no
+races, so the parallel variant gives bitwise the serial sums); the tangent and element sums
+run serially in a fixed order (deterministic). The pattern is the canonical CSR (sorted, no
+duplicates) of the ``3n x 3n`` matrix.
 
 Examples
 --------
@@ -33,9 +35,13 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from numba import njit
+from numba import njit, prange
 
 __all__ = ["NodalAverage", "shape_gradients"]
+#: Whether :class:`NodalAverage` runs its products on all threads by default: off, as
+#: measured by ``springfem bench lockfree`` on the shared 2-core machine (two threads were
+#: not faster at 5k or 30k organ tets under other processes' load).
+PARALLEL_BY_DEFAULT = False
 
 
 def shape_gradients(X: np.ndarray, tets: np.ndarray) -> np.ndarray:
@@ -85,6 +91,9 @@ class NodalAverage:
         safe = np.where(self.patch > 0, self.patch, 1.0)
         self.weights = np.ascontiguousarray(V[:, None] / safe[self.tets])  # (m, 4)
         self._pattern: tuple | None = None
+        #: Run the products on all numba threads (rows are independent: no races, the same
+        #: sums in the same order as serially). Default :data:`PARALLEL_BY_DEFAULT`.
+        self.parallel = PARALLEL_BY_DEFAULT
 
     @classmethod
     def of(cls, X: np.ndarray, tets: np.ndarray) -> NodalAverage:
@@ -108,7 +117,8 @@ class NodalAverage:
         x = np.ascontiguousarray(x, dtype=float).reshape(self.n, 3)
         out = np.empty((self.n, 3, 3)) if out is None else out
         rowptr, cols, gb = self.rows
-        _row_gradients(x, rowptr, cols, gb, out)
+        kernel = _row_gradients_parallel if self.parallel else _row_gradients
+        kernel(x, rowptr, cols, gb, out)
         return out
 
     def transpose(self, T: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
@@ -117,7 +127,8 @@ class NodalAverage:
         T = np.ascontiguousarray(T, dtype=float).reshape(self.n, 3, 3)
         out = np.zeros((self.n, 3)) if out is None else out
         rowptr, cols, gb = self.rows
-        _row_transpose(T, rowptr, cols, gb, self.transposed, out)
+        kernel = _row_transpose_parallel if self.parallel else _row_transpose
+        kernel(T, rowptr, cols, gb, self.transposed, out)
         return out
 
     @property
@@ -245,8 +256,8 @@ def _two_ring_pattern(tets, grads, weights, n):
 
 
 @njit(cache=True, fastmath=False)
-def _row_gradients(x, rowptr, cols, gb, out):  # pragma: no cover - compiled; tested against B x
-    """``out[a] = sum_c x_c (x) gb_ac`` over the row of node ``a``."""
+def _row_gradients(x, rowptr, cols, gb, out):  # pragma: no cover - compiled; vs B x
+    """``out[a] = sum_c x_c (x) gb_ac`` over the row of node ``a`` (rows are independent)."""
     for a in range(rowptr.size - 1):
         f00 = f01 = f02 = f10 = f11 = f12 = f20 = f21 = f22 = 0.0
         for k in range(rowptr[a], rowptr[a + 1]):
@@ -267,10 +278,52 @@ def _row_gradients(x, rowptr, cols, gb, out):  # pragma: no cover - compiled; te
         out[a, 2, 0], out[a, 2, 1], out[a, 2, 2] = f20, f21, f22
 
 
+@njit(cache=True, fastmath=False, parallel=True)
+def _row_gradients_parallel(x, rowptr, cols, gb, out):  # pragma: no cover - compiled; vs B x
+    """``out[a] = sum_c x_c (x) gb_ac`` over the row of node ``a`` (rows are independent)."""
+    for a in prange(rowptr.size - 1):
+        f00 = f01 = f02 = f10 = f11 = f12 = f20 = f21 = f22 = 0.0
+        for k in range(rowptr[a], rowptr[a + 1]):
+            c = cols[k]
+            g0, g1, g2 = gb[k, 0], gb[k, 1], gb[k, 2]
+            x0, x1, x2 = x[c, 0], x[c, 1], x[c, 2]
+            f00 += x0 * g0
+            f01 += x0 * g1
+            f02 += x0 * g2
+            f10 += x1 * g0
+            f11 += x1 * g1
+            f12 += x1 * g2
+            f20 += x2 * g0
+            f21 += x2 * g1
+            f22 += x2 * g2
+        out[a, 0, 0], out[a, 0, 1], out[a, 0, 2] = f00, f01, f02
+        out[a, 1, 0], out[a, 1, 1], out[a, 1, 2] = f10, f11, f12
+        out[a, 2, 0], out[a, 2, 1], out[a, 2, 2] = f20, f21, f22
+
+
 @njit(cache=True, fastmath=False)
-def _row_transpose(T, rowptr, cols, gb, tpos, out):  # pragma: no cover - compiled; vs B^T T
-    """``out[c] += sum_a T_a gb_ac`` over the row of node ``c`` (``a`` in its patch)."""
+def _row_transpose(T, rowptr, cols, gb, tpos, out):  # pragma: no cover - compiled
+    """``out[c] += sum_a T_a gb_ac`` over the row of node ``c`` (``a`` in its patch; rows
+    are independent)."""
     for c in range(rowptr.size - 1):
+        v0 = v1 = v2 = 0.0
+        for k in range(rowptr[c], rowptr[c + 1]):
+            a = cols[k]
+            t = tpos[k]
+            g0, g1, g2 = gb[t, 0], gb[t, 1], gb[t, 2]
+            v0 += T[a, 0, 0] * g0 + T[a, 0, 1] * g1 + T[a, 0, 2] * g2
+            v1 += T[a, 1, 0] * g0 + T[a, 1, 1] * g1 + T[a, 1, 2] * g2
+            v2 += T[a, 2, 0] * g0 + T[a, 2, 1] * g1 + T[a, 2, 2] * g2
+        out[c, 0] += v0
+        out[c, 1] += v1
+        out[c, 2] += v2
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _row_transpose_parallel(T, rowptr, cols, gb, tpos, out):  # pragma: no cover - compiled
+    """``out[c] += sum_a T_a gb_ac`` over the row of node ``c`` (``a`` in its patch; rows
+    are independent)."""
+    for c in prange(rowptr.size - 1):
         v0 = v1 = v2 = 0.0
         for k in range(rowptr[c], rowptr[c + 1]):
             a = cols[k]

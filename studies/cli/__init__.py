@@ -242,7 +242,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser(
         "bench", help="benchmarks: spring force kernel, threads rule, FEM, steps, tissue solves"
     )
-    p.add_argument("what", choices=("forces", "fem", "step", "threads", "tissue", "scale"))
+    p.add_argument(
+        "what", choices=("forces", "fem", "step", "threads", "tissue", "scale", "lockfree")
+    )
     p.add_argument("--tets", type=int, default=None, help="approximate number of tets")
     p.add_argument("--repeats", type=int, default=None,
                    help="repeats (median reported; default 7, tissue 3)")  # fmt: skip
@@ -254,6 +256,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="tissue: ventricle element size in mm (default 4)")  # fmt: skip
     p.add_argument("--divisions", default=None, metavar="NX,NY,NZ",
                    help="tissue: beam divisions (default 30,3,3)")  # fmt: skip
+    p.add_argument("--solves", type=int, default=None, metavar="K",
+                   help="lockfree: interleaved rounds of static solves (default 0)")  # fmt: skip
     _scale_options(p)
     p.set_defaults(func=_subcommand("studies.cli.bench", "cmd_bench"))
     return parser

@@ -1,4 +1,4 @@
-"""``springfem bench forces|fem|step|threads|tissue|scale``: benchmarks (medians, ratios, laws)."""
+"""``springfem bench forces|fem|step|threads|tissue|scale|lockfree``: benchmarks (medians)."""
 
 from __future__ import annotations
 
@@ -21,6 +21,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
         return _bench_tissue(args)
     if what == "scale":
         return _bench_scale(args)
+    if what == "lockfree":
+        return _bench_lockfree(args)
     n = args.tets if args.tets is not None else DEFAULT_TETS[what]
     repeats = int(getattr(args, "repeats", None) or 7)
     if n < 6:
@@ -62,6 +64,25 @@ def _print_json(res: dict) -> None:
     from springfem.files import jsonable as _jsonable
 
     print(json.dumps(_jsonable(res), indent=2, sort_keys=True))
+
+
+def _bench_lockfree(args: argparse.Namespace) -> int:
+    """``springfem bench lockfree`` (:mod:`studies.bench_lockfree`)."""
+    from springfem.errors import InputError
+
+    from ..bench_lockfree import DEFAULT_TETS, bench_lockfree, print_lockfree
+
+    n = DEFAULT_TETS if args.tets is None else int(args.tets)
+    repeats = int(args.repeats if args.repeats is not None else 7)
+    solves = int(getattr(args, "solves", None) or 0)
+    if n < 100 or repeats < 1 or solves < 0:
+        raise InputError("bench lockfree: --tets >= 100, --repeats >= 1, --solves >= 0")
+    res = bench_lockfree(n, repeats, solves)
+    if args.json:
+        _print_json(res)
+    else:
+        print_lockfree(res)
+    return 0
 
 
 def _bench_tissue(args: argparse.Namespace) -> int:

@@ -157,3 +157,17 @@ def test_organ_forces_gradient_tangent_and_rigid_motion(organ):
     df = model.internal(x + dx) - model.internal(x - dx)
     assert np.abs(K @ dx.ravel() + df.ravel() / 2.0).max() < 1e-6 * np.abs(df).max()
     assert abs(K - K.T).max() < 1e-12 * abs(K).max()
+
+
+def test_parallel_products_equal_the_serial_ones_bitwise():
+    """Rows are independent: on all threads the same sums in the same order."""
+    model = SpringModel(scene_from_dict(isotropic_block()))
+    op = NodalAverage.of(model.x0, model.elements.tets)
+    rng = np.random.default_rng(11)
+    x = model.x0 + 0.1 * rng.standard_normal(model.x0.shape)
+    T = rng.standard_normal((op.n, 3, 3))
+    serial = op.gradients(x), op.transpose(T)
+    op.parallel = True
+    parallel = op.gradients(x), op.transpose(T)
+    for a, b in zip(serial, parallel, strict=True):
+        assert np.array_equal(a, b)

@@ -1,0 +1,181 @@
+"""``springfem bench lockfree``: the locking-free models against P1-NH on an organ mesh.
+
+On a liver-shaped gmsh organ of about ``--tets`` tets (:func:`springfem.mesh.organ.organ_scene`,
+neo-Hookean, nu = 0.49, gravity), interleaved rounds (:mod:`studies.timing`) of
+
+- the explicit step (forces + symplectic-Euler update) and the bare force pass of the
+  stabilised spring element (``spring-stabilised``) and of explicit P1-NH, serial and on all
+  threads, and the parts of the spring element's pass (its element kernel, the nodal strain,
+  the nodal volume);
+- the internal force of nodal-strain P1 (``fem-P1-nodal-strain``: the Newton solve's force,
+  numpy; it has no explicit system);
+- with ``--solves K``, ``K`` interleaved rounds of the static solves of the three models.
+
+Ratios are medians of per-round ratios against P1-NH; the machine's load average is printed
+beside them.
+"""
+
+from __future__ import annotations
+
+import tempfile
+
+from .bench import STEP_COUNT, explicit_steps
+from .timing import deformed_state, interleaved, load_average, machine, median, median_ratio
+
+DEFAULT_TETS = 5000
+#: The models compared, the reference last.
+MODELS = ("spring-stabilised", "fem-P1-nodal-strain", "P1-NH")
+
+
+def organ(n_tets: int):
+    """The organ scene of about ``n_tets`` tets (written to a temporary folder, loaded)."""
+    from springfem.mesh.organ import organ_scene
+    from springfem.scene import load_scene
+
+    with tempfile.TemporaryDirectory() as folder:
+        return load_scene(organ_scene(folder, tets=n_tets))
+
+
+def bench_lockfree(n_tets: int = DEFAULT_TETS, repeats: int = 7, solves: int = 0,
+                   steps: int = STEP_COUNT) -> dict:  # fmt: skip
+    """Explicit steps, force passes and (``solves > 0``) static solves, interleaved.
+
+    Parameters
+    ----------
+    n_tets
+        Approximate organ size.
+    repeats
+        Rounds of the steps and force passes.
+    solves
+        Rounds of the static solves (0: none).
+    steps
+        Steps (and force passes) per timing.
+
+    Returns
+    -------
+    dict
+        ``rows`` (per-step seconds and the ratio to P1-NH's serial step), ``solves``, the
+        machine.
+    """
+    from reference_fem.explicit import ExplicitFem
+    from reference_fem.solver import make_problem
+    from springmodel.model import SpringModel
+    from studies.models import get
+
+    scene = organ(n_tets)
+    spring = get("spring-stabilised")
+    options = spring.spring_options(scene)
+    systems = {
+        "spring-stabilised, serial": SpringModel(scene, options, parallel=False),
+        "spring-stabilised, parallel": SpringModel(scene, options, parallel=True),
+        "P1-NH, serial": ExplicitFem(scene, law="neo-hookean", parallel=False),
+        "P1-NH, parallel": ExplicitFem(scene, law="neo-hookean", parallel=True),
+    }
+    systems["spring-stabilised, parallel"].nodal_strain.average = _parallel_copy(
+        systems["spring-stabilised, parallel"].nodal_strain.average
+    )
+    x = deformed_state(scene.mesh.points)
+    cases = {}
+    for name, s in systems.items():
+        cases[f"{name}: step"] = lambda s=s: explicit_steps(s, steps)
+        cases[f"{name}: forces"] = lambda s=s: [s.forces(x, None, 1.0) for _ in range(steps)]
+    sm = systems["spring-stabilised, serial"]
+    parts = {
+        "element kernel": lambda: sm.kernel.forces(x),
+        "nodal strain": lambda: sm.nodal_strain.forces(x),
+        "nodal volume": lambda: sm.nodal.term.forces(x),
+    }
+    for name, fn in parts.items():
+        cases[f"spring-stabilised part: {name}"] = lambda fn=fn: [fn() for _ in range(steps)]
+    fem_scene, order, law = get("fem-P1-nodal-strain").fem_settings(scene)
+    problem = make_problem(fem_scene, order=order, law=law)
+    u = (x - scene.mesh.points).ravel()
+    cases["fem-P1-nodal-strain: internal force"] = lambda: [
+        problem.internal_force(u) for _ in range(steps)
+    ]
+    load_before = load_average()
+    samples = interleaved(cases, rounds=repeats)
+    ref = "P1-NH, serial: step"
+    rows = [
+        {
+            "case": name,
+            "seconds": median(samples, name) / steps,
+            "over_p1_nh_step": median_ratio(samples, name, ref),
+        }
+        for name in cases
+    ]
+    out = {
+        "benchmark": "lockfree",
+        "n_tets": scene.mesh.n_tets,
+        "n_nodes": scene.mesh.n_points,
+        "rounds": repeats,
+        "steps_per_timing": steps,
+        "grouped_nodal_strain": bool(sm.nodal_strain.grouped),
+        "virtual_elements": int(sm.nodal_strain.elements.n_elements),
+        "rows": rows,
+        "machine": machine(load_before),
+    }
+    if solves > 0:
+        out["solves"] = static_solves(scene, solves)
+    return out
+
+
+def _parallel_copy(average):
+    """A copy of a :class:`~springfem.mesh.nodal_average.NodalAverage` run on all threads."""
+    from copy import copy
+
+    twin = copy(average)
+    twin.parallel = True
+    return twin
+
+
+def static_solves(scene, rounds: int) -> dict:
+    """Interleaved static solves of :data:`MODELS` (their wall times and ratios to P1-NH)."""
+    from studies.models import run
+
+    status: dict[str, list[str]] = {m: [] for m in MODELS}
+
+    def solve(name):
+        out = run(scene, name)
+        status[name].append(out.status)
+
+    cases = {name: (lambda name=name: solve(name)) for name in MODELS}
+    load_before = load_average()
+    samples = interleaved(cases, rounds=rounds, warmup=0)
+    return {
+        "rounds": rounds,
+        "rows": [
+            {
+                "model": name,
+                "seconds": median(samples, name),
+                "over_p1_nh": median_ratio(samples, name, "P1-NH"),
+                "status": sorted(set(status[name])),
+            }
+            for name in MODELS
+        ],
+        "machine": machine(load_before),
+    }
+
+
+def print_lockfree(res: dict) -> None:
+    """The table of :func:`bench_lockfree`."""
+    print(
+        f"bench lockfree: organ {res['n_tets']:,} tets, {res['n_nodes']:,} nodes; "
+        f"{res['rounds']} interleaved rounds of {res['steps_per_timing']} steps; nodal "
+        f"strain on {res['virtual_elements']:,} virtual elements"
+        f"{' (grouped)' if res['grouped_nodal_strain'] else ''}"
+    )
+    print(f"  {'case':52s} {'per step':>11s} {'/ P1-NH step':>13s}")
+    for r in res["rows"]:
+        print(f"  {r['case']:52s} {1e3 * r['seconds']:9.3f} ms {r['over_p1_nh_step']:12.2f}x")
+    m = res["machine"]
+    print(f"  machine: {m.get('cpus')} cpus, {m.get('numba_threads')} numba threads, load "
+          f"average {m.get('load_average_before', m.get('load_average'))} -> "
+          f"{m.get('load_average')}")  # fmt: skip
+    if "solves" in res:
+        s = res["solves"]
+        print(f"  static solves, {s['rounds']} interleaved round(s):")
+        for r in s["rows"]:
+            print(f"    {r['model']:24s} {r['seconds']:9.2f} s {r['over_p1_nh']:8.2f}x "
+                  f"{','.join(r['status'])}")  # fmt: skip
+        print(f"    load average {s['machine'].get('load_average')}")
