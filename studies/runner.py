@@ -248,5 +248,23 @@ def run_report(
     for name in names or tuple(REGISTRY):
         print(f"study {name} …", flush=True)
         outputs.append(run_study(name, out, quick, workers=workers))
+        print(study_time_line(outputs[-1]), flush=True)
     write_report(outputs, Path(out), quick)
     return outputs
+
+
+def study_time_line(output: StudyOutput) -> str:
+    """The line the report prints after each study: its wall time and the machine's load
+    (a shared machine's load stretches every time: read them together).
+
+    Examples
+    --------
+    >>> o = StudyOutput(name="locking", title="t", findings=[], tables=[], figures=[])
+    >>> o.seconds = 12.3
+    >>> study_time_line(o).startswith("study locking: 12 s (load average ")
+    True
+    """
+    import os
+
+    load = ", ".join(f"{x:.1f}" for x in os.getloadavg())
+    return f"study {output.name}: {output.seconds:.0f} s (load average {load})"

@@ -16,7 +16,11 @@ law: its volumetric penalty). The reference at each ν is the P2/P1 Taylor–Hoo
 the finest level; a method's error is its relative difference from it and its cost the wall
 time of its static solve. The answer per ν is the cheapest method and level within 5 % of
 the reference (the reference itself excluded): "none" when none is. A solve is capped
-(:attr:`~.cases.Settings.max_time`); one that needs longer is recorded as stopped.
+(:attr:`~.cases.Settings.max_time`); one that needs longer is recorded as stopped. A finer
+level that cannot change the answer is not run (a ``skipped`` row with the reason,
+:attr:`~.cases.Settings.skip_costlier`): above all displacement P2 near incompressibility,
+which locks there and needs hundreds of Newton iterations, while P2/P1 on a coarser mesh is
+more accurate and faster.
 
 The bundled run: Cook's membrane (neo-Hookean, shear load, Cook's μ = 80.19 kPa; deflection
 ``u_y`` of the corner) and Land's beam (Guccione, follower pressure; ``u_z`` of the tip).
@@ -40,6 +44,8 @@ from ..registry import StudyContext, StudyOutput, study_run
 from ..scenes import StudyScene, require
 from .cases import (
     COST_PER_DOF,
+    COSTLIER,
+    LINEAR_TETS,
     REFERENCE,
     TOLERANCE,
     Settings,
@@ -51,7 +57,7 @@ from .cases import (
     scene_methods,
 )
 from .figures import deflection_figure, error_cost_figure
-from .findings import report_findings
+from .findings import HEADLINE_METHODS, report_findings
 from .tables import (
     answer_frame,
     answer_table,
@@ -82,14 +88,13 @@ def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> Stud
         from dataclasses import replace
 
         settings = replace(settings, timed=False)
-    all_cases, all_results, laws, notes = [], [], {}, []
+    laws, notes, levels = {}, [], []
     for sc in scenes:
         laws[sc.label] = str(sc.table.get("material", {}).get("law", "linear"))
         factors, note = affordable_levels(ctx, sc, settings)
         notes += note
-        cs, rs = _staged(ctx, sc, settings, factors)
-        all_cases += cs
-        all_results += rs
+        levels.append((sc, factors))
+    all_cases, all_results = _staged(ctx, levels, settings)
     df, refs = with_errors(result_frame(all_cases, all_results))
     answers = answer_frame(df)
     findings, headline = report_findings(df, refs, answers, laws, settings.max_time)
@@ -147,55 +152,142 @@ def affordable_levels(
 
 
 def _staged(
-    ctx: StudyContext, sc: StudyScene, s: Settings, factors: tuple[int, ...]
+    ctx: StudyContext, levels: list[tuple[StudyScene, tuple[int, ...]]], s: Settings
 ) -> tuple[list[dict], list[dict]]:
-    """The cases and results of one scene: the references first (the finest level), then
-    each level from the coarsest; with ``s.prune`` a method's level whose predicted time is
-    over 1.5 × the cap is left out (a ``skipped`` row), and so are the finer levels of a
-    method that is within :data:`~.cases.TOLERANCE` at that ν already."""
+    """The cases and results of the scenes, each with its levels: the references first (each
+    scene's finest level), then the i-th level of every scene in one run, from the coarsest
+    (the workers stay busy across scenes; without a budget the longest predicted cases start
+    first). A case is not run (a ``skipped`` row, :func:`_not_run`) when it cannot change
+    the answer."""
     from ..budget import skipped_result
 
-    methods = scene_methods(sc, s)
-    finest = factors[-1]
     run = dict(progress=ctx.progress, estimate=estimate, skippable=True, priors=COST_PER_DOF)
-    with_ref = REFERENCE in methods
-    ref_cases = [case_of(sc, s, REFERENCE, nu, finest) for nu in s.nus] if with_ref else []
-    ref_res = ctx.cache.run(ref_cases, locking_case, desc=f"{sc.label} reference", **run)
+    ref_cases = [case_of(sc, s, REFERENCE, nu, factors[-1]) for sc, factors in levels
+                 if REFERENCE in scene_methods(sc, s) for nu in s.nus]  # fmt: skip
+    ref_res = _run(ctx, ref_cases, "references", run)
     ref_res = [{**r, "tets": estimate(c)[2]} if r.get("status") == "skipped" else r
                for c, r in zip(ref_cases, ref_res, strict=True)]  # fmt: skip
-    refs = {c["nu"]: r for c, r in zip(ref_cases, ref_res, strict=True)}
-    axis = _axis(sc, ref_res)
-    done: set[tuple[str, float]] = set()  # (method, nu) within the tolerance
-    out_c, out_r = [], []
-    for f in factors:
-        todo, skipped = [], []
-        for nu in s.nus:
-            for m in methods:
-                if m == REFERENCE and f == finest or (m, nu) in done:
-                    continue
-                c = case_of(sc, s, m, nu, f)
-                kind, size, _ = estimate(c)
-                first = f == factors[0] or not s.prune
-                guess = None if first else ctx.cache.costs.predict(kind, size)
-                if m != REFERENCE and guess is not None and guess > 1.5 * s.max_time:
-                    skipped.append((c, skipped_result(
-                        f"not run: predicted {guess:.3g} s, over the {s.max_time:g} s cap "
-                        "of a solve")))  # fmt: skip
-                else:
-                    todo.append(c)
-        res = ctx.cache.run(todo, locking_case, desc=f"{sc.label} level x{f}", **run)
-        for c, r in [*zip(todo, res, strict=True), *skipped]:
+    refs = {(c["scene"], c["nu"]): r for c, r in zip(ref_cases, ref_res, strict=True)}
+    axes = {
+        sc.label: _axis(
+            sc, [r for c, r in zip(ref_cases, ref_res, strict=True) if c["scene"] == sc.label]
+        )  # fmt: skip
+        for sc, _ in levels
+    }
+    done: set[tuple[str, str, float]] = set()  # (scene, method, nu) within the tolerance
+    dropped: dict[tuple[str, str, float], str] = {}  # (scene, method, nu) -> why not run
+    best: dict[tuple[str, float, bool], tuple[float, str, int]] = {}
+    last: dict[tuple[str, float, bool], list[tuple[str, float, float, int]]] = {}
+    out: dict[str, list[tuple[dict, dict]]] = {sc.label: [] for sc, _ in levels}
+    for i in range(max((len(f) for _, f in levels), default=0)):
+        rows: list[tuple[dict, dict | None]] = []
+        for sc, factors in levels:
+            if i >= len(factors):
+                continue
+            f = factors[i]
+            for nu in s.nus:
+                for m in scene_methods(sc, s):
+                    if m == REFERENCE and f == factors[-1] or (sc.label, m, nu) in done:
+                        continue
+                    c = case_of(sc, s, m, nu, f)
+                    why = dropped.get((sc.label, m, nu))
+                    if why is None and i > 0:
+                        key = (sc.label, nu, m in LINEAR_TETS)
+                        why = _not_run(ctx, s, c, best.get(key), last.get(key, []))
+                        if why is not None and COSTLIER in why:
+                            dropped[(sc.label, m, nu)] = why  # nor its finer levels
+                    rows.append((c, None if why is None else skipped_result(why)))
+        todo = [c for c, r in rows if r is None]
+        names = ", ".join(f"{sc.label} x{f[i]}" for sc, f in levels if i < len(f))
+        got = dict(zip(map(id, todo), _run(ctx, todo, f"level {i + 1} ({names})", run),
+                       strict=True))  # fmt: skip
+        last = {}
+        for c, r in rows:
+            r = got[id(c)] if r is None else r
             if r.get("status") == "skipped":
                 r = {**r, "tets": estimate(c)[2]}  # the size it would have had
-            out_c.append(c)
-            out_r.append(r)
-            ref = refs.get(c["nu"], {})
-            if s.prune and _within(r, ref, axis):
-                done.add((c["method"], c["nu"]))
+            out[c["scene"]].append((c, r))
+            key = (c["scene"], c["nu"], c["method"] in LINEAR_TETS)
+            error = _error(r, refs.get((c["scene"], c["nu"]), {}), axes[c["scene"]])
+            if error is None:
+                continue
+            last.setdefault(key, []).append((c["method"], error, float(r["seconds"]),
+                                             int(r["tets"])))  # fmt: skip
+            if error <= TOLERANCE:
+                if s.prune:
+                    done.add((c["scene"], c["method"], c["nu"]))
+                if key not in best or r["seconds"] < best[key][0]:
+                    best[key] = (float(r["seconds"]), c["method"], int(r["tets"]))
     for c, r in zip(ref_cases, ref_res, strict=True):
-        out_c.append(c)
-        out_r.append(r)
-    return out_c, out_r
+        out[c["scene"]].append((c, r))
+    pairs = [p for sc, _ in levels for p in out[sc.label]]
+    return [c for c, _ in pairs], [r for _, r in pairs]
+
+
+def _run(ctx: StudyContext, cases: list[dict], desc: str, run: dict) -> list[dict]:
+    """Run ``cases`` (without a budget the longest predicted first: the last case to finish
+    is a short one); the results in the order of ``cases``."""
+    order = list(range(len(cases)))
+    if ctx.cache.budget.seconds is None:  # a budget leaves out the last: keep the order
+        ctx.cache.costs.priors.update(COST_PER_DOF)
+
+        def cost(i: int) -> float:
+            kind, size, _ = estimate(cases[i])
+            return ctx.cache.costs.predict(kind, size) or 0.0
+
+        order.sort(key=cost, reverse=True)
+    res = ctx.cache.run([cases[i] for i in order], locking_case, desc=desc, **run)
+    back: list[dict] = [{}] * len(cases)
+    for i, r in zip(order, res, strict=True):
+        back[i] = r
+    return back
+
+
+def _not_run(
+    ctx: StudyContext,
+    s: Settings,
+    c: dict,
+    best: tuple[float, str, int] | None,
+    last: list[tuple[str, float, float, int]],
+) -> str | None:
+    """Why a case of a finer level is not run, or ``None`` to run it.
+
+    With ``s.prune``: its predicted time is over 1.5 × the cap of a solve. With
+    ``s.skip_costlier`` (on the same kind of tets, linear: :data:`~.cases.LINEAR_TETS`, or
+    quadratic; ``best``: the cheapest there within :data:`~.cases.TOLERANCE` at this ν so
+    far, ``(seconds, method, tets)``; ``last``: ``(method, error, seconds, tets)`` of the
+    coarser level at this ν):
+
+    - a method was within the tolerance in less than the case's predicted time: the case
+      cannot be the cheapest;
+    - on the coarser level a method was at least twice as accurate as the case's and no
+      slower: the case's method is not expected to become the cheapest on a finer level
+      (both converge; it is locking).
+
+    Neither applies to a headline method (:data:`~.findings.HEADLINE_METHODS`) at the
+    highest ν: its finest level there is a headline number.
+
+    (With ``s.prune`` a method within the tolerance does not run its own finer levels
+    either: :func:`_staged`.)
+    """
+    kind, size, _ = estimate(c)
+    guess = ctx.cache.costs.predict(kind, size)
+    if s.prune and guess is not None and c["method"] != REFERENCE and guess > 1.5 * s.max_time:
+        return f"not run: predicted {guess:.3g} s, over the {s.max_time:g} s cap of a solve"
+    if not s.skip_costlier or c["method"] in HEADLINE_METHODS and c["nu"] == max(s.nus):
+        return None  # the finest level of these at the highest ν is a headline number
+    if best is not None and guess is not None and guess > best[0]:
+        seconds, method, tets = best
+        return (f"not run: {COSTLIER} (predicted {guess:.3g} s; {method} on {tets} tets "
+                f"within {TOLERANCE:.0%} in {seconds:.2g} s)")  # fmt: skip
+    own = [x for x in last if x[0] == c["method"]]
+    for method, error, seconds, tets in last if own else []:
+        if method != c["method"] and 2.0 * error <= own[0][1] and seconds <= own[0][2]:
+            return (
+                f"not run: {COSTLIER} (on {tets} tets {method} was {error:.1%} off in "
+                f"{seconds:.2g} s, {c['method']} {own[0][1]:.1%} in {own[0][2]:.2g} s)"
+            )
+    return None
 
 
 def _axis(sc: StudyScene, ref_results: list[dict]) -> int | None:
@@ -207,9 +299,9 @@ def _axis(sc: StudyScene, ref_results: list[dict]) -> int | None:
     return int(np.argmax(np.mean(us, axis=0))) if us else None
 
 
-def _within(r: dict, ref: dict, axis: int | None) -> bool:
-    """Whether a result is within the tolerance of its reference."""
+def _error(r: dict, ref: dict, axis: int | None) -> float | None:
+    """A result's relative error against its reference (``None``: either did not solve)."""
     if axis is None or r.get("status") != "ok" or ref.get("status") != "ok":
-        return False
+        return None
     value = ref["u"][axis]
-    return bool(value and abs(r["u"][axis] / value - 1.0) <= TOLERANCE)
+    return float(abs(r["u"][axis] / value - 1.0)) if value else None

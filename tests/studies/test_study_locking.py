@@ -85,6 +85,34 @@ def test_cheapest_method_rule_on_a_hand_made_table():
     assert answer_frame(df, 0.005).iloc[0]["cheapest within tolerance"] == "none"
 
 
+def test_a_level_that_cannot_be_the_cheapest_of_its_kind_is_not_run():
+    """A finer level is left out where, on a coarser level, a method on the same kind of
+    tets was within the tolerance faster than the level's predicted time (DOFs x cost per
+    DOF, by hand), or twice as accurate and no slower."""
+    from types import SimpleNamespace
+
+    from studies.budget import CostModel
+    from studies.study_locking.cases import COSTLIER, case_of, estimate
+
+    s = Settings(nus=(0.4999,), cook=(2, 2, 1), beam=None, factors=(1, 2),
+                 methods=("P1", "P2", "P2-mixed"), timed=False, prune=False)  # fmt: skip
+    sc = bundled_scenes(s)[0]
+    ctx = SimpleNamespace(cache=SimpleNamespace(costs=CostModel(priors={"P1": 1e-3, "P2": 1e-3})))
+    p2, p1 = (case_of(sc, s, m, 0.4999, 2) for m in ("P2", "P1"))
+    predicted = 1e-3 * estimate(p2)[1]  # seconds: DOFs x the prior
+    faster = (0.5 * predicted, "P2-mixed", 24)
+    assert COSTLIER in locking._not_run(ctx, s, p2, faster, [])
+    assert locking._not_run(ctx, s, p2, (2.0 * predicted, "P2-mixed", 24), []) is None
+    # on the coarser level: P2/P1 twice as accurate and no slower, or not
+    dominated = [("P2", 0.5, 2.0, 24), ("P2-mixed", 0.25, 2.0, 24)]
+    assert COSTLIER in locking._not_run(ctx, s, p2, None, dominated)
+    for other in (("P2-mixed", 0.26, 1.0, 24), ("P2-mixed", 0.1, 2.1, 24)):
+        assert locking._not_run(ctx, s, p2, None, [dominated[0], other]) is None
+    assert locking._not_run(ctx, s, p1, None, [("P1", 0.5, 2.0, 24)]) is None
+    off = Settings(**{**s.__dict__, "skip_costlier": False})
+    assert locking._not_run(ctx, off, p2, faster, dominated) is None
+
+
 def test_a_second_run_redoes_nothing(tmp_path, monkeypatch):
     calls = []
 
