@@ -143,13 +143,14 @@ def resolve_region(mesh: TetMesh, spec: str | dict, where: str = "region") -> Re
 
 
 def outward_facets(facets: np.ndarray, boundary: np.ndarray) -> np.ndarray:
-    """A facet set with each boundary triangle in the outward order of ``boundary``.
+    """A facet set with each of its boundary triangles oriented as in ``boundary`` (outward).
 
     A mesh file's facet set keeps the file's vertex order, which need not point out of the
     body (cardiac-geometries' gmsh ventricle orders every facet inward). A pressure's
     direction follows the order (:func:`springfem.loads.external_forces`), so each facet of
-    the set that lies on the boundary takes the order of its boundary facet; the others keep
-    theirs.
+    the set that lies on the boundary takes the orientation of its boundary facet; the others
+    keep theirs. A facet already outward keeps its vertex order; an inward one swaps its last
+    two vertices.
 
     Parameters
     ----------
@@ -168,14 +169,15 @@ def outward_facets(facets: np.ndarray, boundary: np.ndarray) -> np.ndarray:
     >>> from springfem.mesh import box_mesh
     >>> m = box_mesh((1.0, 1.0, 1.0), (1, 1, 1))
     >>> bf = m.boundary_facets()
-    >>> bool((outward_facets(bf[:, ::-1], bf) == bf).all())
-    True
+    >>> _, n = facet_areas_normals(m.points, bf)
+    >>> _, flipped = facet_areas_normals(m.points, outward_facets(bf[:, ::-1], bf))
+    >>> bool(np.allclose(flipped, n)), bool((outward_facets(bf, bf) == bf).all())
+    (True, True)
     """
     facets = np.asarray(facets, dtype=np.int64).reshape(-1, 3)
     boundary = np.asarray(boundary, dtype=np.int64).reshape(-1, 3)
     if len(facets) == 0 or len(boundary) == 0:
         return facets
-
     both = np.sort(np.concatenate([boundary, facets]), axis=1)
     _, ids = np.unique(both, axis=0, return_inverse=True)
     ids = ids.ravel()
@@ -183,8 +185,11 @@ def outward_facets(facets: np.ndarray, boundary: np.ndarray) -> np.ndarray:
     order = np.argsort(kb)
     at = order[np.minimum(np.searchsorted(kb, kf, sorter=order), len(kb) - 1)]
     on = kb[at] == kf
+    b, f = boundary[at], facets
+    pos = np.argmax(b == f[:, :1], axis=1)  # where f's first vertex sits in b
+    inward = on & (b[np.arange(len(f)), (pos + 1) % 3] != f[:, 1])
     out = facets.copy()
-    out[on] = boundary[at[on]]
+    out[inward] = facets[inward][:, [0, 2, 1]]
     return out
 
 
