@@ -15,10 +15,13 @@ Each case runs in its own process (:func:`run_case`), so its peak RSS is its own
 (``os.wait4`` reads it), under a time cap (``--max-time``, per static solve) and a memory cap
 (``--max-memory``: ``RLIMIT_AS``, the address space, which is a little above the RSS). The
 cases run one at a time, smallest size first, every model at a size before the next size. A
-model stops at the first size it does not fit or fails; the larger sizes say so. A case
-whose predicted time or memory (:func:`predict`, from the model's smaller sizes) is over a
-cap is not tried and is recorded as not fitting, with the prediction. ``--budget`` bounds the
-whole run: a case whose predicted time does not fit in what is left is not started.
+model's static solve stops at the first size it does not fit or fails; the larger sizes say
+so. A case whose predicted time or memory (:func:`predict`, from the model's smaller sizes)
+is over a cap is not tried and is recorded as not fitting, with the prediction. A model with
+an explicit form whose static solve no longer fits in time still has its explicit step
+timed at the larger sizes, in a case of its own (``--step-only``). ``--budget`` bounds the
+whole run: a case whose predicted time does not fit in what is left is not started;
+``--resume`` keeps the cases of an earlier run in the same output folder.
 
 The laws, tables, figure and JSON are written by :mod:`studies.bench_scale_output` after
 every size, so a run stopped part way leaves what it measured.
@@ -88,6 +91,8 @@ class ScaleSettings:
         Output folder.
     cost_laws
         Also write the cost laws here (:func:`studies.bench_scale_fit.cost_laws_document`).
+    resume
+        Keep the cases ``out/cases.json`` holds (those the budget left out are run again).
     notes
         Lines for the findings (which models are the same solve, e.g.).
     """
@@ -100,6 +105,7 @@ class ScaleSettings:
     meshes: Path = DEFAULT_MESHES
     out: Path = DEFAULT_OUT
     cost_laws: Path | None = None
+    resume: bool = False
     notes: list[str] = field(default_factory=list)
 
 
@@ -202,6 +208,7 @@ def run_case(
     warmup: Path | None,
     max_time: float,
     max_memory: float,
+    step_only: bool = False,
 ) -> CaseResult:
     """Run one case (:mod:`studies.bench_scale_case`) in a child process under the caps.
 
@@ -221,6 +228,8 @@ def run_case(
         Seconds of the static solve.
     max_memory
         Bytes of address space (``RLIMIT_AS``).
+    step_only
+        Time the explicit step only (``--step-only``).
 
     Returns
     -------
@@ -230,6 +239,7 @@ def run_case(
 
     cmd = [sys.executable, "-m", "studies.bench_scale_case", str(scene), model,
            "--cap", f"{max_time:g}"] + (["--warmup", str(warmup)] if warmup else [])  # fmt: skip
+    cmd += ["--step-only"] if step_only else []
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env=_child_env(), preexec_fn=_limit(max_memory),
@@ -417,7 +427,7 @@ def bench_scale(settings: ScaleSettings, log: Callable[[str], None] = print) -> 
     """
     from springfem.scene import load_scene
 
-    from .bench_scale_output import write_outputs
+    from .bench_scale_output import read_cases, write_outputs
 
     t0 = time.perf_counter()
     sizes = sorted(int(s) for s in settings.sizes)
@@ -429,55 +439,106 @@ def bench_scale(settings: ScaleSettings, log: Callable[[str], None] = print) -> 
     if not names:
         names, alias_notes = scale_models(load_scene(warmup))
         notes += alias_notes
+    done = (
+        {(r["model"], int(r["size"])): r for r in read_cases(settings.out)}
+        if settings.resume
+        else {}
+    )
     rows: list[dict] = []
-    stopped: dict[str, str] = {}
+    states = {name: _ModelState() for name in names}
+    scenes: dict[int, Path] = {}
+
+    def scene_of(size: int) -> Path:
+        if size not in scenes:
+            scenes[size] = organ_scene_file(settings.meshes, size, settings.max_memory)
+        return scenes[size]
+
     for size in sizes:
-        scene = None
         for name in names:
+            state = states[name]
+            old = done.get((name, size))
+            if old is not None and not str(old["status"]).startswith("not run: budget"):
+                rows.append(old)
+                state.update(old)
+                log(_case_line(old) + "  (kept)")
+                continue
             mine = [r for r in rows if r["model"] == name]
-            if name in stopped:
-                rows.append(_row(name, size, size, stopped[name], "a smaller size did not"))
-                continue
-            predicted = predict(mine, size)
-            over = _over(predicted, settings)
-            left = None if settings.budget is None else settings.budget - (time.perf_counter() - t0)
-            if over:
-                rows.append(_row(name, size, size, f"{DID_NOT_FIT}: predicted", over,
-                                 **{"predicted static (s)": predicted[0],
-                                    "predicted memory (bytes)": predicted[1]}))  # fmt: skip
-                stopped[name] = f"{DID_NOT_FIT}: predicted"
-                log(f"  {size:>8} {name:<22} skipped: {over}")
-                continue
-            overhead = (
-                np.nan_to_num(mine[-1]["case wall (s)"]) - np.nan_to_num(mine[-1]["static (s)"])
-                if mine else 30.0
-            )  # fmt: skip
-            need = np.nan_to_num(predicted[0]) + overhead
-            if left is not None and need > left:
-                rows.append(
-                    _row(
-                        name,
-                        size,
-                        size,
-                        "not run: budget",
-                        f"needs about {need:.0f} s, {left:.0f} s of the budget left",
-                    )
-                )
-                log(f"  {size:>8} {name:<22} not run: budget ({left:.0f} s left)")
-                continue
-            if scene is None:
-                scene = organ_scene_file(settings.meshes, size, settings.max_memory)
-            res = run_case(scene, name, warmup, settings.max_time, settings.max_memory)
-            row = measured_row(name, size, res, settings.max_time, settings.max_memory,
-                               predicted)  # fmt: skip
+            row = _next_case(name, size, mine, state, settings, t0, scene_of, warmup)
             rows.append(row)
-            if row["status"] not in SOLVED:
-                stopped[name] = (row["status"] if row["status"].startswith(DID_NOT_FIT)
-                                 else "not run: failed at a smaller size")  # fmt: skip
+            state.update(row)
             log(_case_line(row))
         write_outputs(pd.DataFrame(rows), settings, time.perf_counter() - t0)
     log(f"bench scale: {time.perf_counter() - t0:.0f} s, load average {_load()}")
     return pd.DataFrame(rows)
+
+
+@dataclass
+class _ModelState:
+    """Where a model is in the run: why its static solve is no longer tried (``""``: it
+    is), and whether its explicit step still is (a step-only case at the sizes its static
+    solve does not fit in time)."""
+
+    static_stop: str = ""
+    step: bool = True
+    step_only_ok: bool = True
+
+    def update(self, row: dict) -> None:
+        status = str(row["status"])
+        if status.startswith("not run: budget"):
+            return
+        if "case wall (s)" in row and np.isfinite(row["case wall (s)"]):  # a case that ran
+            self.step = self.step and bool(np.isfinite(row["step (s)"]))
+        if not self.static_stop and status not in SOLVED:
+            self.static_stop = status
+            # the step is still worth its own case when the static solve ran out of time
+            self.step_only_ok = status.startswith(DID_NOT_FIT) and "memory" not in status
+            if "predicted" in status and "GB" in str(row["message"]):
+                self.step_only_ok = False
+
+
+def _next_case(name: str, size: int, mine: list[dict], state: _ModelState,
+               settings: ScaleSettings, t0: float, scene_of, warmup: Path) -> dict:  # fmt: skip
+    """The next case of model ``name``: run in full, step only, or not run (and why)."""
+    left = None if settings.budget is None else settings.budget - (time.perf_counter() - t0)
+    ran = [r for r in mine if np.isfinite(r["case wall (s)"])]
+    last = ran[-1] if ran else None
+    overhead = 30.0
+    if last is not None:  # its set-up and step, grown with the mesh above a fixed start-up
+        extra = float(last["case wall (s)"]) - np.nan_to_num(last["static (s)"]) - 8.0
+        overhead = 8.0 + max(extra, 0.0) * size / float(last["tets"])
+    predicted = predict(mine, size)
+    values = {"predicted static (s)": predicted[0], "predicted memory (bytes)": predicted[1]}
+    status, why = state.static_stop, "a smaller size did not fit"
+    if not status:
+        why = _over(predicted, settings)
+        if not why:
+            need = np.nan_to_num(predicted[0]) + overhead
+            if left is not None and need > left:
+                return _row(name, size, size, "not run: budget",
+                            f"needs about {need:.0f} s, {left:.0f} s of the budget left",
+                            **values)  # fmt: skip
+            res = run_case(scene_of(size), name, warmup, settings.max_time, settings.max_memory)
+            return measured_row(name, size, res, settings.max_time, settings.max_memory,
+                                predicted)  # fmt: skip
+        status = f"{DID_NOT_FIT}: predicted"
+        step_only = state.step and "GB" not in why
+    else:
+        step_only = state.step and state.step_only_ok
+        if status.startswith("not run") or not status.startswith(DID_NOT_FIT):
+            status, why = "not run: failed at a smaller size", "a smaller size failed"
+        elif "predicted" not in status:
+            status = f"{DID_NOT_FIT}: after a smaller size"
+    if not step_only or not ran:
+        return _row(name, size, size, status, why, **values)
+    if left is not None and overhead > left:
+        return _row(name, size, size, status, f"{why}; step not run (budget)", **values)
+    res = run_case(scene_of(size), name, warmup, settings.max_time, settings.max_memory,
+                   step_only=True)  # fmt: skip
+    row = measured_row(name, size, res, settings.max_time, settings.max_memory, predicted)
+    row.update(status=status, message=f"{why}; step only", **{"static (s)": np.nan})
+    if "step" not in res.stages:
+        row["message"] = f"{why}; step failed: {classify(res, 1e9, settings.max_memory)[1]}"
+    return row
 
 
 def _over(predicted: tuple[float, float], settings: ScaleSettings) -> str:
@@ -494,6 +555,8 @@ def _load() -> str:
 
 
 def _case_line(row: dict) -> str:
+    if not np.isfinite(row["case wall (s)"]):  # not run
+        return f"  {int(row['tets']):>8} {row['model']:<22} {row['status']:<22} {row['message']}"
     step = row["step (s)"]
     step_text = f"step {step * 1e3:8.3f} ms" if np.isfinite(step) else " " * 16
     static = row["static (s)"]

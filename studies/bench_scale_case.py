@@ -21,6 +21,9 @@ each stage, so a case stopped in its static solve still gives its step time.
 Run by hand::
 
     python -m studies.bench_scale_case SCENE MODEL --warmup WARMUP_SCENE --cap 120
+
+``--step-only`` leaves out the static solve (and its warm-up): a size the model's static
+solve does not fit still gives its explicit step.
 """
 
 from __future__ import annotations
@@ -112,7 +115,7 @@ def _rss() -> int:
     return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
 
 
-def run(scene_path: str, name: str, warmup: str | None, cap: float) -> int:
+def run(scene_path: str, name: str, warmup: str | None, cap: float, static: bool = True) -> int:
     """The case (see the module docstring); the exit code (0 also when the model failed:
     the lines say how).
 
@@ -126,6 +129,8 @@ def run(scene_path: str, name: str, warmup: str | None, cap: float) -> int:
         The warm-up scene file (``None``: no warm-up).
     cap
         Seconds the static solve may take (:func:`~springfem.mechanics.limits.solve_limits`).
+    static
+        Solve statically (``False``: the explicit step only, and no warm-up solve).
 
     Returns
     -------
@@ -141,7 +146,8 @@ def run(scene_path: str, name: str, warmup: str | None, cap: float) -> int:
         t = time.perf_counter()
         small = load_scene(warmup)
         with quiet, solve_limits(max_time=cap):
-            models.run(small, name)
+            if static:
+                models.run(small, name)
             system = explicit_system(small, name)
             if system is not None:
                 step_seconds(system)
@@ -156,6 +162,8 @@ def run(scene_path: str, name: str, warmup: str | None, cap: float) -> int:
         step, count = step_seconds(system)
         _say(stage="step", seconds=step, passes=count, rss=_rss())
     del system
+    if not static:
+        return 0
     with contextlib.redirect_stderr(io.StringIO()), solve_limits(max_time=cap):
         got = models.run(scene, name)
     _say(stage="static", status=got.status, seconds=float(got.seconds),
@@ -164,15 +172,17 @@ def run(scene_path: str, name: str, warmup: str | None, cap: float) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m studies.bench_scale_case SCENE MODEL [--warmup FILE] [--cap S]``."""
+    """``python -m studies.bench_scale_case SCENE MODEL [--warmup FILE] [--cap S]
+    [--step-only]``."""
     p = argparse.ArgumentParser(prog="python -m studies.bench_scale_case")
     p.add_argument("scene")
     p.add_argument("model")
     p.add_argument("--warmup", default=None)
     p.add_argument("--cap", type=float, default=None)
+    p.add_argument("--step-only", action="store_true")
     a = p.parse_args(argv)
     try:
-        return run(a.scene, a.model, a.warmup, a.cap)
+        return run(a.scene, a.model, a.warmup, a.cap, static=not a.step_only)
     except MemoryError:
         _say(stage="error", kind="memory", message="MemoryError", rss=_rss())
         return 4

@@ -2,7 +2,8 @@
 
 Into the output folder (default ``reports/scale/``):
 
-- ``cases.csv`` / ``cases.md``: every model and size, measured or why not;
+- ``cases.csv`` / ``cases.md``: every model and size, measured or why not (``cases.json``:
+  the same in full precision, which ``--resume`` reads);
 - ``laws.csv`` / ``laws.md``: each model's fitted exponents, the largest size it solved and
   the largest mesh its laws allow in 24 GB and in an hour
   (:func:`studies.bench_scale_fit.laws_table`);
@@ -37,6 +38,29 @@ from .bench_scale_fit import (
 COMMAND = "springfem bench scale --cost-laws studies/cost_laws.json"
 #: The figure's file name.
 FIGURE = "scale.png"
+
+
+#: The raw cases (full precision, bytes and seconds), read back by ``--resume``.
+RAW_CASES = "cases.json"
+
+
+def read_cases(out: Path) -> list[dict]:
+    """The raw cases an earlier run wrote into ``out`` (none when there are none).
+
+    Parameters
+    ----------
+    out
+        The output folder.
+
+    Returns
+    -------
+    list of dict
+    """
+    try:
+        rows = json.loads((Path(out) / RAW_CASES).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return []
+    return [{k: (np.nan if v is None else v) for k, v in r.items()} for r in rows]
 
 
 def cases_table(cases: pd.DataFrame) -> pd.DataFrame:
@@ -235,6 +259,8 @@ def write_outputs(cases: pd.DataFrame, settings, seconds: float) -> dict[str, Pa
         "laws": write_table(table, out / "laws"),
         "figure": scale_figure(cases, laws, out / FIGURE),
     }
+    raw = cases.astype(object).where(pd.notna(cases), None).to_dict(orient="records")
+    atomic_write_text(out / RAW_CASES, json.dumps(raw, indent=0, default=float) + "\n")
     doc = cost_laws_document(laws)
     text = json.dumps(doc, indent=1, sort_keys=True) + "\n"
     paths["cost_laws"] = out / "cost_laws.json"

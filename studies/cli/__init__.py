@@ -302,6 +302,11 @@ def _scale_options(p: argparse.ArgumentParser) -> None:
     )
     g.add_argument("--out", default=None, help="scale: output folder (default reports/scale)")
     g.add_argument(
+        "--resume",
+        action="store_true",
+        help="scale: keep the cases of an earlier run in the output folder",
+    )
+    g.add_argument(
         "--meshes",
         default=None,
         help="scale: folder of the organ meshes (default out/organ-meshes)",

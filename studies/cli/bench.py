@@ -163,6 +163,7 @@ def _bench_scale(args: argparse.Namespace) -> int:
         meshes=Path(args.meshes) if args.meshes else DEFAULT_MESHES,
         out=Path(args.out) if args.out else DEFAULT_OUT,
         cost_laws=Path(args.cost_laws) if args.cost_laws else None,
+        resume=bool(args.resume),
     )
     bench_scale(settings, log=lambda line: print(line, flush=True))
     print(f"wrote {settings.out}/laws.md, cases.md, scale.png, cost_laws.json"

@@ -183,3 +183,59 @@ def test_a_quick_run_on_tiny_organs_writes_table_figure_and_laws(tmp_path, monke
     assert "| mass-spring" in report
     page = write_index(out.parent, "t").read_text()
     assert "Scale benchmark" in page and "data:image/png;base64," in page
+
+
+def test_a_model_stops_at_the_first_size_it_does_not_fit(tmp_path, monkeypatch):
+    """Driven by fake cases: ``fast`` solves every size; ``slow`` runs out of time at the
+    second size and has its explicit step timed alone at the third; ``broken`` fails at
+    the first size and is not run again; ``big`` is predicted over the memory cap."""
+    from pathlib import Path
+
+    from studies import bench_scale, bench_scale_output
+
+    calls = []
+
+    def fake_case(scene, name, warmup, max_time, max_memory, step_only=False):
+        n = int(Path(scene).stem.split("-")[1])
+        calls.append((name, n, step_only))
+        stages = {"warmup": {"rss": 2e8}, "ready": {"tets": n}, "step": {"seconds": n * 1e-7}}
+        x = n / 1e4
+        if name == "broken":
+            stages["static"] = {"status": "failed", "seconds": 1.0, "message": "diverged"}
+        elif name == "slow" and n > 1000:
+            stages["static"] = {"status": "partial", "seconds": max_time, "message": "capped"}
+        elif name == "big":
+            stages["static"] = {"status": "ok", "seconds": 0.1, "message": ""}
+            return CaseResult(stages, 0, int(2e8 + 2e10 * x), False, "", 1.0)
+        else:
+            stages["static"] = {"status": "ok", "seconds": x, "message": ""}
+        if step_only:
+            del stages["static"]
+        return CaseResult(stages, 0, int(2e8 + 1e8 * x), False, "", 1.0)
+
+    monkeypatch.setattr(bench_scale, "run_case", fake_case)
+    monkeypatch.setattr(
+        bench_scale, "organ_scene_file", lambda folder, n, cap: tmp_path / f"organ-{n}.toml"
+    )
+    monkeypatch.setattr(bench_scale_output, "write_outputs", lambda *a, **k: {})
+    settings = bench_scale.ScaleSettings(
+        sizes=(1000, 4000, 16000),
+        models=["fast", "slow", "broken", "big"],
+        max_time=10.0,
+        max_memory=4e9,
+        out=tmp_path,
+    )
+    cases = bench_scale.bench_scale(settings, log=lambda _line: None).set_index(["model", "size"])
+    assert (cases.loc["fast", "status"] == "ok").all()
+    assert cases.at[("slow", 4000), "status"] == f"{DID_NOT_FIT}: time"
+    assert cases.at[("slow", 16000), "status"] == f"{DID_NOT_FIT}: after a smaller size"
+    assert cases.at[("slow", 16000), "step (s)"] == pytest.approx(16000 * 1e-7)
+    assert ("slow", 16000, True) in calls  # its step alone
+    assert cases.at[("broken", 1000), "status"] == "failed"
+    assert cases.at[("broken", 4000), "status"] == "not run: failed at a smaller size"
+    assert [c for c in calls if c[0] == "broken"] == [("broken", 1000, False)]
+    # big: 2.2 GB at 1k tets over a 0.2 GB baseline: 4k is predicted at 0.2 + 2 * 4 GB,
+    # over the 4 GB cap, and not run
+    assert cases.at[("big", 4000), "status"] == f"{DID_NOT_FIT}: predicted"
+    assert cases.at[("big", 4000), "predicted memory (bytes)"] == pytest.approx(8.2e9)
+    assert [c for c in calls if c[0] == "big"] == [("big", 1000, False)]
