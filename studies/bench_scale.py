@@ -306,19 +306,22 @@ def classify(res: CaseResult, max_time: float, max_memory: float) -> tuple[str, 
     -------
     tuple of (str, str)
     """
+    memory_words = ("memoryerror", "cannot allocate", "bad_alloc", "out of memory",
+                    "unable to allocate", "failed to allocate")  # fmt: skip
     static = res.stages.get("static")
     if static is not None:
+        message = static.get("message", "")
         if static["status"] in SOLVED:
-            return static["status"], static.get("message", "")
+            return static["status"], message
         if static["seconds"] >= 0.9 * max_time:
             return f"{DID_NOT_FIT}: time", f"stopped at the {max_time:g} s cap"
-        return static["status"], static.get("message", "")
+        if any(w in message.lower() for w in memory_words):  # a solver that caught it
+            return f"{DID_NOT_FIT}: memory", f"{message[:120]} (cap {max_memory / 1e9:g} GB)"
+        return static["status"], message
     if res.killed_for_time:
         where = "static solve" if "ready" in res.stages else "set-up"
         return f"{DID_NOT_FIT}: time", f"killed past the {max_time:g} s cap in its {where}"
     err = res.stderr_tail.lower()
-    memory_words = ("memoryerror", "cannot allocate", "bad_alloc", "out of memory",
-                    "unable to allocate", "failed to allocate")  # fmt: skip
     if ("error" in res.stages and res.stages["error"].get("kind") == "memory") or any(
         w in err for w in memory_words
     ):

@@ -140,6 +140,9 @@ def test_a_case_is_classified_by_what_its_child_left():
     assert classify(_result(capped), cap, mem)[0] == f"{DID_NOT_FIT}: time"
     failed = {"ready": {}, "static": {"status": "failed", "seconds": 2.0, "message": "diverged"}}
     assert classify(_result(failed), cap, mem) == ("failed", "diverged")
+    caught = {"ready": {}, "static": {"status": "failed", "seconds": 2.0,
+                                      "message": "Unable to allocate 3.1 GiB"}}  # fmt: skip
+    assert classify(_result(caught), cap, mem)[0] == f"{DID_NOT_FIT}: memory"
     assert classify(_result({"ready": {}}, -9, killed=True), cap, mem)[0] == f"{DID_NOT_FIT}: time"
     memory = {"ready": {}, "error": {"kind": "memory"}}
     assert classify(_result(memory, 4), cap, mem)[0] == f"{DID_NOT_FIT}: memory"
