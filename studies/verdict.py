@@ -32,8 +32,10 @@ model that no longer fits is ``skipped (budget)``, one that would not fit in mem
 fit or finish falls back to the next finest FEM the scene does not rule out, with a note;
 when none is left, the note says what the reference would need. A reference with inverted
 elements or implausible strains (:func:`springfem.plausibility.check_solution`) is not
-valid: the verdict says so and names no model. The verdict so far is handed to
-``on_update`` after every model, so that a verdict stopped part way leaves its table.
+valid: the verdict says so and names no model. A mesh too coarse across a thin wall for
+linear tets gets a note (:func:`springfem.mesh.thickness.thin_wall_note`). The verdict so
+far is handed to ``on_update`` after every model, so that a verdict stopped part way leaves
+its table.
 Models whose options resolve to the same solve on this scene are solved once (a note says
 which are the same).
 
@@ -61,13 +63,22 @@ from pathlib import Path
 import numpy as np
 
 from springfem.mechanics.limits import solve_limits
+from springfem.mesh.thickness import thin_wall_note
 from springfem.scene import Scene
 
 from . import fem_laws, model_set, models
 from .compare import LARGE_STRAIN, max_principal_strain
 from .cost_model import SolveCosts, gigabytes, read_laws
 from .peak_memory import PeakMemory, available_bytes
-from .verdict_plan import SOLVE_SHARE, Planned, make_plan, plan_lines, ruled_out, skip_reason
+from .verdict_plan import (
+    SOLVE_SHARE,
+    Planned,
+    dearer_than_reference,
+    make_plan,
+    plan_lines,
+    ruled_out,
+    skip_reason,
+)
 from .verdict_table import Verdict, VerdictState, verdict_sentence
 from .verdict_timing import static_times, step_costs
 
@@ -191,6 +202,9 @@ def verdict(
     say = log or (lambda _line: None)
     t0 = time.perf_counter() - spent
     notes: list[str] = list(scene.mesh.notes)
+    thin = thin_wall_note(scene.mesh)  # linear tets cannot bend through one tet across
+    if thin is not None:
+        notes.append(thin)
     names = list(models) if models is not None else candidate_models(scene)
     names = list(dict.fromkeys(registry.get(n).name for n in names))
     state = VerdictState(scene, tolerance, names, notes)
@@ -224,6 +238,7 @@ def verdict(
 
     def skip(p: Planned, why: str) -> None:
         kind = "memory" if "available" in why else "budget"
+        kind = "ruled out" if "more than the reference" in why else kind
         state.skipped[p.name] = (f"skipped ({kind})", why)
         say(f"  {p.name:<26} skipped ({kind}): {why}")
         publish()
@@ -262,7 +277,10 @@ def verdict(
         if p.name in state.outcomes or p.name in state.skipped:
             continue
         p.predicted = costs.predict(p.name)
-        p.skip = skip_reason(p, solve_room(), 0.0, float(available_bytes()) or None)
+        ref_seconds = float(state.outcomes[ref].seconds) if ref else np.nan
+        p.skip = skip_reason(
+            p, solve_room(), 0.0, float(available_bytes()) or None
+        ) or dearer_than_reference(p, ref_seconds)
         if p.skip:
             skip(p, p.reason)
         else:

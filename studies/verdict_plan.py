@@ -6,7 +6,9 @@ peak memory (:mod:`studies.cost_model`) and what it will do with it:
 - the reference comes first: nothing is weighed without it;
 - then the models that can pass, cheapest first, so that a budget weighs as many as it can;
 - last, the models the scene rules out (:func:`ruled_out`: displacement P1 and P2 lock on a
-  nearly incompressible scene); they never stand in for the reference;
+  nearly incompressible scene); they never stand in for the reference, and one predicted
+  to cost more than the reference is skipped (``skipped (ruled out)``): it only shows the
+  locking, at a price the answer does not need;
 - under a budget, a model whose predicted time does not fit in what is left is skipped
   (``skipped (budget)``), and one whose predicted memory exceeds what the machine has is
   skipped (``skipped (memory)``); both are named in the table with the reason.
@@ -14,11 +16,11 @@ peak memory (:mod:`studies.cost_model`) and what it will do with it:
 Examples
 --------
 >>> from studies.cost_model import Law, SolveCosts
->>> laws = {"fem-P2-mixed": Law((30.0, 1.3), (2e9, 1.2)), "P1-NH": Law((1.0, 1.0), (3e8, 1.0)),
+>>> laws = {"fem-P2-mixed": Law((10.0, 1.3), (2e9, 1.2)), "P1-NH": Law((1.0, 1.0), (3e8, 1.0)),
 ...         "P2-NH": Law((20.0, 1.2), (1e9, 1.2))}
 >>> costs = SolveCosts(laws, tets=10_000)
 >>> plan = make_plan(["P2-NH", "P1-NH", "fem-P2-mixed"], "fem-P2-mixed", costs,
-...                  {"P2-NH": "displacement P2 locks at nu = 0.49"}, budget=40.0,
+...                  {"P2-NH": "displacement P2 locks at nu = 0.49"}, budget=15.0,
 ...                  memory=16e9)
 >>> for p in plan:
 ...     print(p.name, p.role, p.action)
@@ -27,6 +29,9 @@ P1-NH model solve
 P2-NH ruled out skip
 >>> plan[2].reason
 'displacement P2 locks at nu = 0.49; the budget has no room for it (20 s)'
+>>> make_plan(["P2-NH", "fem-P2-mixed"], "fem-P2-mixed", costs, {"P2-NH": "it locks"},
+...           budget=None, memory=None)[1].reason
+'it locks; it would cost more than the reference (20 s)'
 """
 
 from __future__ import annotations
@@ -158,10 +163,11 @@ def make_plan(
         role = "reference" if n == reference else ("ruled out" if n in ruled else "model")
         plan.append(Planned(n, costs.predict(n), role, why=ruled.get(n, "")))
     plan.sort(key=key)
+    ref_seconds = next((p.predicted.seconds for p in plan if p.role == "reference"), math.nan)
     spent = 0.0
     room = None if budget is None else SOLVE_SHARE * budget
     for p in plan:
-        skip = skip_reason(p, room, spent, memory)
+        skip = skip_reason(p, room, spent, memory) or dearer_than_reference(p, ref_seconds)
         if skip:
             p.action, p.skip = "skip", skip
         elif math.isfinite(p.predicted.seconds):
@@ -195,8 +201,31 @@ def skip_reason(p: Planned, room: float | None, spent: float, memory: float | No
     left = room - spent
     slack = REFERENCE_SLACK if p.role == "reference" else 1.0
     if pred.seconds > slack * left:
-        return f"the budget has no room for it ({pred.seconds:.2g} s)"
+        return f"the budget has no room for it ({pred.seconds:.3g} s)"
     return ""
+
+
+def dearer_than_reference(p: Planned, reference_seconds: float) -> str:
+    """Why a ruled-out model is not worth its solve: it is predicted to cost more than the
+    reference (empty: it is worth it, or it is not ruled out).
+
+    Parameters
+    ----------
+    p
+        The planned model.
+    reference_seconds
+        The reference's time (measured, or predicted).
+
+    Returns
+    -------
+    str
+    """
+    s = p.predicted.seconds
+    if p.role != "ruled out" or not math.isfinite(s) or not math.isfinite(reference_seconds):
+        return ""
+    if s <= max(reference_seconds, 1.0):
+        return ""
+    return f"it would cost more than the reference ({s:.3g} s)"
 
 
 def plan_lines(plan: Sequence[Planned], tets: int, budget: float | None) -> list[str]:
@@ -223,7 +252,7 @@ def plan_lines(plan: Sequence[Planned], tets: int, budget: float | None) -> list
     lines = [head]
     for p in plan:
         s = p.predicted.seconds
-        when = f"~{s:.2g} s" if math.isfinite(s) else "time ?"
+        when = "time ?" if not math.isfinite(s) else f"~{s:.2g} s" if s < 100 else f"~{s:.0f} s"
         what = p.role if p.action == "solve" else f"skip: {p.reason}"
         if p.action == "solve" and p.why:
             what += f" ({p.why})"

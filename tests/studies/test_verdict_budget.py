@@ -127,3 +127,15 @@ def test_a_reference_with_an_inverted_element_is_flagged_and_names_no_model(
     assert any("is not valid" in n and "inverted" in n for n in v["notes"])
     assert v["static"] is None and v["dynamic"] is None
     assert "not a valid solution" in v["sentence"] and not t["within tolerance"].any()
+
+
+def test_a_wall_one_tet_across_gets_a_note_and_a_solid_organ_none(organs, tmp_path, capsys):
+    from tests.springmodel.test_thin_wall_ventricle import write_inward_ventricle
+
+    lv = write_inward_ventricle(tmp_path)
+    v, _, _ = _run(["verdict", str(lv), "--json", "--out", str(tmp_path / "lv"),
+                    "--models", "fem-P1-nodal-strain"], capsys)  # fmt: skip
+    assert any(n.startswith("thin wall: ") for n in v["notes"])
+    v, _, _ = _run(["verdict", str(organs[700]), "--json", "--out", str(tmp_path / "o"),
+                    "--models", "mass-spring"], capsys)  # fmt: skip
+    assert not any(n.startswith("thin wall: ") for n in v["notes"])
