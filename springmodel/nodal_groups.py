@@ -182,6 +182,33 @@ def group_pairs(tets: np.ndarray, cls: np.ndarray, V: np.ndarray):
 
 
 @njit(cache=True, fastmath=False)
+def virtual_positions_from_rows(x, rowptr, cols, gb, nodes, Xg, y):  # pragma: no cover
+    """:func:`virtual_positions` with ``Fbar_a = sum_c x_c (x) gb_ac`` formed on the fly, once
+    per node (the groups are sorted by node; the row sums of
+    :class:`~springfem.mesh.nodal_average.NodalAverage`, in its order)."""
+    F = np.empty((3, 3))
+    last = -1
+    for g in range(nodes.shape[0]):
+        a = nodes[g]
+        if a != last:
+            last = a
+            for al in range(3):
+                for be in range(3):
+                    F[al, be] = 0.0
+            for k in range(rowptr[a], rowptr[a + 1]):
+                c = cols[k]
+                for al in range(3):
+                    xa = x[c, al]
+                    for be in range(3):
+                        F[al, be] += xa * gb[k, be]
+        for i in range(4):
+            for al in range(3):
+                y[4 * g + i, al] = (
+                    F[al, 0] * Xg[g, i, 0] + F[al, 1] * Xg[g, i, 1] + F[al, 2] * Xg[g, i, 2]
+                )
+
+
+@njit(cache=True, fastmath=False)
 def virtual_positions(Fbar, nodes, Xg, y):  # pragma: no cover - compiled; tested via forces
     """``y[4 g + i] = Fbar[nodes[g]] Xg[g, i]``."""
     for g in range(nodes.shape[0]):

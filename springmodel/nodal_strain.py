@@ -57,7 +57,7 @@ from .nodal_groups import (
     nodal_stresses,
     probe_gradients,
     subset,
-    virtual_positions,
+    virtual_positions_from_rows,
 )
 
 #: Virtual elements per block of the tissue pass's element matrices (bounds their memory).
@@ -214,12 +214,23 @@ class _Energy:
         self.elements = elements
         opts = replace(options, volume_average="element", volume_stabilisation=None)
         self.tissue = None if tissue is None else TissuePart(elements, tissue)
-        self.kernel = self.hessian = self.stiffening = None
+        self.kernel = self.stiffening = None
+        self._hessian: SpringHessian | None = None  # its CSR pattern, on the first tangent
+        self._out: np.ndarray | None = None  # the kernel's force buffer
+        self._options = opts
         if self.tissue is None:
             self.kernel = SpringKernel(elements, opts, parallel=None)
-            self.hessian = SpringHessian(elements, opts)
             if modulus is not None and options.stiffening != "off":
                 self.stiffening = StiffeningPart(elements, opts, modulus)
+
+    @property
+    def hessian(self):
+        """The spring Hessian of the elements (built on first use)."""
+        from .hessian import SpringHessian
+
+        if self._hessian is None:
+            self._hessian = SpringHessian(self.elements, self._options)
+        return self._hessian
 
     def energy(self, y: np.ndarray) -> float:
         if self.tissue is not None:
@@ -230,7 +241,9 @@ class _Energy:
     def forces(self, y: np.ndarray) -> np.ndarray:
         if self.tissue is not None:
             return self.tissue.forces(y)
-        fy = self.kernel.forces(y)
+        if self._out is None:
+            self._out = np.empty((self.elements.n_points, 3))
+        fy = self.kernel.forces(y, out=self._out)
         return fy if self.stiffening is None else fy + self.stiffening.forces(y)
 
     def element_matrices(self, y: np.ndarray, lo: int, hi: int) -> np.ndarray:
@@ -357,8 +370,9 @@ class NodalStrainPart:
 
     def virtual_positions(self, x: np.ndarray) -> np.ndarray:
         """``y = Fbar_a X_i`` of every virtual element's vertices, ``(4 g, 3)``."""
-        F = self.average.gradients(np.asarray(x, float).reshape(-1, 3))
-        virtual_positions(F, self.nodes, self.Xg, self._y)
+        x = np.ascontiguousarray(x, dtype=float).reshape(-1, 3)
+        rowptr, cols, gb = self.average.rows
+        virtual_positions_from_rows(x, rowptr, cols, gb, self.nodes, self.Xg, self._y)
         return self._y
 
     def energy(self, x: np.ndarray) -> float:
