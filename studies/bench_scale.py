@@ -17,7 +17,8 @@ Each case runs in its own process (:func:`run_case`), so its peak RSS is its own
 cases run one at a time, smallest size first, every model at a size before the next size. A
 model's static solve stops at the first size it does not fit or fails; the larger sizes say
 so. A case whose predicted time or memory (:func:`predict`, from the model's smaller sizes)
-is over a cap is not tried and is recorded as not fitting, with the prediction. A model with
+is far over a cap (:data:`FAR`) is not tried and is recorded as not fitting, with the
+prediction. A model with
 an explicit form whose static solve no longer fits in time still has its explicit step
 timed at the larger sizes, in a case of its own (``--step-only``). ``--budget`` bounds the
 whole run: a case whose predicted time does not fit in what is left is not started;
@@ -62,6 +63,10 @@ GRACE_SECONDS = 60.0
 #: mesh it reads).
 ONE_SIZE_TIME_EXPONENT = 1.5
 MIN_EXPONENT = 1.0
+#: A case is not tried when its predicted static time is over this many times the time cap
+#: ("far too big": between the cap and this the cap itself stops it) or its predicted
+#: memory over the memory cap (a case over it would take the machine's memory from others).
+FAR = 2.0
 #: The default output folder and meshes folder.
 DEFAULT_OUT = Path("reports") / "scale"
 DEFAULT_MESHES = Path("out") / "organ-meshes"
@@ -548,8 +553,8 @@ def _over(predicted: tuple[float, float], settings: ScaleSettings) -> str:
     t, m = predicted
     if np.isfinite(m) and m > settings.max_memory:
         return f"predicted {m / 1e9:.3g} GB > the {settings.max_memory / 1e9:g} GB cap"
-    if np.isfinite(t) and t > settings.max_time:
-        return f"predicted {t:.3g} s > the {settings.max_time:g} s cap"
+    if np.isfinite(t) and t > FAR * settings.max_time:
+        return f"predicted {t:.3g} s > {FAR:g}x the {settings.max_time:g} s cap"
     return ""
 
 
