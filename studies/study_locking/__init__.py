@@ -178,6 +178,7 @@ def _staged(
     dropped: dict[tuple[str, str, float], str] = {}  # (scene, method, nu) -> why not run
     best: dict[tuple[str, float, bool], tuple[float, str, int]] = {}
     last: dict[tuple[str, float, bool], list[tuple[str, float, float, int]]] = {}
+    errors: dict[tuple[str, str, float], list[float]] = {}  # by level, where it solved
     out: dict[str, list[tuple[dict, dict]]] = {sc.label: [] for sc, _ in levels}
     for i in range(max((len(f) for _, f in levels), default=0)):
         rows: list[tuple[dict, dict | None]] = []
@@ -193,7 +194,8 @@ def _staged(
                     why = dropped.get((sc.label, m, nu))
                     if why is None and i > 0:
                         key = (sc.label, nu, m in LINEAR_TETS)
-                        why = _not_run(ctx, s, c, best.get(key), last.get(key, []))
+                        why = _not_run(ctx, s, c, best.get(key), last.get(key, []),
+                                       errors.get((sc.label, m, nu), []))  # fmt: skip
                         if why is not None and COSTLIER in why:
                             dropped[(sc.label, m, nu)] = why  # nor its finer levels
                     rows.append((c, None if why is None else skipped_result(why)))
@@ -213,6 +215,7 @@ def _staged(
                 continue
             last.setdefault(key, []).append((c["method"], error, float(r["seconds"]),
                                              int(r["tets"])))  # fmt: skip
+            errors.setdefault((c["scene"], c["method"], c["nu"]), []).append(error)
             if error <= TOLERANCE:
                 if s.prune:
                     done.add((c["scene"], c["method"], c["nu"]))
@@ -249,6 +252,7 @@ def _not_run(
     c: dict,
     best: tuple[float, str, int] | None,
     last: list[tuple[str, float, float, int]],
+    own: list[float] | None = None,
 ) -> str | None:
     """Why a case of a finer level is not run, or ``None`` to run it.
 
@@ -256,13 +260,17 @@ def _not_run(
     ``s.skip_costlier`` (on the same kind of tets, linear: :data:`~.cases.LINEAR_TETS`, or
     quadratic; ``best``: the cheapest there within :data:`~.cases.TOLERANCE` at this ν so
     far, ``(seconds, method, tets)``; ``last``: ``(method, error, seconds, tets)`` of the
-    coarser level at this ν):
+    coarser level at this ν; ``own``: the case's method's errors on the coarser levels):
 
     - a method was within the tolerance in less than the case's predicted time: the case
       cannot be the cheapest;
     - on the coarser level a method was at least twice as accurate as the case's and no
       slower: the case's method is not expected to become the cheapest on a finer level
-      (both converge; it is locking).
+      (both converge; it is locking);
+    - its error on the two coarser levels, extrapolated at the same rate (``e₂² / e₁``, no
+      better than ``e₂``), is over twice the tolerance: it is not expected to be within it
+      (the rate of these methods improved from level to level, so the extrapolation errs
+      on the side of running).
 
     Neither applies to a headline method (:data:`~.findings.HEADLINE_METHODS`) at the
     highest ν: its finest level there is a headline number.
@@ -280,13 +288,20 @@ def _not_run(
         seconds, method, tets = best
         return (f"not run: {COSTLIER} (predicted {guess:.3g} s; {method} on {tets} tets "
                 f"within {TOLERANCE:.0%} in {seconds:.2g} s)")  # fmt: skip
-    own = [x for x in last if x[0] == c["method"]]
-    for method, error, seconds, tets in last if own else []:
-        if method != c["method"] and 2.0 * error <= own[0][1] and seconds <= own[0][2]:
+    mine = [x for x in last if x[0] == c["method"]]
+    for method, error, seconds, tets in last if mine else []:
+        if method != c["method"] and 2.0 * error <= mine[0][1] and seconds <= mine[0][2]:
             return (
                 f"not run: {COSTLIER} (on {tets} tets {method} was {error:.1%} off in "
-                f"{seconds:.2g} s, {c['method']} {own[0][1]:.1%} in {own[0][2]:.2g} s)"
+                f"{seconds:.2g} s, {c['method']} {mine[0][1]:.1%} in {mine[0][2]:.2g} s)"
             )
+    own = own or []
+    if len(own) >= 2 and own[-2] > 0:
+        expected = own[-1] * min(own[-1] / own[-2], 1.0)
+        if expected > 2.0 * TOLERANCE:
+            return (f"not run: {COSTLIER} (its error {own[-2]:.1%}, {own[-1]:.1%} on the "
+                    f"coarser levels extrapolates to {expected:.1%}, over twice "
+                    f"{TOLERANCE:.0%})")  # fmt: skip
     return None
 
 
