@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .bench_scale_fit import SOLVED, power_law
+from .bench_scale_fit import ASSUMED, SOLVED, power_law
 
 #: The organ family (tets) of the full benchmark and of ``--quick``.
 DEFAULT_SIZES = (5_000, 30_000, 120_000, 500_000)
@@ -61,7 +61,7 @@ GRACE_SECONDS = 60.0
 #: Exponents a prediction from one size assumes (time of a static solve, memory above
 #: the baseline); a fitted exponent below 1 is raised to 1 (no cost grows slower than the
 #: mesh it reads).
-ONE_SIZE_TIME_EXPONENT = 1.5
+ONE_SIZE_TIME_EXPONENT = ASSUMED["time"]
 MIN_EXPONENT = 1.0
 #: A case is not tried when its predicted static time is over this many times the time cap
 #: ("far too big": between the cap and this the cap itself stops it) or its predicted
@@ -100,6 +100,8 @@ class ScaleSettings:
         Keep the cases ``out/cases.json`` holds (those the budget left out are run again).
     notes
         Lines for the findings (which models are the same solve, e.g.).
+    aliases
+        Models left out as the same solve as a measured one (:func:`scale_models`).
     """
 
     sizes: Sequence[int] = DEFAULT_SIZES
@@ -112,13 +114,14 @@ class ScaleSettings:
     cost_laws: Path | None = None
     resume: bool = False
     notes: list[str] = field(default_factory=list)
+    aliases: dict[str, str] = field(default_factory=dict)
 
 
-def scale_models(scene) -> tuple[list[str], list[str]]:
+def scale_models(scene) -> tuple[list[str], dict[str, str]]:
     """The models the verdict weighs on ``scene`` and its reference
     (:func:`studies.verdict.candidate_models`), each solve once: a model that is the same
     solve as another (:func:`studies.model_set.same_solves`) is left out, the named one
-    kept; and notes saying which.
+    kept; and the models left out, each with the one it is the same solve as.
 
     Parameters
     ----------
@@ -127,7 +130,7 @@ def scale_models(scene) -> tuple[list[str], list[str]]:
 
     Returns
     -------
-    tuple of (list of str, list of str)
+    tuple of (list of str, dict)
     """
     from . import model_set
     from .verdict import candidate_models
@@ -139,9 +142,7 @@ def scale_models(scene) -> tuple[list[str], list[str]]:
     # the scene's own spring model last, so that a named variant of the same solve is kept
     names = [n for n in names if n != "spring"] + (["spring"] if "spring" in names else [])
     alias = model_set.same_solves(scene, names)
-    notes = [f"{n} is the same solve as {first} on the organ: measured once as {first}"
-             for n, first in alias.items()]  # fmt: skip
-    return [n for n in names if n not in alias], notes
+    return [n for n in names if n not in alias], alias
 
 
 def organ_scene_file(folder: Path, tets: int, max_memory: float) -> Path:
@@ -445,8 +446,13 @@ def bench_scale(settings: ScaleSettings, log: Callable[[str], None] = print) -> 
     names = list(settings.models or [])
     notes = settings.notes
     if not names:
-        names, alias_notes = scale_models(load_scene(warmup))
-        notes += alias_notes
+        names, aliases = scale_models(load_scene(warmup))
+        settings.aliases.update(aliases)
+        notes += [
+            f"{n} is the same solve as {first} on the organ: measured once as {first}, "
+            "and the cost laws give it that model's laws"
+            for n, first in aliases.items()
+        ]
     done = (
         {(r["model"], int(r["size"])): r for r in read_cases(settings.out)}
         if settings.resume

@@ -38,6 +38,10 @@ DOMINANT = 2.0
 SOLVED = ("ok", "implausible")
 #: The memory of the machine the benchmark speaks of (bytes): where one machine ends.
 MACHINE_BYTES = 24e9
+#: Exponents a law from one size assumes (static time, memory, explicit step): such a law
+#: is only a size-aware stand-in for the cost model, and the laws table gives no
+#: extrapolation from it.
+ASSUMED = {"time": 1.5, "memory": 1.0, "step": 1.0}
 
 
 def power_law(tets, values) -> tuple[float, float]:
@@ -125,10 +129,17 @@ def _extrapolated(law: tuple[float, float], limit: float, sizes: list[int]) -> t
     )
 
 
-def _fit(rows: pd.DataFrame, column: str) -> tuple[float, float] | None:
-    rows = rows[np.isfinite(rows[column]) & (rows[column] > 0)]
+def _fit(
+    rows: pd.DataFrame, column: str, assume: float | None = None
+) -> tuple[float, float] | None:
+    """The power law of ``column`` over ``rows``; from one size, the law of exponent
+    ``assume`` through it (``None``: no law)."""
+    rows = rows[np.isfinite(rows[column].astype(float)) & (rows[column].astype(float) > 0)]
     if rows["tets"].nunique() < 2:
-        return None
+        if rows.empty or assume is None:
+            return None
+        n, v = float(rows["tets"].iloc[-1]), float(rows[column].iloc[-1])
+        return v / (n / UNIT) ** assume, assume
     return power_law(rows["tets"], rows[column])
 
 
@@ -147,7 +158,8 @@ def model_laws(cases: pd.DataFrame) -> dict[str, dict]:
         ``model -> {"time": (a, b) or None, "memory": ..., "step": ..., "sizes": [...],
         "memory sizes": [...], "memory above baseline": bool, "step sizes": [...]}``
         (``sizes``: the tets of the sizes solved; ``memory above baseline``: the memory law is
-        fitted to two or more sizes at least :data:`DOMINANT` times the baseline).
+        fitted to two or more sizes at least :data:`DOMINANT` times the baseline); from one
+        size a law has the :data:`ASSUMED` exponent, and ``assumed`` names those laws.
     """
     out = {}
     for name, rows in cases.groupby("model", sort=False):
@@ -157,9 +169,14 @@ def model_laws(cases: pd.DataFrame) -> dict[str, dict]:
         memory_rows = dominant if above else solved
         stepped = rows[np.isfinite(rows["step (s)"].astype(float))].sort_values("tets")
         out[str(name)] = {
-            "time": _fit(solved, "static (s)"),
-            "memory": _fit(memory_rows, "peak memory (bytes)"),
-            "step": _fit(stepped, "step (s)"),
+            "time": _fit(solved, "static (s)", ASSUMED["time"]),
+            "memory": _fit(memory_rows, "peak memory (bytes)", ASSUMED["memory"]),
+            "step": _fit(stepped, "step (s)", ASSUMED["step"]),
+            "assumed": [
+                k
+                for k, r in (("time", solved), ("memory", memory_rows), ("step", stepped))
+                if r["tets"].nunique() == 1
+            ],
             "sizes": [int(n) for n in solved["tets"]],
             "memory sizes": [int(n) for n in memory_rows["tets"]],
             "memory above baseline": bool(above),
@@ -168,7 +185,9 @@ def model_laws(cases: pd.DataFrame) -> dict[str, dict]:
     return out
 
 
-def cost_laws_document(laws: dict[str, dict], machine: str | None = None) -> dict:
+def cost_laws_document(
+    laws: dict[str, dict], machine: str | None = None, aliases: dict[str, str] | None = None
+) -> dict:
     """The laws as the verdict's cost model reads them::
 
         {"machine": "...", "date": "...",
@@ -177,7 +196,10 @@ def cost_laws_document(laws: dict[str, dict], machine: str | None = None) -> dic
 
     with ``time_s = a (tets/1e4)^b``, ``memory_bytes = c (tets/1e4)^d``,
     ``step_s = e (tets/1e4)^f``; ``step`` is left out for a model without an explicit form,
-    and a model without a time or memory law (fewer than two sizes solved) is left out.
+    and a model no size of which was solved is left out. A law from one size has the
+    :data:`ASSUMED` exponent (its ``sizes`` says so). ``aliases`` names models that are the
+    same solve as a measured one (the scene's ``spring`` as ``spring-stabilised`` on the
+    organ): they get its laws.
 
     Parameters
     ----------
@@ -185,6 +207,8 @@ def cost_laws_document(laws: dict[str, dict], machine: str | None = None) -> dic
         :func:`model_laws`.
     machine
         A description of the machine (default: cores, memory, processor).
+    aliases
+        Model -> the measured model it is the same solve as.
 
     Returns
     -------
@@ -199,6 +223,9 @@ def cost_laws_document(laws: dict[str, dict], machine: str | None = None) -> dic
             entry["step"] = list(law["step"])
         entry["sizes"] = list(law["sizes"])
         out[name] = entry
+    for name, first in (aliases or {}).items():
+        if first in out and name not in out:
+            out[name] = dict(out[first])
     now = datetime.datetime.now(datetime.UTC)
     return {"machine": machine or machine_description(), "date": now.strftime("%Y-%m-%d"),
             "laws": out}  # fmt: skip
@@ -262,6 +289,7 @@ def laws_table(
             "sizes solved": len(law["sizes"]),
             "largest solved (tets)": largest,
             "first did not fit (tets)": int(failed["tets"].min()) if not failed.empty else np.nan,
+            "assumed exponents": ", ".join(law["assumed"]),
             "time a (s)": law["time"][0] if law["time"] else np.nan,
             "time b": law["time"][1] if law["time"] else np.nan,
             "memory c (GB)": law["memory"][0] / 1e9 if law["memory"] else np.nan,
@@ -274,6 +302,9 @@ def laws_table(
             under = solved.loc[~over, "tets"]
             row[f"largest in {gb:.0f} GB (tets)"] = under.max() if not under.empty else np.nan
             row[f"in {gb:.0f} GB"] = "measured"
+        elif law["memory"] is not None and "memory" in law["assumed"]:
+            row[f"largest in {gb:.0f} GB (tets)"] = np.nan
+            row[f"in {gb:.0f} GB"] = "no law: one size"
         elif law["memory"] is not None and not law["memory above baseline"]:
             row[f"largest in {gb:.0f} GB (tets)"] = np.nan
             row[f"in {gb:.0f} GB"] = "no law: every size near the baseline"
@@ -283,7 +314,9 @@ def laws_table(
         else:
             row[f"largest in {gb:.0f} GB (tets)"] = np.nan
             row[f"in {gb:.0f} GB"] = "no law"
-        if law["time"] is not None:
+        if law["time"] is not None and "time" in law["assumed"]:
+            n, how = np.nan, "no law: one size"
+        elif law["time"] is not None:
             n, how = _extrapolated(law["time"], hour, law["sizes"])
         else:
             n, how = np.nan, "no law"

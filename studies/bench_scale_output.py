@@ -261,7 +261,7 @@ def write_outputs(cases: pd.DataFrame, settings, seconds: float) -> dict[str, Pa
     }
     raw = cases.astype(object).where(pd.notna(cases), None).to_dict(orient="records")
     atomic_write_text(out / RAW_CASES, json.dumps(raw, indent=0, default=float) + "\n")
-    doc = cost_laws_document(laws)
+    doc = cost_laws_document(laws, aliases=getattr(settings, "aliases", None))
     text = json.dumps(doc, indent=1, sort_keys=True) + "\n"
     paths["cost_laws"] = out / "cost_laws.json"
     atomic_write_text(paths["cost_laws"], text)

@@ -72,7 +72,8 @@ def _case(model, tets, status="ok", static=np.nan, step=np.nan, peak=np.nan, bas
 def _synthetic_cases():
     """Model A: time 2 N^1.3, step 1e-3 N^1, memory 1e8 N^1.05 (N in 1e4 tets) over a
     baseline of 0.1 GB, all solved; model B: static only (no explicit form), solved at two
-    sizes, did not fit at the third; model C: its 500k case measured over 24 GB."""
+    sizes, did not fit at the third; model C: its 500k case measured over 24 GB; model D:
+    solved at 5k only (its step timed at 30k as well)."""
     rows = []
     for n in SIZES:
         x = n / 1e4
@@ -84,6 +85,8 @@ def _synthetic_cases():
         solved = status == "ok"
         rows.append(_case("B", n, status, static=5 * x**2 if solved else np.nan,
                           peak=3e9 * x if solved else 9e9))  # fmt: skip
+    rows.append(_case("D", 5000, static=4.0, step=1e-3, peak=8e8))
+    rows.append(_case("D", 30000, f"{DID_NOT_FIT}: time", step=6e-3, peak=2e9))
     return pd.DataFrame(rows)
 
 
@@ -97,8 +100,17 @@ def test_laws_of_synthetic_cases_and_the_cost_model_document():
     assert laws["A"]["memory"] == pytest.approx((1e8, 1.05))
     assert laws["B"]["time"] == pytest.approx((5.0, 2.0))
     assert laws["B"]["step"] is None and laws["B"]["sizes"] == [5000, 30000]
-    doc = json.loads(json.dumps(cost_laws_document(laws, machine="test box")))
+    # D solved one size: its laws have the assumed exponents through that point; its step
+    # was timed at two sizes, so it has a fitted step law
+    assert laws["D"]["assumed"] == ["time", "memory"]
+    assert laws["D"]["step"] == pytest.approx((2e-3, 1.0))
+    assert laws["D"]["time"] == pytest.approx((4.0 / 0.5**1.5, 1.5))
+    assert laws["D"]["memory"] == pytest.approx((8e8 / 0.5, 1.0))
+    aliases = {"spring": "A"}
+    doc = json.loads(json.dumps(cost_laws_document(laws, machine="test box", aliases=aliases)))
     assert set(doc) == {"machine", "date", "laws"} and doc["machine"] == "test box"
+    assert doc["laws"]["spring"] == doc["laws"]["A"]
+    assert doc["laws"]["D"]["sizes"] == [5000]
     assert set(doc["laws"]["A"]) == {"time", "memory", "step", "sizes"}
     assert set(doc["laws"]["B"]) == {"time", "memory", "sizes"}  # no explicit form: no step
     a, b = doc["laws"]["A"]["time"]
