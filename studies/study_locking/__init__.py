@@ -178,7 +178,6 @@ def _staged(
     dropped: dict[tuple[str, str, float], str] = {}  # (scene, method, nu) -> why not run
     best: dict[tuple[str, float, bool], tuple[float, str, int]] = {}
     last: dict[tuple[str, float, bool], list[tuple[str, float, float, int]]] = {}
-    errors: dict[tuple[str, str, float], list[float]] = {}  # by level, where it solved
     out: dict[str, list[tuple[dict, dict]]] = {sc.label: [] for sc, _ in levels}
     for i in range(max((len(f) for _, f in levels), default=0)):
         rows: list[tuple[dict, dict | None]] = []
@@ -194,8 +193,7 @@ def _staged(
                     why = dropped.get((sc.label, m, nu))
                     if why is None and i > 0:
                         key = (sc.label, nu, m in LINEAR_TETS)
-                        why = _not_run(ctx, s, c, best.get(key), last.get(key, []),
-                                       errors.get((sc.label, m, nu), []))  # fmt: skip
+                        why = _not_run(ctx, s, c, best.get(key), last.get(key, []))
                         if why is not None and COSTLIER in why:
                             dropped[(sc.label, m, nu)] = why  # nor its finer levels
                     rows.append((c, None if why is None else skipped_result(why)))
@@ -215,7 +213,6 @@ def _staged(
                 continue
             last.setdefault(key, []).append((c["method"], error, float(r["seconds"]),
                                              int(r["tets"])))  # fmt: skip
-            errors.setdefault((c["scene"], c["method"], c["nu"]), []).append(error)
             if error <= TOLERANCE:
                 if s.prune:
                     done.add((c["scene"], c["method"], c["nu"]))
@@ -252,7 +249,6 @@ def _not_run(
     c: dict,
     best: tuple[float, str, int] | None,
     last: list[tuple[str, float, float, int]],
-    own: list[float] | None = None,
 ) -> str | None:
     """Why a case of a finer level is not run, or ``None`` to run it.
 
@@ -260,17 +256,17 @@ def _not_run(
     ``s.skip_costlier`` (on the same kind of tets, linear: :data:`~.cases.LINEAR_TETS`, or
     quadratic; ``best``: the cheapest there within :data:`~.cases.TOLERANCE` at this ν so
     far, ``(seconds, method, tets)``; ``last``: ``(method, error, seconds, tets)`` of the
-    coarser level at this ν; ``own``: the case's method's errors on the coarser levels):
+    coarser level at this ν):
 
     - a method was within the tolerance in less than the case's predicted time: the case
       cannot be the cheapest;
     - on the coarser level a method was at least twice as accurate as the case's and no
       slower: the case's method is not expected to become the cheapest on a finer level
-      (both converge; it is locking);
-    - its error on the two coarser levels, extrapolated at the same rate (``e₂² / e₁``, no
-      better than ``e₂``), is over twice the tolerance: it is not expected to be within it
-      (the rate of these methods improved from level to level, so the extrapolation errs
-      on the side of running).
+      (both converge; it is locking).
+
+    (Not a rule: extrapolating a method's own error from two coarser levels. On the full
+    report's beam at ν = 0.4999 the stabilised spring element went 66.7 %, 37.6 % and then
+    3.1 %, where the same rate predicted 21 %: it would have removed an answer.)
 
     Neither applies to a headline method (:data:`~.findings.HEADLINE_METHODS`) at the
     highest ν: its finest level there is a headline number.
@@ -295,13 +291,6 @@ def _not_run(
                 f"not run: {COSTLIER} (on {tets} tets {method} was {error:.1%} off in "
                 f"{seconds:.2g} s, {c['method']} {mine[0][1]:.1%} in {mine[0][2]:.2g} s)"
             )
-    own = own or []
-    if len(own) >= 2 and own[-2] > 0:
-        expected = own[-1] * min(own[-1] / own[-2], 1.0)
-        if expected > 2.0 * TOLERANCE:
-            return (f"not run: {COSTLIER} (its error {own[-2]:.1%}, {own[-1]:.1%} on the "
-                    f"coarser levels extrapolates to {expected:.1%}, over twice "
-                    f"{TOLERANCE:.0%})")  # fmt: skip
     return None
 
 
