@@ -189,6 +189,8 @@ def _staged(
                 for m in scene_methods(sc, s):
                     if m == REFERENCE and f == factors[-1] or (sc.label, m, nu) in done:
                         continue
+                    if f == factors[-1] and s.finest_nus is not None and nu not in s.finest_nus:
+                        continue  # the quick preset: the finest level at the highest ν only
                     c = case_of(sc, s, m, nu, f)
                     why = dropped.get((sc.label, m, nu))
                     if why is None and i > 0:
