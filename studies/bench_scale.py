@@ -11,18 +11,18 @@ hanging under gravity from its flat cut) is solved by each model the verdict wei
   explicit step (:mod:`studies.bench_scale_case`);
 - the peak resident memory (RSS) of the case.
 
-Each case runs in its own process (:func:`run_case`), so its peak RSS is its own
-(``os.wait4`` reads it), under a time cap (``--max-time``, per static solve) and a memory cap
-(``--max-memory``: ``RLIMIT_AS``, the address space, which is a little above the RSS). The
-cases run one at a time, smallest size first, every model at a size before the next size. A
-model's static solve stops at the first size it does not fit or fails; the larger sizes say
-so. A case whose predicted time or memory (:func:`predict`, from the model's smaller sizes)
-is far over a cap (:data:`FAR`) is not tried and is recorded as not fitting, with the
-prediction. A model with
-an explicit form whose static solve no longer fits in time still has its explicit step
-timed at the larger sizes, in a case of its own (``--step-only``). ``--budget`` bounds the
-whole run: a case whose predicted time does not fit in what is left is not started;
-``--resume`` keeps the cases of an earlier run in the same output folder.
+Each case runs in its own process (:func:`studies.bench_scale_run.run_case`), so its peak
+RSS is its own (``os.wait4`` reads it), under a time cap (``--max-time``, per static solve)
+and a memory cap (``--max-memory``: ``RLIMIT_AS``, the address space, which is a little
+above the RSS). The cases run one at a time, smallest size first, every model at a size
+before the next size. A model's static solve stops at the first size it does not fit or
+fails; the larger sizes say so. A case whose predicted time or memory (:func:`predict`, from
+the model's smaller sizes) is far over a cap (:data:`FAR`) is not tried and is recorded as
+not fitting, with the prediction. A model with an explicit form whose static solve no longer
+fits in time still has its explicit step timed at the larger sizes, in a case of its own
+(``--step-only``). ``--budget`` bounds the whole run: a case whose predicted time does not
+fit in what is left is not started; ``--resume`` keeps the cases of an earlier run in the
+same output folder.
 
 The laws, tables, figure and JSON are written by :mod:`studies.bench_scale_output` after
 every size, so a run stopped part way leaves what it measured.
@@ -31,11 +31,8 @@ every size, so a run stopped part way leaves what it measured.
 from __future__ import annotations
 
 import os
-import resource
 import signal
 import subprocess
-import sys
-import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -45,6 +42,7 @@ import numpy as np
 import pandas as pd
 
 from .bench_scale_fit import ASSUMED, SOLVED, power_law
+from .bench_scale_run import DID_NOT_FIT, CaseResult, classify, organ_scene_file, run_case
 
 #: The organ family (tets) of the full benchmark and of ``--quick``.
 DEFAULT_SIZES = (5_000, 30_000, 120_000, 500_000)
@@ -54,10 +52,6 @@ WARMUP_TETS = 300
 #: Default caps of one case: seconds of its static solve, bytes of its address space.
 DEFAULT_MAX_TIME = 120.0
 DEFAULT_MAX_MEMORY = 14e9
-#: Seconds a case may take to start, warm up and load its mesh beyond its time cap, and
-#: to time its explicit step and stop after the cap.
-SETUP_SECONDS = 180.0
-GRACE_SECONDS = 60.0
 #: Exponents a prediction from one size assumes (time of a static solve, memory above
 #: the baseline); a fitted exponent below 1 is raised to 1 (no cost grows slower than the
 #: mesh it reads).
@@ -70,8 +64,6 @@ FAR = 2.0
 #: The default output folder and meshes folder.
 DEFAULT_OUT = Path("reports") / "scale"
 DEFAULT_MESHES = Path("out") / "organ-meshes"
-#: Case statuses that are not measurements of a solve.
-DID_NOT_FIT = "did not fit"
 
 
 @dataclass
@@ -143,202 +135,6 @@ def scale_models(scene) -> tuple[list[str], dict[str, str]]:
     names = [n for n in names if n != "spring"] + (["spring"] if "spring" in names else [])
     alias = model_set.same_solves(scene, names)
     return [n for n in names if n not in alias], alias
-
-
-def organ_scene_file(folder: Path, tets: int, max_memory: float) -> Path:
-    """The organ scene of about ``tets`` tets in ``folder`` (made in a child process under
-    the memory cap when it is not there yet).
-
-    Parameters
-    ----------
-    folder
-        The meshes folder.
-    tets
-        Tets asked for.
-    max_memory
-        Bytes of address space gmsh may use.
-
-    Returns
-    -------
-    Path
-    """
-    folder = Path(folder)
-    path = folder / f"organ-{tets}.toml"
-    if path.exists() and (folder / f"organ-{tets}.msh").exists():
-        return path
-    folder.mkdir(parents=True, exist_ok=True)
-    code = (
-        "import sys; from springfem.mesh.organ import organ_scene; "
-        "organ_scene(sys.argv[1], tets=int(sys.argv[2]))"
-    )
-    subprocess.run([sys.executable, "-c", code, str(folder), str(tets)], env=_child_env(),
-                   check=True, preexec_fn=_limit(max_memory), timeout=1800)  # fmt: skip
-    return path
-
-
-def _child_env() -> dict[str, str]:
-    """The environment of a child: this checkout first on the path, one BLAS thread."""
-    env = dict(os.environ)
-    root = str(Path(__file__).resolve().parents[1])
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
-    env.setdefault("OPENBLAS_NUM_THREADS", "1")
-    env.setdefault("OMP_WAIT_POLICY", "passive")
-    env.setdefault("MPLBACKEND", "Agg")
-    return env
-
-
-def _limit(max_memory: float) -> Callable[[], None]:
-    def set_limit() -> None:
-        cap = int(max_memory)
-        resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
-
-    return set_limit
-
-
-@dataclass
-class CaseResult:
-    """What :func:`run_case` got from the child: its stage lines, exit, peak RSS, and whether
-    it was stopped for time."""
-
-    stages: dict[str, dict]
-    returncode: int
-    peak_rss: int
-    killed_for_time: bool
-    stderr_tail: str
-    wall: float
-
-
-def run_case(
-    scene: Path,
-    model: str,
-    warmup: Path | None,
-    max_time: float,
-    max_memory: float,
-    step_only: bool = False,
-) -> CaseResult:
-    """Run one case (:mod:`studies.bench_scale_case`) in a child process under the caps.
-
-    The child's static solve stops itself at ``max_time``
-    (:func:`~springfem.mechanics.limits.solve_limits`); it is killed when it has not started
-    within :data:`SETUP_SECONDS` beyond that, or has not ended :data:`GRACE_SECONDS` past it.
-
-    Parameters
-    ----------
-    scene
-        The case's scene file.
-    model
-        The model.
-    warmup
-        The warm-up scene.
-    max_time
-        Seconds of the static solve.
-    max_memory
-        Bytes of address space (``RLIMIT_AS``).
-    step_only
-        Time the explicit step only (``--step-only``).
-
-    Returns
-    -------
-    CaseResult
-    """
-    import json
-
-    cmd = [sys.executable, "-m", "studies.bench_scale_case", str(scene), model,
-           "--cap", f"{max_time:g}"] + (["--warmup", str(warmup)] if warmup else [])  # fmt: skip
-    cmd += ["--step-only"] if step_only else []
-    t0 = time.perf_counter()
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=_child_env(), preexec_fn=_limit(max_memory),
-                            start_new_session=True)  # fmt: skip
-    stages: dict[str, dict] = {}
-    tail: list[str] = []
-
-    def read_out() -> None:
-        assert proc.stdout is not None
-        for line in proc.stdout:
-            try:
-                rec = json.loads(line)
-                stages[rec.pop("stage")] = {**rec, "at": time.perf_counter()}
-            except (ValueError, KeyError, AttributeError):
-                continue
-
-    def read_err() -> None:
-        assert proc.stderr is not None
-        for line in proc.stderr:
-            tail.append(line.rstrip())
-            del tail[:-20]
-
-    readers = [threading.Thread(target=f, daemon=True) for f in (read_out, read_err)]
-    for r in readers:
-        r.start()
-    killed = False
-    status = 0
-    usage = None
-    while True:
-        pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
-        if pid:
-            break
-        now = time.perf_counter()
-        ready = stages.get("ready", {}).get("at")
-        late = (now - t0 > max_time + SETUP_SECONDS) if ready is None else (
-            now - ready > max_time + GRACE_SECONDS)  # fmt: skip
-        if late and not killed:
-            killed = True
-            os.killpg(proc.pid, signal.SIGKILL)
-        time.sleep(0.1)
-    for r in readers:
-        r.join(timeout=5)
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    return CaseResult(stages, proc.returncode, int(usage.ru_maxrss) * 1024, killed,
-                      "\n".join(tail[-5:]), time.perf_counter() - t0)  # fmt: skip
-
-
-def classify(res: CaseResult, max_time: float, max_memory: float) -> tuple[str, str]:
-    """A case's status and message from what its child left.
-
-    ``ok``, ``implausible``, ``partial`` or ``failed`` as :func:`studies.models.run` gives it;
-    ``did not fit: time`` when the static solve was stopped at (or killed past) the time
-    cap; ``did not fit: memory`` when the child ran out of memory (a ``MemoryError``, or a
-    crash with its peak RSS near the cap or an allocation failure on stderr).
-
-    Parameters
-    ----------
-    res
-        The child's result.
-    max_time, max_memory
-        The caps.
-
-    Returns
-    -------
-    tuple of (str, str)
-    """
-    memory_words = ("memoryerror", "cannot allocate", "bad_alloc", "out of memory",
-                    "unable to allocate", "failed to allocate")  # fmt: skip
-    static = res.stages.get("static")
-    if static is not None:
-        message = static.get("message", "")
-        if static["status"] in SOLVED:
-            return static["status"], message
-        if static["seconds"] >= 0.9 * max_time:
-            return f"{DID_NOT_FIT}: time", f"stopped at the {max_time:g} s cap"
-        if any(w in message.lower() for w in memory_words):  # a solver that caught it
-            return f"{DID_NOT_FIT}: memory", f"{message[:120]} (cap {max_memory / 1e9:g} GB)"
-        return static["status"], message
-    if res.killed_for_time:
-        where = "static solve" if "ready" in res.stages else "set-up"
-        return f"{DID_NOT_FIT}: time", f"killed past the {max_time:g} s cap in its {where}"
-    err = res.stderr_tail.lower()
-    if ("error" in res.stages and res.stages["error"].get("kind") == "memory") or any(
-        w in err for w in memory_words
-    ):
-        return f"{DID_NOT_FIT}: memory", f"out of memory under the {max_memory / 1e9:g} GB cap"
-    if res.returncode < 0 and res.peak_rss >= 0.7 * max_memory:
-        return f"{DID_NOT_FIT}: memory", (
-            f"killed by signal {-res.returncode} at {res.peak_rss / 1e9:.3g} GB "
-            f"(cap {max_memory / 1e9:g} GB)"
-        )
-    last = res.stderr_tail.splitlines()[-1] if res.stderr_tail else ""
-    return "failed", f"exit {res.returncode}: {last}"[:300]
 
 
 def predict(rows: list[dict], tets: float) -> tuple[float, float]:
@@ -460,12 +256,37 @@ def bench_scale(settings: ScaleSettings, log: Callable[[str], None] = print) -> 
     )
     rows: list[dict] = []
     states = {name: _ModelState() for name in names}
-    scenes: dict[int, Path] = {}
+    scenes: dict[int, Path | None] = {}
 
-    def scene_of(size: int) -> Path:
+    def scene_of(size: int) -> Path | None:
         if size not in scenes:
-            scenes[size] = organ_scene_file(settings.meshes, size, settings.max_memory)
+            try:
+                scenes[size] = organ_scene_file(settings.meshes, size, settings.max_memory)
+            except (subprocess.SubprocessError, OSError) as exc:
+                log(f"  {size:>8} no mesh: {exc}")
+                scenes[size] = None
         return scenes[size]
+
+    previous = signal.signal(signal.SIGTERM, _stop)  # a timeout's SIGTERM: stop cleanly
+    try:
+        _run_sizes(sizes, names, states, done, rows, settings, t0, scene_of, warmup, log)
+    except KeyboardInterrupt:
+        log("bench scale: stopped; writing what was measured")
+        write_outputs(pd.DataFrame(rows), settings, time.perf_counter() - t0)
+        raise
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    log(f"bench scale: {time.perf_counter() - t0:.0f} s, load average {_load()}")
+    return pd.DataFrame(rows)
+
+
+def _stop(signum, frame) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+def _run_sizes(sizes, names, states, done, rows, settings, t0, scene_of, warmup, log) -> None:
+    """The cases of every size, smallest first (:func:`bench_scale`); outputs after each."""
+    from .bench_scale_output import write_outputs
 
     for size in sizes:
         for name in names:
@@ -482,8 +303,6 @@ def bench_scale(settings: ScaleSettings, log: Callable[[str], None] = print) -> 
             state.update(row)
             log(_case_line(row))
         write_outputs(pd.DataFrame(rows), settings, time.perf_counter() - t0)
-    log(f"bench scale: {time.perf_counter() - t0:.0f} s, load average {_load()}")
-    return pd.DataFrame(rows)
 
 
 @dataclass
@@ -531,7 +350,10 @@ def _next_case(name: str, size: int, mine: list[dict], state: _ModelState,
                 return _row(name, size, size, "not run: budget",
                             f"needs about {need:.0f} s, {left:.0f} s of the budget left",
                             **values)  # fmt: skip
-            res = run_case(scene_of(size), name, warmup, settings.max_time, settings.max_memory)
+            scene = scene_of(size)
+            if scene is None:
+                return _row(name, size, size, "not run: no mesh", "gmsh failed", **values)
+            res = run_case(scene, name, warmup, settings.max_time, settings.max_memory)
             return measured_row(name, size, res, settings.max_time, settings.max_memory,
                                 predicted)  # fmt: skip
         status = f"{DID_NOT_FIT}: predicted"
@@ -546,7 +368,10 @@ def _next_case(name: str, size: int, mine: list[dict], state: _ModelState,
         return _row(name, size, size, status, why, **values)
     if left is not None and overhead > left:
         return _row(name, size, size, status, f"{why}; step not run (budget)", **values)
-    res = run_case(scene_of(size), name, warmup, settings.max_time, settings.max_memory,
+    scene = scene_of(size)
+    if scene is None:
+        return _row(name, size, size, status, f"{why}; no mesh for the step", **values)
+    res = run_case(scene, name, warmup, settings.max_time, settings.max_memory,
                    step_only=True)  # fmt: skip
     row = measured_row(name, size, res, settings.max_time, settings.max_memory, predicted)
     row.update(status=status, message=f"{why}; step only", **{"static (s)": np.nan})
