@@ -357,9 +357,9 @@ class NodalStrainPart:
             ``(NodalStrainPart or None, elements for the spring kernel and Hessian)``: the
             kernel keeps the share ``alpha`` of the springs and all of its volume stiffness.
         """
-        if options.strain_average != "nodal":
-            return None, elements
         alpha = float(options.strain_stabilisation)
+        if options.strain_average != "nodal" or alpha >= 1.0:  # alpha 1: all on the element
+            return None, elements
         deviatoric = replace(elements, k_axis_volume=np.zeros(elements.n_elements))
         part = cls(mesh.points, mesh.tets, scaled_deviatoric(deviatoric, (1 - alpha) / 4),
                    options, modulus, tissue)  # fmt: skip

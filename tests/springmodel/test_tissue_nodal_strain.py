@@ -129,6 +129,19 @@ def test_forces_equal_the_nodal_strain_fem(law, case, frames):
     assert np.abs(K - K_fem).max() < 1e-10 * np.abs(K_fem).max()
 
 
+def test_alpha_one_keeps_all_on_the_element_as_the_fem_does():
+    """``strain_stabilisation = 1``: no nodal-strain share (it once divided by that zero share
+    and gave NaN forces); the FEM's alpha 1 is its nodal-volume tet."""
+    spring, fem, kappa = SAME_ENERGY["spring beta"]
+    one = {"strain_stabilisation": 1.0}
+    problem = make_problem(scene("holzapfel-ogden", TISSUE, {**fem, **one}, kappa=kappa))
+    model = SpringModel(scene("holzapfel-ogden", {**TISSUE, **spring, **one}))
+    assert model.nodal_strain is None
+    X, u = MESH.points, displacement(MESH.points)
+    f_fem = problem.internal_force(u.ravel())[0]
+    assert np.abs(model.internal(X + u).ravel() + f_fem).max() < 1e-10 * np.abs(f_fem).max()
+
+
 def test_default_shares_differ_between_the_two():
     """Not the same energy at both defaults (the module text): ~0.4 % in the forces here."""
     X, u = MESH.points, displacement(MESH.points)
