@@ -15,7 +15,10 @@ stationarity gives the block system
 ``K_up = -int J F^-T : grad du* p dX = K_pu^T``, ``K_pp = -int p* p / kappa dX``,
 ``K_uu = int grad du* : (A_W - p d(J F^-T)/dF) : grad du dX`` (minus the follower-pressure
 stiffness). DOFs: the ``3 n_nodes`` displacement DOFs of the P2 space, then one pressure
-per mesh vertex. The saddle-point system is factorised (``LinearSolver(saddle_point=True)``).
+per mesh vertex. The saddle-point system is factorised (``LinearSolver(saddle_point=True)``),
+or, when that is too large, solved by GMRES with a block preconditioner whose Schur
+complement approximation is the lumped pressure mass matrix times ``1/(2 mu) + 1/kappa``
+(:meth:`MixedProblem.schur_diagonal`, :mod:`springfem.mechanics.saddle`).
 
 Examples
 --------
@@ -108,6 +111,23 @@ class MixedProblem(FemProblem):
         self.p_nodes = np.ascontiguousarray(pb.element_dofs.T, dtype=np.int64)
         self.p_values = np.stack([np.asarray(b[0])[0] for b in pb.basis], axis=1)  # (nq, 4)
         self.p_scale = P_SCALE * scene.material.mu
+        self.linear_solver.schur = self.schur_diagonal()
+
+    def schur_diagonal(self) -> np.ndarray:
+        """The Schur complement's diagonal approximation in the scaled pressure unknowns:
+        ``p_scale^2 (1/(2 mu) + 1/kappa)`` times the lumped P1 pressure mass matrix.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n_p,)`` positive entries.
+        """
+        mass = np.einsum("eq,qa->ea", self.space.dx, self.p_values)
+        lumped = np.bincount(self.p_nodes.ravel(), weights=mass.ravel(), minlength=self.n_p)
+        mu = self.scene.material.mu
+        inv_bulk = 1.0 / self.bulk if np.isfinite(self.bulk) else 0.0
+        scale = self.p_scale**2 * (0.5 / mu + inv_bulk)
+        return scale * np.maximum(lumped, 1e-300)
 
     @property
     def n_dofs(self) -> int:

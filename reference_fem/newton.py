@@ -19,6 +19,12 @@ iteration, residual, step length).
 
 Convergence: ``|R_free| <= tol * max(|f_int|, |f_ext|)`` with the prescribed values reached.
 
+An iterative linear solve is inexact Newton (Eisenstat & Walker 1996, SIAM J. Sci. Comput.
+17, choice 2): its relative residual may be the forcing term ``eta_k = 0.9 (r_k /
+r_{k-1})^2``, at most :data:`ETA_MAX`, at least ``0.9 eta_{k-1}^2`` when that is above
+0.1, and at least :data:`ETA_FLOOR` times ``tol / r_k`` (no solve more accurate than the
+last step needs). A factorisation ignores it.
+
 Examples
 --------
 Inverted elements reject a state: a trial is backtracked, a start fails the load step.
@@ -41,7 +47,7 @@ import numpy as np
 
 from springfem.errors import SolverError
 from springfem.mechanics.limits import Deadline, SolveStopped, checkpoint
-from springfem.mechanics.linsolve import LinearSolver
+from springfem.mechanics.linsolve import Factorization, LinearSolver
 from springfem.mechanics.newton import (
     LoadStepping,
     NewtonOutcome,
@@ -50,6 +56,47 @@ from springfem.mechanics.newton import (
     newton,
 )
 from springfem.mechanics.phases import PhaseTimes
+
+#: The largest forcing term (:func:`forcing_term`).
+ETA_MAX = 0.1
+#: The forcing term is at least this times ``tol / r``.
+ETA_FLOOR = 0.2
+
+
+def forcing_term(r: float, r_prev: float | None, eta_prev: float | None, tol: float) -> float:
+    """The relative tolerance of an iterative Newton correction (module docstring).
+
+    Parameters
+    ----------
+    r, r_prev
+        Relative residual now and at the previous correction (``None``: none yet).
+    eta_prev
+        The previous forcing term (``None``: none yet).
+    tol
+        Newton's tolerance.
+
+    Returns
+    -------
+    float
+        ``eta`` in ``(0, ETA_MAX]``.
+
+    Examples
+    --------
+    >>> forcing_term(1e-2, None, None, 1e-10)
+    0.1
+    >>> round(forcing_term(1e-4, 1e-2, 0.1, 1e-10), 8)  # 0.9 * (1e-2)^2
+    9e-05
+    >>> forcing_term(1e-9, 1e-5, 1e-3, 1e-10)  # the floor: 0.2 tol / r
+    0.02
+    """
+    if r_prev is None or eta_prev is None or r_prev <= 0:
+        eta = ETA_MAX
+    else:
+        eta = 0.9 * (r / r_prev) ** 2
+        if 0.9 * eta_prev**2 > 0.1:
+            eta = max(eta, 0.9 * eta_prev**2)
+    eta = max(eta, ETA_FLOOR * tol / max(r, 1e-300))
+    return float(min(ETA_MAX, eta))
 
 
 class InvertedElements(RejectedState):
@@ -193,6 +240,8 @@ class FemStep:
     kept
         Holder of the last tangent ``K`` and its ``factor``, shared by the load steps of a
         solve, for :meth:`reused_correction` (modified Newton).
+    tol
+        Newton's tolerance (for the forcing term of an iterative solve).
     """
 
     def __init__(
@@ -201,6 +250,7 @@ class FemStep:
         scale: float,
         phases: PhaseTimes | None = None,
         kept: dict | None = None,
+        tol: float = 1e-10,
     ):
         self.problem, self.scale = problem, scale
         self.target = scale * problem.fixed_values
@@ -208,13 +258,17 @@ class FemStep:
         self.phases = PhaseTimes() if phases is None else phases
         self.phase = "line search"  # the phase of the next residual evaluation
         self.kept = {} if kept is None else kept  # the last tangent and its factorisation
+        self.tol = tol
+        self.r = np.inf  # the last relative residual evaluated
+        self._eta: tuple[float, float] | None = None  # (r, eta) at the last correction
 
     def residual(self, u: np.ndarray) -> tuple[np.ndarray, float]:
         """Residual ``R`` (energy-gradient sign) and its relative norm."""
         checkpoint()
         with self.phases(self.phase):
             R, ref = self.problem.residual(u, self.scale)
-        return R, float(np.linalg.norm(R[self.problem.free]) / max(ref, 1e-300))
+        self.r = float(np.linalg.norm(R[self.problem.free]) / max(ref, 1e-300))
+        return R, self.r
 
     def correction(self, u: np.ndarray, R: np.ndarray):
         """Newton correction ``d = -K^-1 R`` and the re-solve with the same tangent."""
@@ -224,7 +278,9 @@ class FemStep:
             _, K, symmetric, _ = p.residual_tangent(u, self.scale)
         checkpoint()
         with times("factorization"):
-            factor = p.linear_solver.factorize(K, p.free, symmetric)
+            last = self.kept.get("factor")
+            last = last if isinstance(last, Factorization) else None  # an AMG hierarchy
+            factor = p.linear_solver.factorize(K, p.free, symmetric, reuse=last)
         self.kept.update(K=K, factor=factor)
         return self._solve(u, R, K, factor)
 
@@ -240,12 +296,16 @@ class FemStep:
         du = np.zeros_like(u)
         du[p.fixed_dofs] = self.target - u[p.fixed_dofs]
         b = -R - (K @ du if not self.constrained(u) else 0.0)
+        r_prev, eta_prev = self._eta if self._eta is not None else (None, None)
+        eta = forcing_term(self.r, r_prev, eta_prev, self.tol)
+        self._eta = (self.r, eta)
+        inexact = isinstance(factor, Factorization)  # else a wrapper's own solve(b)
         with times("solve"):
-            du += factor.solve(b)
+            du += factor.solve(b, eta) if inexact else factor.solve(b)
 
         def resolve(rhs: np.ndarray) -> np.ndarray:
             with times("line search"):
-                return -factor.solve(rhs)
+                return -(factor.solve(rhs, eta) if inexact else factor.solve(rhs))
 
         return du, resolve
 
@@ -335,7 +395,8 @@ def newton_step(
         _log(opts, f"  {label} iteration {it:2d}  |R|/|f| = {rel:.3e}")
 
     settings = NewtonSettings(opts.tol, opts.max_iter, opts.max_backtracks, opts.reuse)
-    return newton(FemStep(problem, scale, phases, kept), u.copy(), settings, monitor)
+    step_problem = FemStep(problem, scale, phases, kept, opts.tol)
+    return newton(step_problem, u.copy(), settings, monitor)
 
 
 def _predict(

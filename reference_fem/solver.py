@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from springfem.errors import SolverError
+from springfem.mechanics.memory import MemoryLimitExceeded, memory_limit, resident_bytes
 from springfem.result import Result, frame_cell_data, volume_summary
 from springfem.scene import Scene
 
@@ -196,9 +197,46 @@ def solve(
         ) from None
 
 
+#: Bytes per tangent entry an iterative solve holds at its peak, the assembly's element
+#: arrays included (measured: see :func:`check_memory`).
+PEAK_BYTES_PER_NNZ = 120.0
+
+
+def check_memory(problem: FemProblem) -> None:
+    """Refuse, before it starts, a solve that cannot fit the memory limit even iteratively.
+
+    The tangent's entries are counted from the displacement pattern (``9`` per node pair,
+    a tenth more for a mixed problem's pressure coupling); the solve holds about
+    :data:`PEAK_BYTES_PER_NNZ` bytes per entry at its peak (assembly arrays, the matrix and
+    its copies, the AMG hierarchy), on top of what the process holds.
+
+    Parameters
+    ----------
+    problem
+        The discrete problem.
+
+    Raises
+    ------
+    MemoryLimitExceeded
+        The estimate is over :func:`~springfem.mechanics.memory.memory_limit`.
+    """
+    nnz = 9.0 * problem.pattern.indices.size * (1.1 if problem.mixed else 1.0)
+    held = resident_bytes()
+    need = held + PEAK_BYTES_PER_NNZ * nnz
+    limit = memory_limit()
+    if need > limit:
+        raise MemoryLimitExceeded(
+            f"{problem.scene.name} (fem P{problem.order}, {problem.law_name}, "
+            f"{problem.n_dofs} DOFs): the solve needs about {need / 1e9:.2f} GB even with "
+            f"an iterative linear solver, over the memory limit of {limit / 1e9:.2f} GB "
+            "(SPRINGFEM_MAX_MEMORY, or free memory)"
+        )
+
+
 def _solve(problem: FemProblem, verbose: bool, t0: float) -> FemSolution:
     scene = problem.scene
     check_rigid_motions(problem.space, problem.fixed_dofs)
+    check_memory(problem)
     info: dict = {
         "vertices": problem.space.n_vertices,
         "intorder": problem.space.intorder,
@@ -235,6 +273,10 @@ def _solve(problem: FemProblem, verbose: bool, t0: float) -> FemSolution:
     cell_data = {**problem.cell_data(u), **frame_cell_data(scene, u_vertices)}
     stats = problem.linear_solver.stats
     info["krylov_iterations"] = stats["krylov_iterations"]
+    if stats["krylov_iterations"]:
+        info["krylov_solver"] = problem.linear_solver.name
+    if getattr(problem.linear_solver, "reason", ""):
+        info["direct_refused"] = problem.linear_solver.reason
     if stats["factorizations"]:
         info["direct_solver"] = problem.linear_solver.direct.backend
         info["factorizations"] = stats["factorizations"]

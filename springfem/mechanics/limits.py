@@ -1,5 +1,5 @@
-"""Caps on a solve: wall time and time steps (``--max-time``, ``--max-steps``), and the
-interrupt (Ctrl-C).
+"""Caps on a solve: wall time and time steps (``--max-time``, ``--max-steps``), memory
+(``max_memory``: :mod:`.memory`), and the interrupt (Ctrl-C).
 
 :func:`solve_limits` sets them for every solve started inside its block; the per-solve
 context (:class:`~springfem.mechanics.context.SolveContext`) checks them at every force
@@ -72,7 +72,7 @@ class SolveStopped(SpringFemError, RuntimeError):
         self.load_factor = load_factor
 
 
-LIMITS: dict[str, float | None] = {"max_time": None, "max_steps": None}
+LIMITS: dict[str, float | None] = {"max_time": None, "max_steps": None, "max_memory": None}
 #: What the time cap of :data:`LIMITS` is (``why`` of :func:`solve_limits`).
 CAP_REASON: dict[str, str | None] = {"why": None}
 #: Seconds past the cap after which the watchdog interrupts the main thread.
@@ -85,9 +85,12 @@ _ABANDONED: list[threading.Thread] = []  # workers of interruptible calls left r
 
 @contextlib.contextmanager
 def solve_limits(
-    max_time: float | None = None, max_steps: int | None = None, why: str | None = None
+    max_time: float | None = None,
+    max_steps: int | None = None,
+    why: str | None = None,
+    max_memory: float | None = None,
 ) -> Iterator[None]:
-    """Cap every solve started inside the block: wall time and time steps.
+    """Cap every solve started inside the block: wall time, time steps and memory.
 
     A :class:`SolveContext` created inside takes a deadline ``max_time`` seconds after its
     first force evaluation (which includes the one-time compilation of the force kernels,
@@ -121,6 +124,8 @@ def solve_limits(
     """
     saved, saved_why = dict(LIMITS), CAP_REASON["why"]
     LIMITS.update(max_time=max_time, max_steps=max_steps)
+    if max_memory is not None:
+        LIMITS["max_memory"] = float(max_memory)
     CAP_REASON["why"] = why
     try:
         yield

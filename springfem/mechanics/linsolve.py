@@ -9,16 +9,23 @@ analysis); :meth:`LinearSolver.factorize` prepares one matrix for several right-
 direct solver factorises its free block, AMG its symmetric elimination (constrained rows
 and columns zeroed, unit diagonal: the 3x3 blocks smoothed aggregation works best with).
 
-Size rule (``auto``): direct up to :data:`DIRECT_MAX_DOFS` unknowns, AMG above; a saddle
-point (``saddle_point``: mixed u–p, indefinite, which smoothed aggregation cannot
-precondition) is always factorised. With SuperLU the crossover with AMG-CG on the P1 and P2
-stiffness of a clamped box is at about 4,000–6,000 DOFs, the same in DOFs for both orders
-(not in nnz), and SuperLU's cost grows superlinearly (fill-in) while AMG's grows about
-linearly. PARDISO moves the crossover on that box to about 25,000 DOFs (P1) and 35,000
-(P2); on the slender P2 tangents of the bundled scenes (14k–19k DOFs) it is 15–35 times
-faster than AMG-CG, whose iterations grow with the slenderness. A factorisation is also
-exact, which suits the small, ill-conditioned problems (slender beams, near-incompressible
-P1) tests use.
+Size rule (``auto``): direct up to :data:`DIRECT_MAX_DOFS` unknowns, AMG above (SuperLU's
+crossover with AMG-CG on a clamped box's P1 and P2 stiffness is at 4,000–6,000 DOFs,
+PARDISO's at 25,000 (P1) and 35,000 (P2); on the slender P2 tangents of the bundled scenes
+PARDISO is 15–35 times faster than AMG-CG, and exact, which suits small ill-conditioned
+tests). A saddle point (``saddle_point``: mixed u–p, indefinite) is factorised unless that
+takes more than :data:`DIRECT_MAX_FLOPS` (PARDISO's analysis counts them; about 55,000 DOFs
+of a P2/P1 tangent) and the problem gave the Schur complement's diagonal
+(:attr:`LinearSolver.schur`): then GMRES with the block preconditioner of :mod:`.saddle`
+solves it. The organ's P2/P1 tangent at 30k tets (136,837 DOFs) takes 3.4e11 flops, 60 s
+and 1.4 GB to factorise on one core.
+
+Memory (:mod:`.memory`): a factorisation whose memory (PARDISO's analysis, or a measured
+law) does not fit :func:`~.memory.memory_limit` beside what the process holds is not
+started; the solve is iterative instead (AMG-CG, or the block preconditioner), and one that
+does not fit either way raises :class:`~.memory.MemoryLimitExceeded` before it starts. A
+solve may ask for a looser tolerance (``rtol`` of :meth:`Factorization.solve`: the forcing
+term of an inexact Newton); a factorisation ignores it.
 
 A solution is accepted when its relative residual ``|A x - b| / |b|`` is at most
 :data:`RESIDUAL_ACCEPT`; otherwise the solve raises :class:`~springfem.errors.SolverError`
@@ -47,12 +54,16 @@ import scipy.sparse.linalg as spla
 
 from springfem.errors import InputError, SolverError
 
+from . import memory as _memory
 from .amg import hierarchy, krylov
-from .direct import DirectFactor, DirectSolver
+from .direct import DirectFactor, DirectSolver, FactorRefused, flops_law
 from .limits import interruptible
+from .memory import MemoryLimitExceeded, factor_bytes_law, memory_limit, resident_bytes
+from .saddle import BlockPreconditioner
 
 __all__ = [
-    "DIRECT_MAX_DOFS", "RESIDUAL_ACCEPT", "REUSE_GROWTH", "SUPERLU_MAX_DOFS", "SYMMETRY_TOL",
+    "DIRECT_MAX_DOFS", "DIRECT_MAX_FLOPS", "RESIDUAL_ACCEPT", "REUSE_GROWTH",
+    "SUPERLU_MAX_DOFS", "SYMMETRY_TOL",
     "Factorization",
     "LinearSolver", "LinearSolverKind", "eliminate", "is_symmetric", "solve_linear",
 ]  # fmt: skip
@@ -120,6 +131,14 @@ RESIDUAL_ACCEPT = 1e-6
 STATS = ("solves", "krylov_iterations", "factorizations", "analyses")
 #: A reused AMG hierarchy is rebuilt past this growth of its Krylov iterations.
 REUSE_GROWTH = 2.0
+#: ``auto`` solves a saddle point iteratively when factorising it takes more flops (one
+#: core does about 5e9 per second on these factors: about 10 s).
+DIRECT_MAX_FLOPS = 5e10
+#: The measured laws (:func:`~.direct.flops_law`, :func:`~.memory.factor_bytes_law`) skip
+#: the analysis of a factorisation they predict this many times over a limit.
+LAW_MARGIN = 3.0
+#: Bytes per stored entry of the free block's copies a factorisation makes beside its factor.
+COPY_BYTES_PER_NNZ = 24.0
 
 
 @dataclass
@@ -140,7 +159,14 @@ class LinearSolver:
         The size rule of ``auto`` (default: :data:`DIRECT_MAX_DOFS` with PARDISO,
         :data:`SUPERLU_MAX_DOFS` with SuperLU).
     saddle_point
-        The matrices are saddle points (indefinite): always factorised.
+        The matrices are saddle points (indefinite): factorised, or (with :attr:`schur`)
+        solved by block-preconditioned GMRES when a factorisation is too large.
+    schur
+        Of a saddle point: the positive diagonal ``S_hat`` of the Schur complement's
+        approximation (one entry per trailing unknown, :mod:`.saddle`), or ``None`` (no
+        iterative solve).
+    direct_max_flops
+        ``auto``: a saddle point whose factorisation takes more flops is solved iteratively.
 
     Attributes
     ----------
@@ -148,7 +174,10 @@ class LinearSolver:
         ``solves``, ``krylov_iterations``, ``factorizations`` and ``analyses`` (symbolic
         analyses of the direct solver) so far.
     name
-        The solver that produced the last solution (``direct``, ``cg+amg``, ``gmres+amg``).
+        The solver that produced the last solution (``direct``, ``cg+amg``, ``gmres+amg``,
+        ``gmres+block``).
+    reason
+        Why the last direct solve became iterative ("" when none did).
     direct
         The :class:`~springfem.mechanics.direct.DirectSolver` (its backend and the analysis
         it keeps per pattern).
@@ -163,6 +192,17 @@ class LinearSolver:
     stats: dict = field(default_factory=lambda: dict.fromkeys(STATS, 0))
     name: str = "none"
     direct: DirectSolver = field(default_factory=DirectSolver, repr=False)
+    schur: np.ndarray | None = field(default=None, repr=False)
+    direct_max_flops: float = DIRECT_MAX_FLOPS
+    reason: str = ""
+    _iterative: tuple | None = field(default=None, repr=False)  # (shape, nnz) refused
+
+    @property
+    def iterative(self) -> str | None:
+        """The iterative kind for these matrices (``amg``, ``block``), ``None`` if none."""
+        if not self.saddle_point:
+            return "amg"
+        return "block" if self.schur is not None else None
 
     def __post_init__(self):
         if self.method not in ("auto", "direct", "amg"):
@@ -182,10 +222,15 @@ class LinearSolver:
         Returns
         -------
         str
-            ``direct`` or ``amg``.
+            ``direct``, ``amg`` or ``block`` (a saddle point, :mod:`.saddle`).
         """
         if self.saddle_point:
-            return "direct"
+            if self.iterative is None or self.method == "direct":
+                return "direct"
+            if self.method == "amg":
+                return "block"
+            laws = flops_law(n_dofs) > LAW_MARGIN * self.direct_max_flops
+            return "block" if laws else "direct"
         if self.method == "auto":
             limit = DIRECT_MAX_DOFS if self.direct_max_dofs is None else self.direct_max_dofs
             return "direct" if n_dofs <= limit else "amg"
@@ -264,9 +309,12 @@ class Factorization:
 
     Notes
     -----
-    With ``reuse`` the previous hierarchy (costly to build; successive Newton tangents
-    differ little) preconditions CG on the *new* matrix, whose solution it still is to
-    ``rtol``. It is rebuilt when a solve with it fails or its iterations exceed
+    A direct factorisation is admitted (:meth:`_admit`) when its memory fits and, for an
+    ``auto`` saddle point, its flops are at most ``direct_max_flops``; else the matrix is
+    solved iteratively. With ``reuse`` the previous hierarchy (costly to build; successive
+    Newton tangents differ little) preconditions CG (or the block preconditioner) on the
+    *new* matrix, whose solution it still is to ``rtol``. It is rebuilt when a solve with
+    it fails or its iterations per decade of residual reduction exceed
     :data:`REUSE_GROWTH` times (+ 2) those of the first solve after it was built.
     """
 
@@ -285,20 +333,71 @@ class Factorization:
         self._coarse = "splu"  # pinv's dense SVD is slow with oversubscribed BLAS threads
         self._fresh_iterations: int | None = None  # Krylov iterations: of the fresh hierarchy
         self._last_iterations: int | None = None  # and of the last solve
-        self._reused = reuse is not None and self.kind == "amg" and reuse._reusable(self)
+        self._pre: BlockPreconditioner | None = None
+        self._nnz = A.nnz
+        if self.kind == "direct" and solver._iterative == (A.shape, A.nnz):
+            self.kind = solver.iterative or "direct"  # this pattern was refused before
+        if self.kind == "direct":
+            self._factor(A)
+        if self.kind != "direct":
+            self._check_iterative()
+        self._reused = (
+            isinstance(reuse, Factorization) and self.kind != "direct" and reuse._reusable(self)
+        )
         if self._reused:
             self._ml, self._coarse = reuse._ml, reuse._coarse
             self._fresh_iterations = reuse._fresh_iterations
-        if self.kind == "direct":
-            before = solver.direct.analyses
-            try:
-                self._lu = interruptible(solver.direct.factor, A, self.free)
-            except RuntimeError as exc:  # an exactly singular factor: AMG reports it
-                if solver.saddle_point:
-                    raise SolverError(f"{where}singular saddle-point system ({exc})") from None
-                self._lu = None
-            solver.stats["factorizations"] += 1
-            solver.stats["analyses"] += solver.direct.analyses - before
+
+    def _factor(self, A) -> None:
+        solver, where = self.solver, self.where
+        before = solver.direct.analyses
+        n = self.n if self.free is None else int(self.free.sum())
+        try:
+            if self.solver.iterative is not None:
+                self._admit(factor_bytes_law(n) / LAW_MARGIN, flops_law(n) / LAW_MARGIN)
+            self._lu = interruptible(solver.direct.factor, A, self.free, self._admit)
+        except FactorRefused as exc:
+            if solver.iterative is None:
+                raise MemoryLimitExceeded(
+                    f"{where}{exc}, and this matrix has no iterative solver"
+                ) from None
+            solver.reason = str(exc)
+            solver._iterative = (A.shape, A.nnz)
+            self.kind = solver.iterative
+            return
+        except RuntimeError as exc:  # an exactly singular factor: AMG reports it
+            if solver.saddle_point:
+                raise SolverError(f"{where}singular saddle-point system ({exc})") from None
+            self._lu = None
+        solver.stats["factorizations"] += 1
+        solver.stats["analyses"] += solver.direct.analyses - before
+
+    def _admit(self, nbytes: float, flops: float) -> None:
+        """Raise :class:`FactorRefused` for a factorisation too large (class Notes)."""
+        need = resident_bytes() + nbytes + COPY_BYTES_PER_NNZ * self._nnz
+        limit = memory_limit()
+        if need > limit:
+            raise FactorRefused(
+                f"the direct factorisation needs {_memory.gb(nbytes)} (the process holds "
+                f"{_memory.gb(need - nbytes)}), over the memory limit of {_memory.gb(limit)}"
+            )
+        s = self.solver
+        if s.saddle_point and s.method == "auto" and flops > s.direct_max_flops:
+            raise FactorRefused(
+                f"the direct factorisation takes {flops:.2g} flops, over "
+                f"{s.direct_max_flops:.2g} (direct_max_flops)"
+            )
+
+    def _check_iterative(self) -> None:
+        """Raise :class:`MemoryLimitExceeded` when the iterative solve cannot fit either."""
+        need = resident_bytes() + _memory.iterative_bytes(self.n, self._nnz)
+        limit = memory_limit()
+        if need > limit:
+            why = f"; {self.solver.reason}" if self.solver.reason else ""
+            raise MemoryLimitExceeded(
+                f"{self.where}the iterative solve of {self.n} unknowns needs about "
+                f"{_memory.gb(need)}, over the memory limit of {_memory.gb(limit)}{why}"
+            )
 
     @cached_property
     def A(self) -> sp.csr_matrix:
@@ -320,13 +419,17 @@ class Factorization:
             return self.A
         return (0.5 * (self.A + self.A.T)).tocsr()
 
-    def solve(self, b: np.ndarray) -> np.ndarray:
+    def solve(self, b: np.ndarray, rtol: float | None = None) -> np.ndarray:
         """Solve ``A x = b``.
 
         Parameters
         ----------
         b
             Right-hand side.
+        rtol
+            Relative residual an iterative solve may stop at (at least the solver's
+            ``rtol``; ``None``: that). The accepted residual is the larger of it and
+            :data:`RESIDUAL_ACCEPT`.
 
         Returns
         -------
@@ -351,6 +454,9 @@ class Factorization:
             x = self._direct(b, bnorm)
             if x is not None:
                 return x
+        tol = self.solver.rtol if rtol is None else max(rtol, self.solver.rtol)
+        if self.kind == "block":
+            return self._saddle(b, bnorm, tol)
         if self.solver.saddle_point:
             raise SolverError(
                 f"{self.where}singular saddle-point system: linear solve failed with relative "
@@ -358,22 +464,22 @@ class Factorization:
             )
         A = self._K
         try:
-            x = self._krylov(b)
-            if self._reused and not self._accepted(A, x, b, bnorm):
+            x = self._krylov(b, tol)
+            if self._reused and not self._accepted(A, x, b, bnorm, tol):
                 self._ml, self._reused = None, False  # stale hierarchy: rebuild once
-                x = self._krylov(b)
+                x = self._krylov(b, tol)
         except RuntimeError:
             # exactly singular coarsest level (a mechanism): its pseudo-inverse lets CG
             # solve a singular but consistent system; an inconsistent one is refused
             self._ml, self._coarse = None, "pinv"
             try:
-                x = self._krylov(b)
+                x = self._krylov(b, tol)
             except (RuntimeError, ValueError, np.linalg.LinAlgError):
                 x = np.full(b.shape, np.nan)
         self.solver.name = self.name
         if self.free is not None:
             x[~self.free] = 0.0
-        if not self._accepted(A, x, b, bnorm):
+        if not self._accepted(A, x, b, bnorm, tol):
             r = np.linalg.norm(A @ x - b) / bnorm if np.all(np.isfinite(x)) else np.inf
             raise SolverError(
                 f"{self.where}singular stiffness: linear solve failed with relative residual "
@@ -400,18 +506,56 @@ class Factorization:
         return x
 
     @staticmethod
-    def _accepted(A, x: np.ndarray, b: np.ndarray, bnorm: float) -> bool:
+    def _accepted(A, x: np.ndarray, b: np.ndarray, bnorm: float, rtol: float = 0.0) -> bool:
         if not np.all(np.isfinite(x)):
             return False
-        return bool(np.linalg.norm(A @ x - b) <= RESIDUAL_ACCEPT * bnorm)
+        return bool(np.linalg.norm(A @ x - b) <= max(RESIDUAL_ACCEPT, 1.5 * rtol) * bnorm)
 
     def _reusable(self, other: Factorization) -> bool:
         """Whether this hierarchy may precondition ``other`` (same form, not stale)."""
         fresh, last = self._fresh_iterations or 0, self._last_iterations or 0
-        same = self.A.shape == other.A.shape and self.symmetric == other.symmetric
+        same = self.n == other.n and self.kind == other.kind
+        if self.kind == "amg":
+            same = same and self.A.shape == other.A.shape and self.symmetric == other.symmetric
         return self._ml is not None and same and last <= REUSE_GROWTH * fresh + 2
 
-    def _krylov(self, b: np.ndarray) -> np.ndarray:
+    def _count(self, its: int, rtol: float) -> None:
+        """Record ``its`` Krylov iterations (per decade of residual reduction, for reuse)."""
+        self.solver.stats["krylov_iterations"] += its
+        rate = int(np.ceil(its / max(1.0, -np.log10(max(rtol, 1e-16)))))
+        self._last_iterations = rate
+        self._fresh_iterations = self._fresh_iterations or rate
+
+    def _saddle(self, b: np.ndarray, bnorm: float, rtol: float) -> np.ndarray:
+        """Block-preconditioned GMRES on the saddle point (:mod:`.saddle`)."""
+        s, A = self.solver, self.A
+        nu = self.n - (0 if s.schur is None else len(s.schur))
+        for attempt in (0, 1):
+            if self._pre is None:
+                ml = self._ml if self._reused else None
+                if ml is None:
+                    self._fresh_iterations = None
+                nns = s.near_nullspace
+                nns = nns[:nu] if nns is not None and nns.shape[0] >= nu else None
+                self._pre = BlockPreconditioner(A, nu, s.schur, nns, self.free is not None, ml)
+                self._ml = self._pre.ml
+            x, its = self._pre.gmres(A, b, rtol, s.maxiter)
+            self._count(its, rtol)
+            if self.free is not None:
+                x[~self.free] = 0.0
+            if self._accepted(A, x, b, bnorm, rtol) or not self._reused or attempt:
+                break
+            self._pre, self._ml, self._reused = None, None, False  # stale: rebuild once
+        self.name = s.name = "gmres+block"
+        if not self._accepted(A, x, b, bnorm, rtol):
+            r = np.linalg.norm(A @ x - b) / bnorm if np.all(np.isfinite(x)) else np.inf
+            raise SolverError(
+                f"{self.where}block-preconditioned GMRES failed with relative residual "
+                f"{r:.2e} (a singular or unstable saddle point)"
+            )
+        return x
+
+    def _krylov(self, b: np.ndarray, rtol: float | None = None) -> np.ndarray:
         if self._ml is None:
             self._fresh_iterations = None
             S = self._K if self.symmetric else (0.5 * (self.A + self.A.T)).tocsr()
@@ -419,10 +563,9 @@ class Factorization:
             self._ml = hierarchy(S, blocks, self.solver.near_nullspace, self._coarse)
         s = self.solver
         A = self._K if self.symmetric else self.A
-        x, its, self.name = krylov(A, b, self._ml, self.symmetric, s.rtol, s.maxiter)
-        s.stats["krylov_iterations"] += its
-        self._last_iterations = its
-        self._fresh_iterations = self._fresh_iterations or its
+        tol = s.rtol if rtol is None else rtol
+        x, its, self.name = krylov(A, b, self._ml, self.symmetric, tol, s.maxiter)
+        self._count(its, tol)
         return x
 
 

@@ -62,7 +62,11 @@ _LOCK = threading.Lock()  # the thread count is process-wide: set it and call un
 
 
 class PardisoError(RuntimeError):
-    """A PARDISO call returned an error code (its message names it)."""
+    """A PARDISO call returned an error code (its message names it, :attr:`code` is it)."""
+
+    def __init__(self, message: str, code: int = 0):
+        super().__init__(message)
+        self.code = code
 
 
 @functools.cache
@@ -149,6 +153,8 @@ class Pardiso:
     ----------
     n
         Order of the analysed matrix (0 before :meth:`analyse`).
+    memory
+        Bytes the numeric factorisation will need, from the analysis (:meth:`peak_kb`).
     perturbed
         Pivots PARDISO perturbed in the last factorisation (their effect is removed by the
         iterative refinement of :meth:`solve`, whose residual the caller checks).
@@ -176,6 +182,7 @@ class Pardiso:
         ip[12] = 1  # ... with weighted matching (saddle points)
         ip[34] = 1  # zero-based indices
         self.n = 0
+        self.memory = 0  # bytes the factorisation needs (phase 11's report)
         self.perturbed = 0
         self.inertia = (0, 0)
         self.generation = 0
@@ -204,7 +211,8 @@ class Pardiso:
                 x.ctypes.data_as(_F64), ctypes.byref(err),
             )  # fmt: skip
         if err.value != 0:
-            raise PardisoError(f"PARDISO phase {phase}: {_ERRORS.get(err.value, err.value)}")
+            msg = f"PARDISO phase {phase}: {_ERRORS.get(err.value, err.value)}"
+            raise PardisoError(msg, err.value)
         return np.ascontiguousarray(x)
 
     def analyse(self, A: sp.csr_matrix) -> None:
@@ -224,7 +232,27 @@ class Pardiso:
         self._data = np.ascontiguousarray(A.data, dtype=float)
         self._finalizer.detach()
         self._finalizer = weakref.finalize(self, _release, self.pt, self.mtype, self.n)
+        self.iparm[17] = -1  # report the factor's nonzeros ...
+        self.iparm[18] = -1  # ... and its MFLOP
         self._call(11)
+        self.memory = self.peak_kb() * 1024
+
+    def peak_kb(self) -> int:
+        """PARDISO's peak memory (KB) of the factorisation, ``max(iparm(15), iparm(16) +
+        iparm(17))`` of the reference manual (symbolic phase, permanent, numeric)."""
+        ip = self.iparm
+        return int(max(int(ip[14]), int(ip[15]) + int(ip[16])))
+
+    @property
+    def factor_nnz(self) -> int:
+        """Nonzeros of the factor (after :meth:`analyse`: predicted; after :meth:`factor`:
+        actual)."""
+        return int(self.iparm[17])
+
+    @property
+    def flops(self) -> float:
+        """Floating-point operations of the numeric factorisation (after :meth:`analyse`)."""
+        return 1e6 * float(self.iparm[18])
 
     def factor(self, data: np.ndarray) -> None:
         """Numeric factorisation of the analysed pattern with values ``data``.
