@@ -31,11 +31,48 @@ from .bench_scale_fit import (
     cost_laws_document,
     evaluate,
     laws_table,
+    machine_description,
     model_laws,
 )
 
-#: The command that regenerates the committed output (the report names it).
-COMMAND = "springfem bench scale --cost-laws studies/cost_laws.json"
+
+def command(settings) -> str:
+    """The ``springfem bench scale`` command line of ``settings`` (the report names it).
+
+    Examples
+    --------
+    >>> from studies.bench_scale import ScaleSettings
+    >>> command(ScaleSettings(budget=1380, cost_laws=Path("studies/cost_laws.json")))
+    'springfem bench scale --budget 1380 --cost-laws studies/cost_laws.json'
+    """
+    from .bench_scale import (
+        DEFAULT_MAX_MEMORY,
+        DEFAULT_MAX_TIME,
+        DEFAULT_MESHES,
+        DEFAULT_OUT,
+        DEFAULT_SIZES,
+    )
+
+    parts = ["springfem bench scale"]
+    if tuple(settings.sizes) != DEFAULT_SIZES:
+        parts.append("--sizes " + ",".join(str(int(n)) for n in settings.sizes))
+    if settings.models:
+        parts.append("--models " + ",".join(settings.models))
+    if settings.max_time != DEFAULT_MAX_TIME:
+        parts.append(f"--max-time {settings.max_time:g}")
+    if settings.max_memory != DEFAULT_MAX_MEMORY:
+        parts.append(f"--max-memory {settings.max_memory / 1e9:g}")
+    if settings.budget is not None:
+        parts.append(f"--budget {settings.budget:g}")
+    if Path(settings.out) != DEFAULT_OUT:
+        parts.append(f"--out {settings.out}")
+    if Path(settings.meshes) != DEFAULT_MESHES:
+        parts.append(f"--meshes {settings.meshes}")
+    if settings.cost_laws is not None:
+        parts.append(f"--cost-laws {settings.cost_laws}")
+    return " ".join(parts)
+
+
 #: The figure's file name.
 FIGURE = "scale.png"
 
@@ -176,8 +213,6 @@ def scale_figure(cases: pd.DataFrame, laws: dict[str, dict], path: Path,
 
 def findings(cases: pd.DataFrame, table: pd.DataFrame, settings, seconds: float) -> list[str]:
     """The benchmark's findings in a few sentences, with its numbers."""
-    from .bench_scale_fit import machine_description
-
     out = []
     ran = cases[np.isfinite(cases["case wall (s)"].astype(float))]
     sizes = sorted({int(t) for t in ran["tets"].astype(float) if np.isfinite(t)})
@@ -261,7 +296,11 @@ def write_outputs(cases: pd.DataFrame, settings, seconds: float) -> dict[str, Pa
     }
     raw = cases.astype(object).where(pd.notna(cases), None).to_dict(orient="records")
     atomic_write_text(out / RAW_CASES, json.dumps(raw, indent=0, default=float) + "\n")
-    doc = cost_laws_document(laws, aliases=getattr(settings, "aliases", None))
+    loads = cases["load average"].astype(float)
+    machine = machine_description()
+    if np.isfinite(loads).any():
+        machine += f" (shared: load average {np.nanmin(loads):.1f}-{np.nanmax(loads):.1f})"
+    doc = cost_laws_document(laws, machine=machine, aliases=getattr(settings, "aliases", None))
     text = json.dumps(doc, indent=1, sort_keys=True) + "\n"
     paths["cost_laws"] = out / "cost_laws.json"
     atomic_write_text(paths["cost_laws"], text)
@@ -285,5 +324,5 @@ def write_outputs(cases: pd.DataFrame, settings, seconds: float) -> dict[str, Pa
                   for _, r in table.iterrows() if np.isfinite(r["time b"])},
         seconds=seconds,
     )  # fmt: skip
-    paths["output"] = write_output(out, result, COMMAND)
+    paths["output"] = write_output(out, result, command(settings))
     return paths
