@@ -129,6 +129,25 @@ def _parallel_copy(average):
     return twin
 
 
+def warm_up(scene) -> None:
+    """One tangent and energy of every model at a deformed state: the compiled kernels of a
+    Newton step are loaded (or compiled) before the first timed solve."""
+    from reference_fem.solver import make_problem
+    from studies.models import get
+
+    x = deformed_state(scene.mesh.points)
+    for name in MODELS:
+        model = get(name)
+        if model.kind == "spring":
+            system = model.system(scene)
+            system.stiffness(x, 1.0)
+            system.energy(x, 1.0)
+            continue
+        fem_scene, order, law = model.fem_settings(scene)
+        problem = make_problem(fem_scene, order=order, law=law)
+        problem.internal_force((x - scene.mesh.points).ravel(), tangent=True)
+
+
 def static_solves(scene, rounds: int) -> dict:
     """Interleaved static solves of :data:`MODELS` (their wall times and ratios to P1-NH)."""
     from studies.models import run
@@ -140,6 +159,7 @@ def static_solves(scene, rounds: int) -> dict:
         status[name].append(out.status)
 
     cases = {name: (lambda name=name: solve(name)) for name in MODELS}
+    warm_up(scene)
     load_before = load_average()
     samples = interleaved(cases, rounds=rounds, warmup=0)
     return {

@@ -38,9 +38,11 @@ import scipy.sparse as sp
 from numba import njit, prange
 
 __all__ = ["NodalAverage", "shape_gradients"]
-#: Whether :class:`NodalAverage` runs its products on all threads by default: off, as
-#: measured by ``springfem bench lockfree`` on the shared 2-core machine (two threads were
-#: not faster at 5k or 30k organ tets under other processes' load).
+#: Whether :class:`NodalAverage` runs its products on all threads by default: off.
+#: ``springfem bench lockfree`` on the shared 2-core machine under a load average of 8-13:
+#: at 4,781 organ tets the spring-stabilised step took 1.3 ms on two threads against 1.0 ms
+#: on one; at 29,291 tets 9.9 against 37 ms, in a run where P1-NH's own step varied 2.4x
+#: between its thread counts. Measure on an idle machine before turning it on.
 PARALLEL_BY_DEFAULT = False
 
 
