@@ -217,7 +217,8 @@ class MixedProblem(FemProblem):
             pp = sp.csr_matrix((w * Ne.ravel(), (r, c)), shape=(self.n_p, self.n_p))
         else:
             pp = sp.csr_matrix((self.n_p, self.n_p))
-        return sp.bmat([[uu, up], [up.T, pp]], format="csr")
+        # all blocks CSR: scipy stacks them without a COO copy of the whole matrix
+        return sp.bmat([[uu, up], [up.T.tocsr(), pp]], format="csr")
 
     def _external(self, x: np.ndarray, scale: float, tangent: bool):
         U, _ = self.split(x)

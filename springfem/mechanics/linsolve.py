@@ -112,10 +112,19 @@ def eliminate(K: sp.spmatrix, free: np.ndarray) -> sp.csr_matrix:
     >>> A.toarray().tolist(), is_symmetric(A)
     ([[2.0, 0.0], [0.0, 1.0]], True)
     """
-    d = sp.diags(free.astype(float))
-    A = (d @ sp.csr_matrix(K) @ d + sp.diags((~free).astype(float))).tocsr()
+    free = np.asarray(free, dtype=bool)
+    A = sp.csr_matrix(K, copy=True)
+    A.sum_duplicates()
+    rows = np.repeat(np.arange(A.shape[0], dtype=A.indices.dtype), np.diff(A.indptr))
+    A.data[~(free[rows] & free[A.indices])] = 0.0  # in place: no products of the matrix
+    unit = (rows == A.indices) & ~free[rows]  # the constrained rows' stored diagonals
+    A.data[unit] = 1.0
+    missing = np.setdiff1d(np.flatnonzero(~free), rows[unit])
+    del rows, unit
     A.eliminate_zeros()
-    return A
+    if missing.size:
+        A = A + sp.csr_matrix((np.ones(missing.size), (missing, missing)), shape=A.shape)
+    return sp.csr_matrix(A)
 
 
 LinearSolverKind = Literal["auto", "direct", "amg"]
