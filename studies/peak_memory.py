@@ -43,23 +43,6 @@ def high_water_bytes() -> int:
     return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
 
 
-def available_bytes() -> int:
-    """Memory available to a new allocation on this machine (bytes): ``MemAvailable``, or
-    a cap set on this process's address space, whichever is smaller."""
-    avail = 0
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    avail = int(line.split()[1]) * 1024
-    except OSError:
-        avail = 0
-    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
-    if soft != resource.RLIM_INFINITY and soft > 0:
-        avail = min(avail or soft, max(soft - resident_bytes(), 0))
-    return avail
-
-
 class PeakMemory:
     """Context manager: the peak resident size while its block runs.
 

@@ -63,13 +63,14 @@ from pathlib import Path
 import numpy as np
 
 from springfem.mechanics.limits import solve_limits
+from springfem.mechanics.memory import MemoryLimitExceeded, memory_limit
 from springfem.mesh.thickness import thin_wall_note
 from springfem.scene import Scene
 
 from . import fem_laws, model_set, models
 from .compare import LARGE_STRAIN, max_principal_strain
 from .cost_model import SolveCosts, gigabytes, read_laws
-from .peak_memory import PeakMemory, available_bytes
+from .peak_memory import PeakMemory
 from .verdict_plan import (
     SOLVE_SHARE,
     Planned,
@@ -227,8 +228,15 @@ def verdict(
             state.outcomes[name] = run(state.alias[name])
             return state.outcomes[name]
         cap = solve_room()
-        with PeakMemory() as pm, solve_limits(max_time=None if cap is None else max(cap, 1e-3)):
-            got = registry.run(scene, name)
+        try:
+            with PeakMemory() as pm, solve_limits(max_time=None if cap is None else max(cap, 1e-3)):
+                got = registry.run(scene, name)
+        except (MemoryLimitExceeded, MemoryError) as exc:  # refused before it started
+            why = str(exc) or "out of memory"
+            state.skipped[name] = ("skipped (memory)", why)
+            say(f"  {name:<26} skipped (memory): {why}")
+            publish()
+            return registry.Outcome(registry.get(name), "failed", None, why)
         state.outcomes[name], state.peaks[name] = got, pm.peak
         if got.ok:
             costs.observe(name, got.seconds)
@@ -263,7 +271,7 @@ def verdict(
     notes += model_set.formulation_notes(scene, names)
     ruled = {n: why for n in names if (why := ruled_out(scene, n)) is not None}
     distinct = [n for n in names if n not in state.alias]
-    memory = float(available_bytes()) or None
+    memory = _memory()
     plan = make_plan(distinct, ref, costs, ruled, budget, memory)
     for line in plan_lines(plan, scene.mesh.n_tets, budget):
         say(line)
@@ -278,9 +286,9 @@ def verdict(
             continue
         p.predicted = costs.predict(p.name)
         ref_seconds = float(state.outcomes[ref].seconds) if ref else np.nan
-        p.skip = skip_reason(
-            p, solve_room(), 0.0, float(available_bytes()) or None
-        ) or dearer_than_reference(p, ref_seconds)
+        p.skip = skip_reason(p, solve_room(), 0.0, _memory()) or dearer_than_reference(
+            p, ref_seconds
+        )
         if p.skip:
             skip(p, p.reason)
         else:
@@ -298,6 +306,12 @@ def verdict(
     if publish_final is not None:
         publish_final(v)
     return v
+
+
+def _memory() -> float | None:
+    """Bytes a solve may hold (:func:`springfem.mechanics.memory.memory_limit`)."""
+    limit = memory_limit()
+    return float(limit) if limit and limit < float("inf") else None
 
 
 def _solve_reference(scene, plan, ref, ruled, names, state, run, skip, solve_room, memory) -> str:

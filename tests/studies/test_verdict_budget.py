@@ -139,3 +139,26 @@ def test_a_wall_one_tet_across_gets_a_note_and_a_solid_organ_none(organs, tmp_pa
     v, _, _ = _run(["verdict", str(organs[700]), "--json", "--out", str(tmp_path / "o"),
                     "--models", "mass-spring"], capsys)  # fmt: skip
     assert not any(n.startswith("thin wall: ") for n in v["notes"])
+
+
+def test_a_small_memory_limit_skips_what_does_not_fit_and_keeps_the_table(
+    organs, tmp_path, capsys, monkeypatch
+):
+    """No crash for want of memory: under a 50 MB limit every solve is refused before it
+    starts, by the plan (predicted memory) or by the linear solver (its own estimate), and
+    the verdict still writes its table."""
+    from springfem.scene import load_scene
+    from studies.verdict import verdict
+
+    monkeypatch.setenv("SPRINGFEM_MAX_MEMORY", "50M")
+    out = tmp_path / "m"
+    argv = ["verdict", str(organs[700]), "--json", "--out", str(out),
+            "--models", "fem-P1-nodal-strain"]  # fmt: skip
+    v, t, _ = _run(argv, capsys)
+    assert (t["status"] == "skipped (memory)").all(), t["status"].to_dict()
+    assert not v["reference"] and any("would need" in n for n in v["notes"])
+    assert set(pd.read_csv(out / "verdict.csv")["model"]) == set(t.index)
+    # without cost laws nothing is predicted: the solver's own check refuses the reference
+    got = verdict(load_scene(organs[700]), models=("fem-P2-mixed",), laws={})
+    row = got.table.set_index("model").loc["fem-P2-mixed"]
+    assert row["status"] == "skipped (memory)" and "memory" in row["message"]
