@@ -30,7 +30,7 @@ from .timing import interleaved, median
 #: A static solve longer than this (seconds) is not timed in rounds.
 LONG = 2.0
 #: A static solve longer than this (seconds) is timed once, by its first solve.
-RESOLVE = 15.0
+RESOLVE = 5.0
 #: Explicit steps per timing of the step cost: at least this many, and as many as make the
 #: cheapest model's sample last SAMPLE_SECONDS (at most MAX_STEPS).
 STEPS = 20
