@@ -274,12 +274,16 @@ class FemStep:
         """Newton correction ``d = -K^-1 R`` and the re-solve with the same tangent."""
         p, times = self.problem, self.phases
         checkpoint()
+        last = self.kept.pop("factor", None)
+        self.kept.pop("K", None)  # the last tangent is not used again: free it first
+        if isinstance(last, Factorization):
+            last.shed()  # its AMG hierarchy may precondition the new tangent
+        else:
+            last = None
         with times("assembly"):
             _, K, symmetric, _ = p.residual_tangent(u, self.scale)
         checkpoint()
         with times("factorization"):
-            last = self.kept.get("factor")
-            last = last if isinstance(last, Factorization) else None  # an AMG hierarchy
             factor = p.linear_solver.factorize(K, p.free, symmetric, reuse=last)
         self.kept.update(K=K, factor=factor)
         return self._solve(u, R, K, factor)

@@ -57,6 +57,7 @@ from springfem.errors import InputError, SolverError
 from . import memory as _memory
 from .amg import hierarchy, krylov
 from .direct import DirectFactor, DirectSolver, FactorRefused, flops_law
+from .elimination import eliminate
 from .limits import interruptible
 from .memory import MemoryLimitExceeded, factor_bytes_law, memory_limit, resident_bytes
 from .saddle import BlockPreconditioner
@@ -88,43 +89,6 @@ def is_symmetric(A: sp.spmatrix) -> bool:
     """
     nrm = spla.norm(A)
     return bool(nrm == 0 or spla.norm(A - A.T) <= SYMMETRY_TOL * nrm)
-
-
-def eliminate(K: sp.spmatrix, free: np.ndarray) -> sp.csr_matrix:
-    """``P K P + (I - P)`` with ``P = diag(free)``: constrained DOFs decoupled, unit diagonal.
-
-    Parameters
-    ----------
-    K
-        Square matrix.
-    free
-        Boolean mask of the free DOFs.
-
-    Returns
-    -------
-    scipy.sparse.csr_matrix
-        The eliminated matrix.
-
-    Examples
-    --------
-    >>> K = sp.csr_matrix(np.array([[2.0, -1.0], [-1.0, 2.0]]))
-    >>> A = eliminate(K, np.array([True, False]))
-    >>> A.toarray().tolist(), is_symmetric(A)
-    ([[2.0, 0.0], [0.0, 1.0]], True)
-    """
-    free = np.asarray(free, dtype=bool)
-    A = sp.csr_matrix(K, copy=True)
-    A.sum_duplicates()
-    rows = np.repeat(np.arange(A.shape[0], dtype=A.indices.dtype), np.diff(A.indptr))
-    A.data[~(free[rows] & free[A.indices])] = 0.0  # in place: no products of the matrix
-    unit = (rows == A.indices) & ~free[rows]  # the constrained rows' stored diagonals
-    A.data[unit] = 1.0
-    missing = np.setdiff1d(np.flatnonzero(~free), rows[unit])
-    del rows, unit
-    A.eliminate_zeros()
-    if missing.size:
-        A = A + sp.csr_matrix((np.ones(missing.size), (missing, missing)), shape=A.shape)
-    return sp.csr_matrix(A)
 
 
 LinearSolverKind = Literal["auto", "direct", "amg"]
@@ -524,9 +488,16 @@ class Factorization:
         """Whether this hierarchy may precondition ``other`` (same form, not stale)."""
         fresh, last = self._fresh_iterations or 0, self._last_iterations or 0
         same = self.n == other.n and self.kind == other.kind
-        if self.kind == "amg":
-            same = same and self.A.shape == other.A.shape and self.symmetric == other.symmetric
+        if self.kind == "amg":  # the symmetry this hierarchy was used with
+            same = same and self.__dict__.get("symmetric") == other.symmetric
         return self._ml is not None and same and last <= REUSE_GROWTH * fresh + 2
+
+    def shed(self) -> None:
+        """Free the matrices and the factor, keeping the AMG hierarchy for ``reuse``
+        (before the next tangent is assembled: the two need not be held at once)."""
+        self._full, self._lu, self._pre = None, None, None
+        for name in ("A", "_K"):
+            self.__dict__.pop(name, None)
 
     def _count(self, its: int, rtol: float) -> None:
         """Record ``its`` Krylov iterations (per decade of residual reduction, for reuse)."""
