@@ -92,7 +92,8 @@ class NodalAverage:
         self.patch = np.bincount(self.tets.ravel(), np.repeat(V, 4), minlength=self.n)
         safe = np.where(self.patch > 0, self.patch, 1.0)
         self.weights = np.ascontiguousarray(V[:, None] / safe[self.tets])  # (m, 4)
-        self._pattern: tuple | None = None
+        self._rows: tuple | None = None  # B by node rows (the products), on first use
+        self._pattern: tuple | None = None  # the tangent's (a superset), on first use
         #: Run the products on all numba threads (rows are independent: no races, the same
         #: sums in the same order as serially). Default :data:`PARALLEL_BY_DEFAULT`.
         self.parallel = PARALLEL_BY_DEFAULT
@@ -137,14 +138,17 @@ class NodalAverage:
     def rows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``B`` by node rows: ``(rowptr, cols, gb)``, ``gb[k]`` the ``3``-vector of node
         ``cols[k]`` in the average of node ``a`` (``rowptr[a] <= k < rowptr[a + 1]``)."""
-        p = self.pattern
-        return p[2], p[3], p[4]
+        if self._rows is None:
+            self._rows = _row_structure(self.tets, self.grads, self.weights, self.n)
+        return self._rows[0], self._rows[1], self._rows[2]
 
     @property
     def transposed(self) -> np.ndarray:
         """``transposed[k]``: the entry ``(c, a)`` of the entry ``k = (a, c)`` (the node
         structure is symmetric)."""
-        return self.pattern[9]
+        self.rows  # noqa: B018 - builds them
+        assert self._rows is not None
+        return self._rows[4]
 
     # -- the two-ring tangent ------------------------------------------------------------------
     @property
@@ -153,7 +157,8 @@ class NodalAverage:
         copy_index)``, built once; ``copy_index[16 e + 4 p + q]`` is the entry of node
         ``tets[e, q]`` in the row of node ``tets[e, p]`` (``rowptr``, ``cols``)."""
         if self._pattern is None:
-            self._pattern = _two_ring_pattern(self.tets, self.grads, self.weights, self.n)
+            self.rows  # noqa: B018 - builds them
+            self._pattern = _two_ring_pattern(self.tets, self._rows, self.n)
         return self._pattern
 
     @property
@@ -211,18 +216,26 @@ class NodalAverage:
         return self.matrix(self.add_tangent(A, self.zeros()))
 
 
-def _two_ring_pattern(tets, grads, weights, n):
-    """The CSR pattern of ``B^T B`` and where every term of the tangent goes."""
+def _row_structure(tets, grads, weights, n):
+    """``B`` by node rows: ``(rowptr, cols, gb, copy_index, transposed)``."""
     m = tets.shape[0]
     # B's node rows: a -> the nodes c of its patch, gb[a, c] = sum_e w_ea grad N_c^e
     a_idx = np.repeat(tets, 4, axis=1).ravel()  # (e, p, q): a = tets[e, p]
     c_idx = np.tile(tets, (1, 4)).ravel()  # c = tets[e, q]
     keys, inv = np.unique(a_idx * n + c_idx, return_inverse=True)
     vals = (weights[:, :, None, None] * grads[:, None, :, :]).reshape(m * 16, 3)
-    gb = np.stack([np.bincount(inv, vals[:, b], keys.size) for b in range(3)], axis=1)
+    gb = np.stack([np.bincount(inv.ravel(), vals[:, b], keys.size) for b in range(3)], axis=1)
     rows, cols = keys // n, keys % n
     rowptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(rows, minlength=n), out=rowptr[1:])
+    return (rowptr, cols.astype(np.int64), np.ascontiguousarray(gb), inv.astype(np.int64).ravel(),
+            np.searchsorted(keys, cols * n + rows))  # fmt: skip
+
+
+def _two_ring_pattern(tets, row_structure, n):
+    """The CSR pattern of ``B^T B`` and where every term of the tangent goes."""
+    m = tets.shape[0]
+    rowptr, cols, gb, inv, tpos = row_structure
     # every term (a; c, d) of the tangent: c, d in the patch of a
     deg = np.diff(rowptr)
     term_ptr = np.zeros(n + 1, dtype=np.int64)
@@ -252,9 +265,8 @@ def _two_ring_pattern(tets, grads, weights, n):
     ekey = (tets[:, :, None] * n + tets[:, None, :]).ravel()
     epair = np.searchsorted(pairs, ekey)
     epos = pos[epair].reshape(m, 4, 4, 3, 3).transpose(0, 1, 3, 2, 4).reshape(m, 144)
-    return (indptr, indices, rowptr, cols.astype(np.int64), np.ascontiguousarray(gb),
-            term_base.astype(np.int64), 3 * bdeg.astype(np.int64), np.ascontiguousarray(epos),
-            inv.astype(np.int64).ravel(), np.searchsorted(keys, cols * n + rows))  # fmt: skip
+    return (indptr, indices, rowptr, cols, gb, term_base.astype(np.int64),
+            3 * bdeg.astype(np.int64), np.ascontiguousarray(epos), inv, tpos)  # fmt: skip
 
 
 @njit(cache=True, fastmath=False)
