@@ -35,48 +35,8 @@ from .bench_scale_fit import (
     model_laws,
 )
 
-
-def command(settings) -> str:
-    """The ``springfem bench scale`` command line of ``settings`` (the report names it).
-
-    Examples
-    --------
-    >>> from studies.bench_scale import ScaleSettings
-    >>> command(ScaleSettings(budget=1380, cost_laws=Path("studies/cost_laws.json")))
-    'springfem bench scale --budget 1380 --cost-laws studies/cost_laws.json'
-    """
-    from .bench_scale import (
-        DEFAULT_MAX_MEMORY,
-        DEFAULT_MAX_TIME,
-        DEFAULT_MESHES,
-        DEFAULT_OUT,
-        DEFAULT_SIZES,
-    )
-
-    parts = ["springfem bench scale"]
-    if tuple(settings.sizes) != DEFAULT_SIZES:
-        parts.append("--sizes " + ",".join(str(int(n)) for n in settings.sizes))
-    if settings.models:
-        parts.append("--models " + ",".join(settings.models))
-    if settings.max_time != DEFAULT_MAX_TIME:
-        parts.append(f"--max-time {settings.max_time:g}")
-    if settings.max_memory != DEFAULT_MAX_MEMORY:
-        parts.append(f"--max-memory {settings.max_memory / 1e9:g}")
-    if settings.budget is not None:
-        parts.append(f"--budget {settings.budget:g}")
-    if Path(settings.out) != DEFAULT_OUT:
-        parts.append(f"--out {settings.out}")
-    if Path(settings.meshes) != DEFAULT_MESHES:
-        parts.append(f"--meshes {settings.meshes}")
-    if settings.cost_laws is not None:
-        parts.append(f"--cost-laws {settings.cost_laws}")
-    return " ".join(parts)
-
-
 #: The figure's file name.
 FIGURE = "scale.png"
-
-
 #: The raw cases (full precision, bytes and seconds), read back by ``--resume``.
 RAW_CASES = "cases.json"
 
@@ -219,7 +179,8 @@ def findings(cases: pd.DataFrame, table: pd.DataFrame, settings, seconds: float)
     loads = cases["load average"].astype(float)
     out.append(
         f"Organ meshes of {', '.join(f'{s:,}' for s in sizes)} tets on {machine_description()}; "
-        f"each case in its own process, capped at {settings.max_time:g} s per static solve and "
+        f"each case in its own process, capped at {settings.max_time:g} s per static solve "
+        f"({settings.reference_cap:g} s for the reference) and "
         f"{settings.max_memory / 1e9:g} GB of address space; load average "
         f"{np.nanmin(loads):.2f}–{np.nanmax(loads):.2f} during the cases ({seconds:.0f} s in all)."
     )
@@ -264,7 +225,9 @@ def _tets(n: float) -> str:
     return f"{n / 1e3:.3g}k" if n >= 1e3 else f"{n:.3g}"
 
 
-def write_outputs(cases: pd.DataFrame, settings, seconds: float) -> dict[str, Path]:
+def write_outputs(
+    cases: pd.DataFrame, settings, seconds: float, command: str = "springfem bench scale"
+) -> dict[str, Path]:
     """Write the tables, the figure, the cost laws and the report entry (module docstring).
 
     Parameters
@@ -275,6 +238,8 @@ def write_outputs(cases: pd.DataFrame, settings, seconds: float) -> dict[str, Pa
         The :class:`~studies.bench_scale.ScaleSettings`.
     seconds
         The run's wall time so far.
+    command
+        The command line that regenerates it (:func:`studies.bench_scale.command`).
 
     Returns
     -------
@@ -324,5 +289,5 @@ def write_outputs(cases: pd.DataFrame, settings, seconds: float) -> dict[str, Pa
                   for _, r in table.iterrows() if np.isfinite(r["time b"])},
         seconds=seconds,
     )  # fmt: skip
-    paths["output"] = write_output(out, result, command(settings))
+    paths["output"] = write_output(out, result, command)
     return paths

@@ -287,6 +287,14 @@ def _scale_options(p: argparse.ArgumentParser) -> None:
         help="scale: seconds per static solve (default 120)",
     )
     g.add_argument(
+        "--reference-time",
+        type=_positive_float,
+        default=None,
+        metavar="S",
+        help="scale: seconds per static solve of the reference, P2/P1 mixed (default 3x "
+        "--max-time)",
+    )
+    g.add_argument(
         "--max-memory",
         type=_positive_float,
         default=None,

@@ -158,6 +158,7 @@ def _bench_scale(args: argparse.Namespace) -> int:
         sizes=sorted(set(sizes)),
         models=models,
         max_time=DEFAULT_MAX_TIME if args.max_time is None else float(args.max_time),
+        reference_time=args.reference_time,
         max_memory=DEFAULT_MAX_MEMORY if args.max_memory is None else args.max_memory * 1e9,
         budget=args.budget,
         meshes=Path(args.meshes) if args.meshes else DEFAULT_MESHES,
