@@ -11,8 +11,9 @@ neo-Hookean, nu = 0.49, gravity), interleaved rounds (:mod:`studies.timing`) of
   numpy; it has no explicit system);
 - with ``--solves K``, ``K`` interleaved rounds of the static solves of the three models.
 
-Ratios are medians of per-round ratios against P1-NH; the machine's load average is printed
-beside them.
+Ratios are medians of per-round ratios against P1-NH: wall time against its serial step, CPU
+time against its case of the same kind (less sensitive to other processes on a shared
+machine); the machine's load average is printed beside them.
 """
 
 from __future__ import annotations
@@ -101,6 +102,8 @@ def bench_lockfree(n_tets: int = DEFAULT_TETS, repeats: int = 7, solves: int = 0
             "case": name,
             "seconds": median(samples, name) / steps,
             "over_p1_nh_step": median_ratio(samples, name, ref),
+            "cpu_seconds": median(samples, name, "cpu") / steps,
+            "cpu_over_p1_nh": median_ratio(samples, name, _twin(name), "cpu"),
         }
         for name in cases
     ]
@@ -118,6 +121,16 @@ def bench_lockfree(n_tets: int = DEFAULT_TETS, repeats: int = 7, solves: int = 0
     if solves > 0:
         out["solves"] = static_solves(scene, solves)
     return out
+
+
+def _twin(name: str) -> str:
+    """The P1-NH case a case's CPU time is compared with: the same kind (step or forces) and
+    threads; P1-NH's serial force pass for the parts and the nodal-strain FEM."""
+    for kind in ("step", "forces"):
+        for threads in ("serial", "parallel"):
+            if name.endswith(f"{threads}: {kind}"):
+                return f"P1-NH, {threads}: {kind}"
+    return "P1-NH, serial: forces"
 
 
 def _parallel_copy(average):
@@ -185,9 +198,14 @@ def print_lockfree(res: dict) -> None:
         f"strain on {res['virtual_elements']:,} virtual elements"
         f"{' (grouped)' if res['grouped_nodal_strain'] else ''}"
     )
-    print(f"  {'case':52s} {'per step':>11s} {'/ P1-NH step':>13s}")
+    print(f"  {'case':44s} {'wall':>11s} {'/ P1-NH step':>13s} {'cpu':>11s} {'/ P1-NH':>8s}")
     for r in res["rows"]:
-        print(f"  {r['case']:52s} {1e3 * r['seconds']:9.3f} ms {r['over_p1_nh_step']:12.2f}x")
+        print(f"  {r['case']:44s} {1e3 * r['seconds']:8.3f} ms {r['over_p1_nh_step']:12.2f}x "
+              f"{1e3 * r['cpu_seconds']:8.3f} ms {r['cpu_over_p1_nh']:7.2f}x")  # fmt: skip
+    print(
+        "  (cpu / P1-NH: against P1-NH's case of the same kind and threads; parts and FEM "
+        "against its serial force pass)"
+    )
     m = res["machine"]
     print(f"  machine: {m.get('cpus')} cpus, {m.get('numba_threads')} numba threads, load "
           f"average {m.get('load_average_before', m.get('load_average'))} -> "
