@@ -1,11 +1,12 @@
 """Tets across a thin wall: is a mesh too coarse through its thickness for linear tets?
 
-A linear tet has one constant strain, so a wall one tet thick cannot bend through its
-thickness: every linear-tet model on it (P1, the locking-free P1 variants, the spring
-elements) is far from a converged solution however good its element is. Measured on a
-left ventricle of cardiac-geometries (2,838 tets, about one tet across, Holzapfel–Ogden,
-2 kPa): P1 58 %, nodal-strain P1 and the default spring element 54 % off the P2/P1
-reference (docs/tissue.rst#thin-walls-one-tet-across).
+A linear tet has one constant strain and one fibre frame, so a wall one tet thick cannot
+bend through its thickness and loses a fibre helix that turns through it: every linear-tet
+model on it (P1, the locking-free P1 variants, the spring elements) is far from a converged
+solution however good its element is. Measured on a left ventricle of cardiac-geometries
+(2,838 tets, about one tet across, Holzapfel–Ogden, 2 kPa): P1 58 %, nodal-strain P1 and
+the default spring element 54 % off the P2/P1 reference, which itself moves 105 % when
+given the elements' fibres (docs/tissue.rst#thin-walls-one-tet-across).
 
 The estimate walks a ray from each boundary facet's centroid along its inward normal,
 tet to tet through shared faces, until it leaves the body: the path length is the wall's
@@ -195,6 +196,6 @@ def thin_wall_note(
     return (
         f"thin wall: {100 * part:.0f} % of the surface has fewer than {layers:g} tets across "
         f"(median {np.median(across):.1f}); linear tets (P1, the spring elements) cannot bend "
-        "through it and stay far from the converged answer: refine to 3 or more tets "
-        "across, or use P2"
+        "through it, and rule-based fibres lose their turn through it: refine to 2 or more "
+        "tets across, or use P2"
     )
