@@ -180,6 +180,13 @@ class VerdictState:
             )
         else:
             sentence = verdict_sentence(table, ref, self.tolerance, static_pick, dynamic_pick)
+        left_out = [n for n in done if str(self.skipped.get(n, ("",))[0]).startswith(
+            ("skipped (budget)", "skipped (memory)"))]  # fmt: skip
+        if left_out and ref_ok:
+            sentence += (
+                f" Not weighed for want of time or memory: {', '.join(left_out)} (the table "
+                "says why)."
+            )
         if not final:
             sentence = f"(part way: {len(done)} of {len(names)} models) " + sentence
         table.insert(3, "rank", rank_by_error(table, ref, same_as_ref))

@@ -60,6 +60,10 @@ def test_the_budget_holds_and_names_what_it_left_out(organs, tmp_path, capsys, t
         assert v["static"] is None and v["dynamic"] is None
     skipped = t[t["status"].str.startswith("skipped")]
     assert len(skipped) > 0  # B is far below what every model needs on either mesh
+    budget_rows = skipped[skipped["status"] == "skipped (budget)"].index
+    if v["reference"] and len(budget_rows):  # the sentence names what was not weighed
+        assert "Not weighed for want of time or memory: " in v["sentence"]
+        assert all(n in v["sentence"] for n in budget_rows)
     assert skipped["message"].str.len().min() > 0  # each with its reason
     assert "failed" not in set(t["status"])  # a model the budget stopped is not a failure
     # the plan comes first; the ruled-out models come last, after every other model
