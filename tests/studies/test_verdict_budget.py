@@ -59,12 +59,13 @@ def test_the_budget_holds_and_names_what_it_left_out(organs, tmp_path, capsys, t
         assert any("no valid reference" in n and "would need" in n for n in v["notes"])
         assert v["static"] is None and v["dynamic"] is None
     skipped = t[t["status"].str.startswith("skipped")]
-    assert len(skipped) > 0  # B is far below what every model needs on either mesh
+    if tets == 30_000:  # 25 s is far below what the models need there (P2/P1 alone: minutes)
+        assert len(skipped) > 0
     budget_rows = skipped[skipped["status"] == "skipped (budget)"].index
     if v["reference"] and len(budget_rows):  # the sentence names what was not weighed
         assert "Not weighed for want of time or memory: " in v["sentence"]
         assert all(n in v["sentence"] for n in budget_rows)
-    assert skipped["message"].str.len().min() > 0  # each with its reason
+    assert (skipped["message"].str.len() > 0).all()  # each with its reason
     assert "failed" not in set(t["status"])  # a model the budget stopped is not a failure
     # the plan comes first; the ruled-out models come last, after every other model
     assert v["log"][1].startswith("plan: ")
