@@ -111,18 +111,20 @@ def largest_tets(law: tuple[float, float], limit: float) -> float:
     return float(UNIT * (limit / a) ** (1.0 / b))
 
 
-#: An extrapolation beyond this many times the largest size a law was fitted to is not
-#: given (a decade of extrapolation is already a guess).
+#: An extrapolation beyond this many times the largest size a law was fitted to is marked
+#: a guess (a decade of extrapolation is already one).
 REACH = 10.0
 
 
 def _extrapolated(law: tuple[float, float], limit: float, sizes: list[int]) -> tuple[float, str]:
-    """The size at which ``law`` reaches ``limit`` and how it is known; ``nan`` beyond
-    :data:`REACH` times the largest of ``sizes``."""
+    """The size at which ``law`` reaches ``limit`` and how it is known (a guess beyond
+    :data:`REACH` times the largest of ``sizes``)."""
     n = largest_tets(law, limit)
     top = max(sizes)
+    if not np.isfinite(n):
+        return np.nan, "the law does not grow"
     if n > REACH * top:
-        return np.nan, f"beyond {REACH:g}x the largest size fitted ({top:,})"
+        return n, f"extrapolated {n / top:.0f}x beyond the largest size fitted: a guess"
     return (
         n,
         f"extrapolated ({len(sizes)} sizes)" if n > top else f"interpolated ({len(sizes)} sizes)",
@@ -260,7 +262,7 @@ def laws_table(
     largest mesh whose memory law stays under ``machine_bytes`` (extrapolated, or measured
     when a measured case was at or above it) and the largest whose static solve takes an
     hour (extrapolated); an extrapolation more than :data:`REACH` times beyond the sizes
-    measured is left out, with a note.
+    measured is marked a guess.
 
     Parameters
     ----------
