@@ -295,7 +295,8 @@ def verdict(
             run(p.name)
     timed = [n for n in distinct if n in state.outcomes and state.outcomes[n].ok]
     first = {n: float(state.outcomes[n].seconds) for n in timed}
-    state.times, state.timed = static_times(scene, timed, first, solves, left, notes)
+    predicted = {n: costs.predict(n).seconds for n in timed}
+    state.times, state.timed = static_times(scene, timed, first, solves, left, notes, predicted)
     budget_left = left()
     if budget_left is not None and budget_left < 2.0:
         notes.append("the budget left no time to time the explicit steps")

@@ -31,6 +31,8 @@ from .timing import interleaved, median
 LONG = 2.0
 #: A static solve longer than this (seconds) is timed once, by its first solve.
 RESOLVE = 5.0
+#: ... unless it is predicted to be short (its first solve was start-up), up to this long.
+COLD_MAX = 60.0
 #: Explicit steps per timing of the step cost: at least this many, and as many as make the
 #: cheapest model's sample last SAMPLE_SECONDS (at most MAX_STEPS).
 STEPS = 20
@@ -45,6 +47,7 @@ def static_times(
     solves: int,
     left: Callable[[], float | None],
     notes: list[str],
+    predicted: dict[str, float] | None = None,
 ) -> tuple[dict[str, float], dict[str, str]]:
     """Static time per model, and how it was timed.
 
@@ -62,6 +65,10 @@ def static_times(
         Seconds left of the budget (``None``: no cap).
     notes
         The verdict's notes (a line is added when the budget cuts the rounds).
+    predicted
+        Predicted seconds per model (:mod:`studies.cost_model`): a first solve over
+        :data:`LONG` of a model predicted under it was mostly start-up (imports, compiling)
+        and gets a warm solve too, up to :data:`COLD_MAX` seconds.
 
     Returns
     -------
@@ -70,7 +77,12 @@ def static_times(
     """
     out = dict(first)
     how = {n: "one solve" for n in timed}
-    for n in [n for n in timed if LONG < first[n] <= RESOLVE]:
+    predicted = predicted or {}
+
+    def cold(n: str) -> bool:
+        return first[n] <= COLD_MAX and predicted.get(n, float("inf")) < LONG
+
+    for n in [n for n in timed if LONG < first[n] and (first[n] <= RESOLVE or cold(n))]:
         budget_left = left()
         if budget_left is not None and budget_left < 1.5 * first[n]:
             continue
