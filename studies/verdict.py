@@ -246,7 +246,8 @@ def verdict(
 
     def skip(p: Planned, why: str) -> None:
         kind = "memory" if "available" in why else "budget"
-        kind = "ruled out" if "more than the reference" in why else kind
+        ruled = "more than the reference" in why or "no measured cost law" in why
+        kind = "ruled out" if ruled else kind
         state.skipped[p.name] = (f"skipped ({kind})", why)
         say(f"  {p.name:<26} skipped ({kind}): {why}")
         publish()

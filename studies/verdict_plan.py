@@ -207,7 +207,8 @@ def skip_reason(p: Planned, room: float | None, spent: float, memory: float | No
 
 def dearer_than_reference(p: Planned, reference_seconds: float) -> str:
     """Why a ruled-out model is not worth its solve: it is predicted to cost more than the
-    reference (empty: it is worth it, or it is not ruled out).
+    reference, or no measured law of its own prices it (empty: it is worth it, or it is not
+    ruled out).
 
     Parameters
     ----------
@@ -221,7 +222,11 @@ def dearer_than_reference(p: Planned, reference_seconds: float) -> str:
     str
     """
     s = p.predicted.seconds
-    if p.role != "ruled out" or not math.isfinite(s) or not math.isfinite(reference_seconds):
+    if p.role != "ruled out":
+        return ""
+    if p.predicted.source != "measured law":  # priced as another model: its cost is a guess
+        return "no measured cost law prices it"
+    if not math.isfinite(s) or not math.isfinite(reference_seconds):
         return ""
     if s <= max(reference_seconds, 1.0):
         return ""
