@@ -47,6 +47,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from springfem.mesh import tet_volumes
+from springfem.mesh.nodal_average import shape_gradients
 
 from .nodal_groups import (
     GROUP_TOLERANCE,
@@ -70,29 +71,6 @@ __all__ = [
     "scaled_deviatoric",
     "virtual_elements",
 ]
-
-
-def shape_gradients(X: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """``grad N_i`` of the four vertices of every tet at rest, ``(m, 4, 3)``.
-
-    Parameters
-    ----------
-    X
-        Rest positions ``(n, 3)``.
-    tets
-        Connectivity ``(m, 4)``.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(m, 4, 3)``; they sum to zero over the vertices.
-    """
-    p = X[tets]
-    D = (p[:, 1:] - p[:, :1]).transpose(0, 2, 1)  # columns: edges
-    g = np.empty(p.shape)
-    g[:, 1:] = np.linalg.inv(D)  # rows of D^-1 are grad N_1..3
-    g[:, 0] = -g[:, 1:].sum(axis=1)
-    return g
 
 
 def nodal_gradients(X: np.ndarray, tets: np.ndarray) -> tuple[sp.csr_matrix, ...]:
