@@ -19,23 +19,14 @@ Examples
 
 from __future__ import annotations
 
-import os
 import resource
 import threading
 import time
 
+from springfem.mechanics.memory import resident_bytes
+
 #: Seconds between samples of the resident size.
 INTERVAL = 0.02
-_PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
-
-
-def resident_bytes() -> int:
-    """The process's resident size now (bytes; 0 where ``/proc`` is missing)."""
-    try:
-        with open("/proc/self/statm") as f:
-            return int(f.read().split()[1]) * _PAGE
-    except OSError:
-        return 0
 
 
 def high_water_bytes() -> int:
