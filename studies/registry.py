@@ -1,8 +1,5 @@
 """The study registry: ``@study("name", Settings, scenes)`` and what a study returns.
 
-A study package registers its ``run`` with :func:`study_run`, which also writes the
-docstring every ``run`` shares.
-
 A study is one function ``run(ctx, scenes, settings) -> StudyOutput`` of a context (where
 it writes, its case cache), a list of :class:`~studies.scenes.StudyScene` and its settings,
 registered with :func:`study`. ``settings`` is an instance of the study's frozen settings
@@ -36,7 +33,6 @@ Examples
 from __future__ import annotations
 
 import inspect
-import textwrap
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -226,91 +222,31 @@ def study(
     return decorate
 
 
-#: The docstring every study package's ``run`` shares; :func:`study_run` fills it in.
-RUN_DOC = """Run the {title} study (see the module docstring).
-
-Parameters
-----------
-ctx
-    Output folder, cache and preset.
-scenes
-    {scenes}
-{settings_name}
-    {settings}
-
-Returns
--------
-StudyOutput
-    {returns}
-"""
-
-
 def study_run(
     name: str,
     settings: type,
     scenes: Callable[[Any], list[StudyScene]],
     *,
-    settings_doc: str,
-    returns: str,
-    scenes_doc: str = "The scenes.",
     user_scenes: str | None = None,
     serial: bool = False,
+    **_docs: str,
 ) -> Callable:
-    """Register a study package's ``run`` (:func:`study`) and write its docstring.
-
-    The scaffold every ``studies/study_<name>/__init__.py`` shares: the registration with
-    the package's ``Settings`` and bundled scenes, and the numpydoc docstring of ``run``
-    (:data:`RUN_DOC`), of which only the descriptions of the scenes, the settings and the
-    output differ between studies.
+    """Deprecated alias of :func:`study` (its documentation keywords are ignored).
 
     Parameters
     ----------
     name, settings, scenes, user_scenes, serial
         As for :func:`study`.
-    settings_doc
-        What the settings hold (the docstring's line for the third parameter, whatever
-        ``run`` names it).
-    returns
-        What the study returns (the docstring's ``Returns`` line).
-    scenes_doc
-        What the scenes are or must have.
+    **_docs
+        Ignored (``settings_doc``, ``returns``, ``scenes_doc``): write ``run``'s
+        docstring by hand.
 
     Returns
     -------
     callable
-        A decorator returning the function, documented, with a ``study`` attribute.
-
-    Examples
-    --------
-    >>> @study_run("doctest-run", object, lambda s: [], settings_doc="Grid sizes.",
-    ...            returns="Nothing much.")
-    ... def run(ctx, scenes, s):
-    ...     return StudyOutput(ctx.name, "example")
-    >>> print(run.__doc__.splitlines()[0]); run.study.name in REGISTRY
-    Run the doctest-run study (see the module docstring).
-    True
-    >>> run.__doc__.splitlines()[8:10]  # the parameter under the name run gives it
-    ['s', '    Grid sizes.']
-    >>> del REGISTRY["doctest-run"]
+        The decorator of :func:`study`.
     """
-
-    def decorate(fn: Callable) -> Callable:
-        settings_name = list(inspect.signature(fn).parameters)[2]
-        fn.__doc__ = RUN_DOC.format(
-            title=name.replace("_", "-"),
-            scenes=_wrap(scenes_doc),
-            settings_name=settings_name,
-            settings=_wrap(settings_doc),
-            returns=_wrap(returns),
-        )
-        return study(name, settings, scenes, user_scenes=user_scenes, serial=serial)(fn)
-
-    return decorate
-
-
-def _wrap(text: str) -> str:
-    """A description as the indented lines of a numpydoc entry."""
-    return textwrap.fill(" ".join(text.split()), 84).replace("\n", "\n    ")
+    return study(name, settings, scenes, user_scenes=user_scenes, serial=serial)
 
 
 def get_study(name: str) -> Study:

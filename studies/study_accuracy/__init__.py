@@ -22,7 +22,7 @@ import numpy as np
 from .. import analytic
 from ..compare import MODELS
 from ..compare_output import error_figure, figure_fields
-from ..registry import Figure, StudyContext, StudyOutput, study_run
+from ..registry import Figure, StudyContext, StudyOutput, study
 from ..scenes import StudyScene
 from .cases import (
     DISCRETISATION_HEADLINE,
@@ -42,15 +42,9 @@ from .tables import error_table, probe_table
 __all__ = ["DISCRETISATION_HEADLINE", "SCENES", "Settings", "bundled_scenes", "run", "work"]
 
 
-@study_run(
-    "accuracy",
-    Settings,
-    bundled_scenes,
-    scenes_doc="The scenes (those serving ``figure`` get an error-field figure).",
-    settings_doc="Meshes.",
-    returns="Findings, two tables, the bar chart and the error-field figures, headline errors.",
-)
+@study("accuracy", Settings, bundled_scenes)
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
+    """Spring, P1 and reference solves per scene; the three errors and the probes."""
     names = [s.label for s in scenes]
     cases = [scene_case(s, settings) for s in scenes]
     results = ctx.cache.run(cases, work, progress=ctx.progress, desc="accuracy")

@@ -37,7 +37,7 @@ Examples
 
 from __future__ import annotations
 
-from ..registry import StudyContext, StudyOutput, study_run
+from ..registry import StudyContext, StudyOutput, study
 from ..scenes import StudyScene, require
 from .cases import Settings, bundled_scenes, cost_case, period_case, reference_model, release_cases
 from .figures import energy_figure, probe_figure
@@ -48,15 +48,9 @@ from .work import WORK
 __all__ = ["Settings", "bundled_scenes", "run"]
 
 
-@study_run(
-    "dynamics",
-    Settings,
-    bundled_scenes,
-    scenes_doc="The scenes (compressible, with a load).",
-    settings_doc="Mesh, run length, time-step safety, models and timing rounds.",
-    returns="Findings, the table, the probe and energy figures, headline numbers.",
-)
+@study("dynamics", Settings, bundled_scenes)
 def run(ctx: StudyContext, scenes: list[StudyScene], s: Settings) -> StudyOutput:
+    """Release runs of each model against explicit P1 of the same law."""
     require(scenes, ctx.name)
     periods = ctx.cache.run([period_case(sc) for sc in scenes], WORK["period"][0], ctx.progress,
                             WORK["period"][1])  # fmt: skip

@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..registry import StudyContext, StudyOutput, study_run
+from ..registry import StudyContext, StudyOutput, study
 from ..scenes import StudyScene, require
 from .cases import (
     COST_PER_DOF,
@@ -70,17 +70,9 @@ from .tables import (
 __all__ = ["Settings", "bundled_scenes", "run"]
 
 
-@study_run(
-    "locking",
-    Settings,
-    bundled_scenes,
-    settings_doc="Poisson ratios, levels, methods, the solve cap.",
-    returns=(
-        "Findings, the table of every case, the references, the cheapest method "
-        "per ν, the two figures, headline errors."
-    ),
-)
+@study("locking", Settings, bundled_scenes)
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
+    """Error and cost of each locking-free method per Poisson ratio."""
     require(scenes, ctx.name)
     if ctx.cache.budget.seconds is not None and settings.timed:
         # within a budget each solve runs once: a warm-up solve and repeats would take a

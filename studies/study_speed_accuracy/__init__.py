@@ -46,7 +46,7 @@ from __future__ import annotations
 from springfem.errors import SolverError
 from springfem.files import safe_filename
 
-from ..registry import StudyContext, StudyOutput, study_run
+from ..registry import StudyContext, StudyOutput, study
 from ..scenes import StudyScene, require
 from ..study_convergence.levels import level_label, select_levels
 from .cases import (
@@ -68,16 +68,9 @@ from .tables import measure, pareto_front, points_frame, step_frame, write_table
 __all__ = ["Settings", "bundled_scenes", "pareto_front", "point_work", "run"]
 
 
-@study_run(
-    "speed_accuracy",
-    Settings,
-    bundled_scenes,
-    scenes_doc="The scenes (with several, files and headline keys end in the scene's label).",
-    settings_doc="Levels and solver settings.",
-    returns="Findings, points and step-cost tables, the Pareto figure, headline numbers.",
-    serial=True,
-)
+@study("speed_accuracy", Settings, bundled_scenes, serial=True)
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
+    """Time and error of every model at each level; the Pareto front."""
     require(scenes, "speed-accuracy")
     out = StudyOutput(ctx.name, "")
     for s in scenes:

@@ -33,7 +33,7 @@ Examples
 
 from __future__ import annotations
 
-from ..registry import StudyContext, StudyOutput, study_run
+from ..registry import StudyContext, StudyOutput, study
 from ..scenes import StudyScene
 from .cases import WORK, Settings, bundled_scenes, grids
 from .figures import failure_map_figure, locking_figure, survival_figure
@@ -43,18 +43,9 @@ from .tables import frames, survival, write_tables
 __all__ = ["Settings", "bundled_scenes", "run"]
 
 
-@study_run(
-    "stability",
-    Settings,
-    bundled_scenes,
-    scenes_doc="The scenes (each serves the series its ``roles`` name; a user's serves all).",
-    settings_doc="Grids of the four series.",
-    returns=(
-        "Findings, tables (critical step, largest load, locking, failure map), "
-        "figures and headline numbers."
-    ),
-)
+@study("stability", Settings, bundled_scenes)
 def run(ctx: StudyContext, scenes: list[StudyScene], settings: Settings) -> StudyOutput:
+    """Critical steps, largest loads, locking and the failure map."""
     cases = grids(scenes, settings)
     results = {
         k: ctx.cache.run(cases[k], fn, ctx.progress, label) for k, (fn, label) in WORK.items()

@@ -47,7 +47,7 @@ Examples
 from __future__ import annotations
 
 from ..analytic import volume_change
-from ..registry import StudyContext, StudyOutput, study_run
+from ..registry import StudyContext, StudyOutput, study
 from ..scenes import StudyScene, require
 from .cases import Settings, bundled_scenes, grids
 from .figures import load_figure, time_figure
@@ -58,15 +58,9 @@ from .work import WORK
 __all__ = ["Settings", "bundled_scenes", "run"]
 
 
-@study_run(
-    "volume_drift",
-    Settings,
-    bundled_scenes,
-    scenes_doc="The scenes (each serves the series its ``roles`` name; a user's serves all).",
-    settings_doc="Run lengths, samples and load factors.",
-    returns="Findings, the final-drift and static tables, the drift figures, headline drifts.",
-)
+@study("volume_drift", Settings, bundled_scenes)
 def run(ctx: StudyContext, scenes: list[StudyScene], s: Settings) -> StudyOutput:
+    """Volume drift over time and under static load, per model."""
     require(scenes, ctx.name)
     cases = grids(scenes, s)
     res = {k: ctx.cache.run(cases[k], fn, ctx.progress, label) for k, (fn, label) in WORK.items()}
