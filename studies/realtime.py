@@ -1,0 +1,306 @@
+"""Models at a frame rate: which settings fit a frame budget, and how far their motion is
+from the dynamic reference's.
+
+For one model on one scene at ``rate`` frames per second, :func:`fit_settings` tries the
+model's frame settings cheapest first (:func:`springfem.frames.frames_settings`), times a few
+frames of each, and keeps those whose cost per frame fits ``1 / rate``; :func:`frame_run`
+runs the scene's load history (its time functions, docs/dynamics.rst) frame by frame and
+records the probes, the vertex field and the energy; :func:`trajectory_error` compares a run
+with the reference's motion at the same times. :func:`weigh` does all three for a model:
+the most accurate setting that fits, or the cheapest one as the nearest miss.
+
+The error is the root mean square over the frames of the probe displacement error, relative
+to the largest probe displacement of the reference (``probe``), and the same over all
+vertices (``field``, relative to the reference field's largest norm). The energy drift is
+the change of kinetic plus stored energy over the last stretch of the run where the loads
+are constant, minus the reference's over the same stretch, relative to the reference's
+energy there.
+
+Examples
+--------
+>>> import numpy as np
+>>> ref = Motion(np.array([0.0, 1.0]), np.array([[[0.0, 0, 0]], [[1.0, 0, 0]]]), None)
+>>> run = Motion(np.array([0.0, 1.0]), np.array([[[0.0, 0, 0]], [[0.9, 0, 0]]]), None)
+>>> round(trajectory_error(run, ref)["probe"], 4)
+0.0707
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from springfem.errors import InputError, SolverError
+from springfem.frames import FrameStepper, frame_stepper, frames_settings
+from springfem.mechanics.limits import SolveStopped
+from springfem.scene import Scene
+
+#: Frames timed per setting when searching for the settings that fit (after one warm frame).
+TIMED_FRAMES = 3
+
+
+@dataclass
+class Motion:
+    """A motion sampled at frame times.
+
+    Attributes
+    ----------
+    times
+        ``(k,)`` seconds.
+    probes
+        ``(k, p, 3)`` probe displacements.
+    field
+        ``(k, n, 3)`` vertex displacements, or ``None``.
+    energy
+        ``(k,)`` kinetic plus stored energy, or ``None``.
+    """
+
+    times: np.ndarray
+    probes: np.ndarray
+    field: np.ndarray | None
+    energy: np.ndarray | None = None
+
+
+@dataclass
+class FrameResult:
+    """One model at one setting over the scene's run.
+
+    Attributes
+    ----------
+    model, settings
+        The model's name and the settings it ran at.
+    seconds_per_frame
+        Median wall time of a frame (s).
+    stable
+        Whether the run stayed finite and bounded.
+    motion
+        What it recorded (``None`` when it did not run).
+    message
+        Why it stopped, when it did.
+    """
+
+    model: str
+    settings: dict[str, Any]
+    seconds_per_frame: float
+    stable: bool
+    motion: Motion | None = None
+    message: str = ""
+    errors: dict[str, float] = field(default_factory=dict)
+
+
+def probe_nodes(scene: Scene) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """``(nodes (p, k), weights (p, k), names)`` of the scene's probes (linear in their
+    tets), else of the vertex farthest from the supports."""
+    if scene.probes:
+        nodes = np.array([scene.mesh.tets[p.tet] for p in scene.probes])
+        w = np.array([np.asarray(p.bary, dtype=float) for p in scene.probes])
+        return nodes, w, [p.name for p in scene.probes]
+    X = scene.mesh.points
+    fixed = np.unique(np.asarray(scene.dirichlet()[0]) // 3)
+    centre = X[fixed].mean(axis=0) if fixed.size else X.mean(axis=0)
+    node = int(np.argmax(np.linalg.norm(X - centre, axis=1)))
+    return np.array([[node]]), np.array([[1.0]]), [f"node {node}"]
+
+
+def _probe(u: np.ndarray, nodes: np.ndarray, w: np.ndarray) -> np.ndarray:
+    return np.einsum("pk,pkj->pj", w, u[nodes])
+
+
+def frame_run(
+    stepper: FrameStepper,
+    scene: Scene,
+    t_end: float,
+    scale: Callable[[float], float],
+    *,
+    model: str = "",
+    field_frames: int = 50,
+    deadline: float | None = None,
+) -> FrameResult:
+    """Run ``stepper`` from rest over ``[0, t_end]`` and record its motion.
+
+    Parameters
+    ----------
+    stepper
+        The model's frames.
+    scene
+        The scene (its probes).
+    t_end
+        End time (s).
+    scale
+        The load factor as a function of time.
+    model
+        Its name, for the result.
+    field_frames
+        The vertex field is kept at about this many frames.
+    deadline
+        ``time.monotonic()`` past which the run stops (``None``: none).
+
+    Returns
+    -------
+    FrameResult
+    """
+    dt = stepper.frame_dt
+    n = max(1, int(round(t_end / dt)))
+    nodes, w, _ = probe_nodes(scene)
+    x, v = stepper.start()
+    X = stepper.x0
+    keep = max(1, n // field_frames)
+    times, probes, fields, energy, walls = [0.0], [_probe(x - X, nodes, w)], [x - X], [], []
+    e0 = stepper.strain_energy(x)
+    has_e = e0 is not None
+    if e0 is not None:
+        energy.append(_kinetic(stepper.masses, v) + e0)
+    ftimes = [0.0]
+    extent = float(np.ptp(X, axis=0).max())
+    stable, message = True, ""
+    for k in range(n):
+        t0 = time.perf_counter()
+        try:
+            stepper.frame(x, v, k * dt, scale)
+        except (SolverError, SolveStopped, FloatingPointError) as exc:
+            stable, message = False, f"frame {k + 1}: {exc}"[:200]
+            break
+        walls.append(time.perf_counter() - t0)
+        u = x - X
+        if not np.isfinite(u).all() or float(np.abs(u).max()) > 10 * extent:
+            stable, message = False, f"frame {k + 1}: the motion blew up (t = {(k + 1) * dt:.4g} s)"
+            break
+        times.append((k + 1) * dt)
+        probes.append(_probe(u, nodes, w))
+        if has_e:
+            energy.append(_kinetic(stepper.masses, v) + float(stepper.strain_energy(x) or 0.0))
+        if (k + 1) % keep == 0:
+            fields.append(u.copy())
+            ftimes.append((k + 1) * dt)
+        if deadline is not None and time.monotonic() > deadline:
+            stable, message = True, f"stopped at t = {(k + 1) * dt:.4g} s (time cap)"
+            break
+    spf = float(np.median(walls[1:] if len(walls) > 1 else walls)) if walls else float("nan")
+    motion = Motion(
+        np.asarray(times),
+        np.asarray(probes),
+        np.asarray(fields) if len(fields) == len(ftimes) else None,
+        np.asarray(energy) if has_e else None,
+    )
+    motion.field_times = np.asarray(ftimes)  # type: ignore[attr-defined]
+    return FrameResult(model, dict(stepper.settings), spf, stable, motion, message)
+
+
+def _kinetic(m: np.ndarray, v: np.ndarray) -> float:
+    return 0.5 * float(np.einsum("i,ij,ij->", m, v, v))
+
+
+def trajectory_error(run: Motion, ref: Motion) -> dict[str, float]:
+    """Relative RMS errors of ``run`` against ``ref`` at ``run``'s frame times (the reference
+    interpolated linearly in time): ``probe`` and, when both have fields at the same times,
+    ``field`` (see the module docstring)."""
+    t = run.times
+    ref_p = np.stack(
+        [np.stack([np.interp(t, ref.times, ref.probes[:, p, j]) for j in range(3)], axis=-1)
+         for p in range(ref.probes.shape[1])], axis=1)  # fmt: skip
+    scale = float(np.linalg.norm(ref.probes, axis=-1).max()) or 1.0
+    err = np.linalg.norm(run.probes - ref_p, axis=-1)
+    out = {"probe": float(np.sqrt(np.mean(err**2))) / scale}
+    if run.field is not None and ref.field is not None:
+        rt = getattr(run, "field_times", None)
+        ft = getattr(ref, "field_times", ref.times)
+        if rt is not None:
+            idx = [int(np.argmin(np.abs(ft - s))) for s in rt]
+            close = np.abs(ft[idx] - rt) < 1e-9 + 1e-6 * max(float(rt[-1]), 1.0)
+            if close.all():
+                R = ref.field[idx]
+                fscale = float(np.linalg.norm(R, axis=-1).max()) or 1.0
+                d = np.linalg.norm(run.field - R, axis=-1)
+                out["field"] = float(np.sqrt(np.mean(d**2))) / fscale
+    return out
+
+
+def energy_drift(run: Motion, ref: Motion, hold_from: float) -> float:
+    """``(dE_run - dE_ref) / E_ref`` over the times at or after ``hold_from`` (NaN when
+    either has no energy or no frames there)."""
+    if run.energy is None or ref.energy is None:
+        return float("nan")
+    r = run.times >= hold_from - 1e-12
+    q = ref.times >= hold_from - 1e-12
+    if r.sum() < 2 or q.sum() < 2:
+        return float("nan")
+    e_ref = ref.energy[q]
+    d_run = float(run.energy[r][-1] - run.energy[r][0])
+    d_ref = float(e_ref[-1] - e_ref[0])
+    return (d_run - d_ref) / (abs(float(e_ref[0])) or 1.0)
+
+
+def time_frames(
+    model: Any,
+    scene: Scene,
+    frame_dt: float,
+    settings: dict[str, Any],
+    scale: Callable[[float], float],
+    frames: int = TIMED_FRAMES,
+) -> tuple[float, FrameStepper | None, str]:
+    """Median seconds per frame of ``model`` at ``settings`` over ``frames`` frames after a
+    warm one (its kernels compiled); the stepper, or why it has none."""
+    try:
+        stepper = frame_stepper(model, scene, frame_dt, **settings)
+    except (InputError, SolverError, TypeError, ValueError) as exc:
+        return float("nan"), None, str(exc)[:200]
+    if stepper is None:
+        return float("nan"), None, "no dynamics (neither frames nor an explicit form)"
+    x, v = stepper.start()
+    walls = []
+    for k in range(frames + 1):
+        t0 = time.perf_counter()
+        stepper.frame(x, v, k * frame_dt, scale)
+        walls.append(time.perf_counter() - t0)
+    return float(np.median(walls[1:])), stepper, ""
+
+
+def weigh(
+    model: Any,
+    scene: Scene,
+    *,
+    rate: float,
+    t_end: float,
+    scale: Callable[[float], float],
+    reference: Motion,
+    hold_from: float,
+    max_runs: int = 3,
+    deadline: float | None = None,
+) -> FrameResult:
+    """The most accurate setting of ``model`` whose frame fits ``1 / rate``, run over the
+    scene's history and compared with ``reference``; when none fits, the cheapest setting's
+    timing alone (``stable`` then says nothing; ``message`` says it missed)."""
+    frame_dt = 1.0 / rate
+    timed = []
+    for s in frames_settings(model):
+        spf, stepper, why = time_frames(model, scene, frame_dt, s, scale)
+        if stepper is None:
+            return FrameResult(model.name, s, float("nan"), False, message=why)
+        timed.append((spf, s, stepper))
+    fit = sorted((t for t in timed if t[0] <= frame_dt), key=lambda t: -t[0])[:max_runs]
+    if not fit:
+        spf, s, stepper = min(timed, key=lambda t: t[0])
+        miss = f"misses the frame: {spf * 1e3:.3g} ms > {frame_dt * 1e3:.3g} ms"
+        return FrameResult(model.name, dict(stepper.settings), spf, True, message=miss)
+    best: FrameResult | None = None
+    for _, s, _ in fit:
+        stepper = frame_stepper(model, scene, frame_dt, **s)
+        assert stepper is not None
+        r = frame_run(stepper, scene, t_end, scale, model=model.name, deadline=deadline)
+        if r.motion is not None and r.stable:
+            r.errors = trajectory_error(r.motion, reference)
+            r.errors["energy drift"] = energy_drift(r.motion, reference, hold_from)
+        if best is None or _better(r, best):
+            best = r
+    assert best is not None
+    return best
+
+
+def _better(a: FrameResult, b: FrameResult) -> bool:
+    if a.stable != b.stable:
+        return a.stable
+    return a.errors.get("probe", np.inf) < b.errors.get("probe", np.inf)
