@@ -96,7 +96,8 @@ def run_study(
         Path(springmodel.__file__).parent,
         Path(reference_fem.__file__).parent,
         spec.source,
-        *sorted(here.glob("*.py")),  # the models, comparisons and metrics every study uses
+        # the models, comparisons and metrics every study uses (a study module: its own)
+        *sorted(f for f in here.glob("*.py") if not f.name.startswith("study_")),
         here / "scenes",
         *plugin_sources(),  # the plug-in models' packages (springfem.model_api)
     )

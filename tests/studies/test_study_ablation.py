@@ -5,15 +5,15 @@ import pandas as pd
 import pytest
 
 from studies.scenes import comparison_scenes
-from studies.study_ablation.cases import (
+from studies.study_ablation import (
     ALL_VARIANTS,
     TOLERANCE,
     Settings,
+    cheapest_adequate,
     fem_case,
     model_error,
     spring_case,
 )
-from studies.study_ablation.tables import cheapest_adequate
 
 
 def _scene(name: str, divisions=None):

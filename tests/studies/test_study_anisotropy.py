@@ -6,7 +6,7 @@ import pytest
 
 from studies import analytic
 from studies.scenes import StudyScene
-from studies.study_anisotropy.cases import (
+from studies.study_anisotropy import (
     STUDY,
     VERSION,
     affine_fit,

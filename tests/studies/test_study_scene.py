@@ -140,7 +140,7 @@ def test_ablation_on_a_gmsh_scene(scene_file, tmp_path):
     ok = rows[(rows.status == "ok") & (rows.error <= 0.05)]
     pick = w.at["gbox", "cheapest with error <= 0.05 (with exact)"]
     assert pick != "none" and pick in set(ok.variant)
-    from studies.study_ablation.cases import TIME_TIE  # ties towards fewer parts
+    from studies.study_ablation import TIME_TIE  # ties towards fewer parts
 
     assert ok.set_index("variant").at[pick, "solve_time"] <= (1 + TIME_TIE) * ok.solve_time.min()
     assert w.at["gbox", "best (with exact)"] in (
