@@ -60,7 +60,18 @@ class XPBDModel:
     sweep
         The settings the speed-accuracy study charts (:data:`SWEEP`, substeps x iterations;
         see :class:`~springfem.model_api.ModelPlugin`); :meth:`with_settings` makes each.
+    variants
+        Named changes of its settings the stability study weighs beside it (:data:`VARIANTS`).
+    setting_step
+        The substep of its settings, ``dt / substeps`` (s).
     """
+
+    #: Jacobi iteration beside the own Gauss–Seidel: the step search and the run to rest
+    #: (at most 3,000 frames: 20,000 cost minutes when rest never comes, and
+    #: docs/peers.rst's measured runs took at most 3,000).
+    VARIANTS: Mapping[str, Mapping[str, Any]] = {
+        "xpbd-jacobi": {"iteration": "jacobi", "max_frames": 3000}
+    }
 
     #: Substeps x iterations, most telling first (a quick study takes the first few, every
     #: level the first): the default and 80 substeps, the rest of the substep series at 2
@@ -80,6 +91,8 @@ class XPBDModel:
         self.default = default
         self.settings: Mapping[str, Any] = asdict(s)
         self.sweep: tuple[Mapping[str, Any], ...] = self.SWEEP
+        self.variants: Mapping[str, Mapping[str, Any]] = self.VARIANTS
+        self.setting_step = s.dt / s.substeps
         #: What it solves (the verdict's ``law vs reference``).
         self.law = "stable-neo-hookean"
 
@@ -144,6 +157,28 @@ class XPBDModel:
             wall_time=out.wall_time, converged=out.converged, iterations=out.substeps, info=info,
         )  # fmt: skip
         return ModelSolution(result, out.u)
+
+    def largest_step(self, scene: Scene, steps: int, bisections: int) -> dict[str, Any]:
+        """The largest substep its undamped run survives (loads off), against
+        ``2 / omega_max`` of its energy: :func:`peers.xpbd.step_search.largest_step`."""
+        from .xpbd.step_search import largest_step
+
+        return largest_step(scene, self._settings, steps, bisections)
+
+    def release_run(self, scene: Scene, **run: Any) -> dict[str, Any]:
+        """Released from its rest state, its own undamped substeps:
+        :func:`peers.xpbd.release.release_run` (``t_end``, ``safety``, ``samples``,
+        ``probe``)."""
+        from .xpbd.release import release_run
+
+        return release_run(scene, self._settings, **run)
+
+    def step_timer(self, scene: Scene, safety: float):
+        """``(steps, tick)`` running its substeps from rest:
+        :func:`peers.xpbd.release.step_timer`."""
+        from .xpbd.release import step_timer
+
+        return step_timer(scene, self._settings, safety)
 
     def run(self, scene: Scene, frames: int) -> ModelSolution:
         """``frames`` frames of XPBD dynamics from rest under the loads.

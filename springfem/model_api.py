@@ -95,6 +95,20 @@ class ModelPlugin(Protocol):
     returning the model with those settings changed. The speed-accuracy study then charts
     one point per sweep entry (its quick preset the first few) where a model without
     ``sweep`` has one static point (docs/peers.rst#in-the-studies).
+
+    A model without an explicit form (``system`` ``None``) whose dynamics are its own may
+    offer them to the studies, each member optional (``peers.plugin.XPBDModel`` has all):
+
+    - ``largest_step(scene, steps, bisections) -> dict``: the largest step its undamped run
+      survives with the loads off (``dt_pred``, ``dt_measured``, ``ratio``, ``setting_h``,
+      ``failure``): the stability study's critical-step series;
+    - ``variants``: a mapping of variant names to changes of its settings, weighed beside
+      it in the stability study (each through ``with_settings``);
+    - ``release_run(scene, t_end=, safety=, samples=, probe=) -> dict``: released from its
+      static state with the loads off (``status``, ``dt``, ``u_steps`` the probe
+      displacement after every step, ``energy_t``, ``energy`` ...), and
+      ``step_timer(scene, safety) -> go(steps, tick)``: the dynamics study's run and cost;
+      ``setting_step``: the step (s) of its own settings.
     """
 
     name: str

@@ -8,8 +8,9 @@ energy per element), the stiffened exact element (``spring-stiffened``: one expo
 element) and the exact small-strain element (``spring-exact``), against explicit P1 of the
 scene's law on the same mesh (:class:`reference_fem.explicit.ExplicitFem`, the compiled
 anisotropic kernels), and the plug-in models weighed by default where they apply: those
-with an explicit form (co-rotational P1, the mass-spring network) the same way, XPBD by its
-own undamped substeps from its run to rest (:mod:`.xpbd_release`); a plug-in that does not
+with an explicit form (co-rotational P1, the mass-spring network) the same way, those with
+their own time integration (XPBD: its undamped substeps from its run to rest) by their
+``release_run`` (:class:`springfem.model_api.ModelPlugin`); a plug-in that does not
 apply has a row saying why. It reports the probe displacement error over time (relative L2
 over the run and max), each model's energy balance (kinetic + strain − work, drift relative
 to its initial energy), the stable step each model uses, and the median cost of one step of
@@ -26,7 +27,7 @@ FILE`` runs the same function on a user's compressible scene with a load (its fi
 ``[[probe]]``, else the node farthest from the fixed nodes).
 
 The study is split into :mod:`.cases` (settings, models, the beam, the cases), :mod:`.work`
-(the period, one release run, the step cost), :mod:`.xpbd_release`, :mod:`.tables`,
+(the period, one release run, the step cost), :mod:`.tables`,
 :mod:`.figures` and :mod:`.findings`.
 
 Examples

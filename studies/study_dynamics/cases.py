@@ -31,9 +31,6 @@ SPRINGS = ("spring-tissue", "spring-stiffened", "spring-exact")
 COLORS = {"spring-tissue": "tab:orange", "spring-stiffened": "tab:blue",
           "spring-exact": "tab:green", "spring-spec": "tab:purple",
           "corotational": "goldenrod", "xpbd": "tab:red", "mass-spring": "tab:brown"}  # fmt: skip
-#: Plug-in models without an explicit form that bring their own time integration
-#: (:mod:`.xpbd_release`).
-OWN_DYNAMICS = ("xpbd",)
 #: The isotropic beam: neo-Hookean, ``E`` = Guccione's small-strain fibre modulus ``C b_f``.
 NH_NU = 0.45
 #: Land's beam, made compressible: ``kappa`` = this × ``C`` (as the explicit kernels' test).
@@ -196,10 +193,18 @@ def _builds(model: str, scene: Scene) -> bool:
     return True
 
 
+def own_integrator(name: str) -> Any:
+    """The plug-in of model ``name`` when it brings its own time integration (a
+    ``release_run``, :class:`~springfem.model_api.ModelPlugin`), else ``None``."""
+    model = models.get(name)
+    plugin = getattr(model, "plugin", None) or model
+    return plugin if hasattr(plugin, "release_run") else None
+
+
 def own_dynamics(scene: Scene) -> list[str]:
     """The plug-in models weighed by default that apply to the scene and bring their own
-    time integration (:data:`OWN_DYNAMICS`)."""
-    return [m for m in models.plugins(scene) if m in OWN_DYNAMICS]
+    time integration (:func:`own_integrator`)."""
+    return [m for m in models.plugins(scene) if own_integrator(m) is not None]
 
 
 def not_applicable(scene: Scene) -> list[str]:

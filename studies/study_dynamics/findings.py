@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..study_stability.xpbd_step import setting_substep
+from .cases import own_integrator
 
 #: Headline key -> table column, per spring model.
 HEADLINE = {"l2_error": "L2 error (run)", "max_error": "max error",
@@ -46,17 +46,21 @@ def _steps(ok: pd.DataFrame) -> str:
 
 
 def _peer_notes(ok: pd.DataFrame) -> list[str]:
-    """What the plug-in peers' rows mean: XPBD's energy change (its own substeps, undamped),
-    the mass-spring network's error (its material, not its integration)."""
+    """What the plug-in peers' rows mean: the energy change of a model with its own time
+    integration (undamped), the mass-spring network's error (its material, not its
+    integration)."""
     out = []
-    for _, r in ok[ok.model == "xpbd"].iterrows():
-        conf = setting_substep("xpbd")
+    for _, r in ok.iterrows():
+        own = own_integrator(r.model)
+        if own is None:
+            continue
+        conf = float(getattr(own, "setting_step", np.nan))
         over = conf / min(r["dt_crit rest (s)"], r["dt_crit loaded (s)"])
         out.append(
-            f"{r.scene}: XPBD runs its own undamped substeps at h = {r['dt (s)']:.3g} s (the "
-            f"explicit models' rule; its configured substep {conf:.3g} s is {over:.3g}× the "
+            f"{r.scene}: {r.model} runs its own undamped steps at h = {r['dt (s)']:.3g} s (the "
+            f"explicit models' rule; its configured step {conf:.3g} s is {over:.3g}× the "
             "2/ω_max of its energy here; the stability study measures how far past that bound "
-            "XPBD survives) and its energy changes by "
+            "it survives) and its energy changes by "
             f"{r['energy change (end)']:.2g} of the initial energy over the run: the position "
             "projection dissipates, where the symplectic explicit steps only oscillate."
         )

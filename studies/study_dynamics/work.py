@@ -28,8 +28,7 @@ from springfem.scene import Scene
 
 from .. import models
 from ..scenes import case_scene
-from . import xpbd_release
-from .cases import OWN_DYNAMICS, resampled
+from .cases import own_integrator, resampled
 
 #: Static Newton of the preload: relative tolerance, iterations per load step.
 NEWTON_TOL, NEWTON_ITER = 1e-10, 40
@@ -111,8 +110,15 @@ def release_case(case: dict[str, Any]) -> dict[str, Any]:
     why = models.get(case["model"]).applies(scene)
     if why is not None:
         return {"status": "not applicable", "message": why[:200]}
-    if case["model"] in OWN_DYNAMICS:
-        return xpbd_release.release_case(case, probe_weights)
+    own = own_integrator(case["model"])
+    if own is not None:  # its own time integration (a plug-in's release_run)
+        nodes, w, _ = probe_weights(scene)
+        t_end = float(case["t_end"])
+        out = own.release_run(scene, t_end=t_end, safety=case["safety"],
+                              samples=case["samples"], probe=(nodes, w))  # fmt: skip
+        if "u_steps" in out:
+            out["t"], out["u"] = resampled(out.pop("u_steps"), out["dt"], t_end, case["samples"])
+        return out
     system = models.get(case["model"]).system(scene)
     try:
         x_load = preload(system)
@@ -149,8 +155,8 @@ def release_case(case: dict[str, Any]) -> dict[str, Any]:
 
 
 def cost_case(case: dict[str, Any]) -> dict[str, Any]:
-    """Median wall time of one explicit step of every model (XPBD: one substep,
-    :func:`.xpbd_release.substep_timer`), in one process, warm.
+    """Median wall time of one explicit step of every model (a plug-in with its own time
+    integration: one of its steps, its ``step_timer``), in one process, warm.
 
     Each model runs from rest under the scene's loads at ``safety`` × its critical step at
     rest; after one untimed warm-up run, ``rounds`` rounds run ``steps`` steps of every
@@ -161,8 +167,8 @@ def cost_case(case: dict[str, Any]) -> dict[str, Any]:
 
     scene = case_scene(case)
     names = list(case["models"])
-    own = {m: xpbd_release.substep_timer(scene, case["safety"]) for m in names
-           if m in OWN_DYNAMICS}  # fmt: skip
+    own = {m: own_integrator(m).step_timer(scene, case["safety"]) for m in names
+           if own_integrator(m) is not None}  # fmt: skip
     systems = {m: models.get(m).system(scene) for m in names if m not in own}
     dts = {m: case["safety"] * stable_time_step(s)[0] for m, s in systems.items()}
     times: dict[str, list[float]] = {m: [] for m in names}

@@ -4,7 +4,7 @@
    perturbed rest state, loads off) against the predicted ``2 / omega_max``, for the spring
    variants, the explicit P1 FEM and the plug-in models with a mechanical system (the
    mass-spring network); for XPBD (Gauss–Seidel and Jacobi) the largest substep it
-   survives, against ``2 / omega_max`` of its own energy (:mod:`.xpbd_step`).
+   survives, against ``2 / omega_max`` of its own energy (its ``largest_step``).
 2. Largest load survived: the scene's loads times growing factors, solved statically by the
    spring model (energy, cosine torsion, the exact element), small-strain FEM (survives any
    load, but past 10 % of the body's size its solution is no solution: ``unphysical``) and
@@ -23,7 +23,7 @@ every series but the locking one (its reference is beam theory). The explicit FE
 isotropic laws only: on an anisotropic scene the explicit series run the spring variants.
 
 The study is split into :mod:`.cases` (settings, the bar, one run per series),
-:mod:`.critical_step`, :mod:`.xpbd_step`, :mod:`.tables`, :mod:`.figures` and :mod:`.findings`.
+:mod:`.critical_step`, :mod:`.tables`, :mod:`.figures` and :mod:`.findings`.
 
 Examples
 --------

@@ -21,8 +21,6 @@ from .. import models
 from ..analytic import extent, reference_for
 from ..scenes import StudyScene, case_scene
 from .critical_step import measure_critical_step
-from .xpbd_step import VARIANTS as XPBD_VARIANTS
-from .xpbd_step import xpbd_load_case, xpbd_step_case
 
 VERSION = 3
 
@@ -90,6 +88,28 @@ class Settings:
         )
 
 
+def own_steppers(names: list[str]) -> dict[str, tuple[str, Any]]:
+    """The plug-ins among ``names`` with their own step search (``largest_step``) and their
+    variants (``variants``, :class:`~springfem.model_api.ModelPlugin`): method name ->
+    (the plug-in's name, the plug-in with the variant's settings).
+
+    Examples
+    --------
+    >>> sorted(own_steppers(["mass-spring", "xpbd"]))
+    ['xpbd', 'xpbd-jacobi']
+    """
+    out: dict[str, tuple[str, Any]] = {}
+    for name in names:
+        model = models.get(name)
+        plugin = getattr(model, "plugin", None) or model
+        if not hasattr(plugin, "largest_step"):
+            continue
+        out[name] = (name, plugin)
+        for variant, changes in getattr(plugin, "variants", {}).items():
+            out[variant] = (name, plugin.with_settings(**changes))
+    return out
+
+
 def bar(nx: int, ny: int, roles: tuple[str, ...]) -> StudyScene:
     """The bundled cantilever (0.1 × 0.01 × 0.01 m, E = 10 kPa, end traction 0.1 Pa) on
     ``nx × ny × ny`` hexahedra (six tets each), energy torsion, serving the series ``roles``.
@@ -144,12 +164,13 @@ def grids(scenes: list[StudyScene], q: Settings) -> dict[str, list[dict]]:
         built = s.build()
         m = dict(series_methods(built.material.law))
         # the plug-in models (studies.models.plugins): static series where they apply,
-        # explicit series where they have an explicit form; XPBD's step search
-        # (studies.study_stability.xpbd_step) in the dt series, its Jacobi variant's run
-        # to rest beside the plug-in's in the load series
+        # explicit series where they have an explicit form; a plug-in's own step search
+        # (largest_step) and its variants in the dt series, the variants' runs to rest
+        # beside the plug-in's in the load series
         peers, peers_x = models.plugins(built), models.plugins(built, explicit=True)
-        xpbd = tuple(XPBD_VARIANTS) if "xpbd" in peers else ()
-        m = {"dt": (*m["dt"], *peers_x, *xpbd), "load": (*m["load"], *peers, *xpbd[1:]),
+        own = tuple(own_steppers(peers))
+        variants = tuple(v for v in own if v not in peers)
+        m = {"dt": (*m["dt"], *peers_x, *own), "load": (*m["load"], *peers, *variants),
              "map": (*m["map"], *peers_x)}  # fmt: skip
 
         def case(kind: str, **kw) -> dict:
@@ -188,11 +209,13 @@ def _inverted(scene: Scene, u: np.ndarray) -> int:
 
 
 def critical_step_case(case: dict) -> dict:
-    """Predicted and measured critical explicit step of one method (loads off); for an XPBD
-    variant its largest surviving substep (:func:`.xpbd_step.xpbd_step_case`)."""
-    if case["method"] in XPBD_VARIANTS:
-        return xpbd_step_case(case)
+    """Predicted and measured critical explicit step of one method (loads off); for a
+    plug-in with its own step search, or its variant, the largest step its own run
+    survives (``largest_step``, :func:`own_steppers`)."""
     scene = case_scene(case, 0.0)
+    own = own_steppers(models.plugins(scene)).get(case["method"])
+    if own is not None:
+        return own[1].largest_step(scene, case["steps"], case["bisections"])
     system = models.get(case["method"]).system(scene)
     try:
         dt_pred, omega, ratio = measure_critical_step(system, case["steps"], case["bisections"])
@@ -217,10 +240,12 @@ def load_case(case: dict) -> dict:
     a small-strain law, ``unphysical`` (largest displacement beyond :data:`UNPHYSICAL` of
     the body's size: the linear solve is no solution of the large-deformation problem).
     """
-    if case["method"] in XPBD_VARIANTS and case["method"] != "xpbd":
-        return xpbd_load_case(case)
     scene = case_scene(case, case["factor"])
-    got = models.run(scene, case["method"])
+    own = own_steppers(models.plugins(scene)).get(case["method"])
+    if own is not None and own[0] != case["method"]:  # a plug-in's variant: its own solve
+        got = models.run(scene, own[0], solve=lambda _, sc: own[1].solve(sc))
+    else:
+        got = models.run(scene, case["method"])
     if not got.ok:
         return {"status": "diverged", "message": got.message[:160], "u/size": float("nan")}
     u = got.u

@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from .. import models
 from ..registry import Figure, StudyContext
 from ..tables import plain_log_ticks, pyplot
-from .cases import Settings
+from .cases import Settings, own_steppers
 
 
 def locking_figure(ctx: StudyContext, dk: pd.DataFrame, q: Settings) -> Figure:
@@ -93,8 +94,8 @@ def survival_figure(ctx: StudyContext, sv: pd.DataFrame, dt: pd.DataFrame) -> Fi
     plt = pyplot()
     fig, ax = plt.subplots(1, 2, figsize=(11, 0.42 * len(sv) + 1.9), layout="constrained")
     y = np.arange(len(sv))
-    colours = ["tab:red" if ("xpbd" in m or m == "mass-spring") else "tab:blue"
-               for m in sv.method]  # fmt: skip
+    peers = {*models.plugins(), *own_steppers(models.plugins())}
+    colours = ["tab:red" if m in peers else "tab:blue" for m in sv.method]
     step, load = sv["largest step (s)"].to_numpy(), sv["max load factor"].to_numpy()
     ax[0].scatter(step, y, c=colours, s=40, zorder=3)
     for i, v in enumerate(step):

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import pandas as pd
 
-from .cases import LOCK_METHODS, UNPHYSICAL, Settings
+from .. import models
+from .cases import LOCK_METHODS, UNPHYSICAL, Settings, own_steppers
 
 #: Failure-map statuses of a run that ended (not stopped or skipped by the budget).
 RAN = ("ok", "inverted", "blew up")
@@ -21,14 +22,15 @@ def report_findings(f: dict[str, pd.DataFrame], q: Settings) -> tuple[list[str],
         ratios = f["dt"].groupby("method", sort=False)["ratio"].median()
         for m, r in ratios.items():
             headline[f"dt_ratio_{m}"] = round(float(r), 2)
-        explicit = ratios[[not m.startswith("xpbd") for m in ratios.index]]  # XPBD: own finding
+        own = own_steppers(models.plugins())  # a plug-in's own step search: own finding
+        explicit = ratios[[m not in own for m in ratios.index]]
         findings.append(
             "Measured/predicted critical step (median over meshes): "
             + ", ".join(f"{m} {r:.2f}" for m, r in explicit.items())
             + " — the linearised bound 2/ω_max predicts the explicit limit of the gradient-"
             "consistent models; a ratio far from 1 flags forces whose linearisation misleads."
         )
-        findings += xpbd_findings(f["dt"], headline)
+        findings += own_step_findings(f["dt"], headline)
     dl = f["load"]
     if len(dl):
         first = dl[dl.scene == dl.scene.iloc[0]]
@@ -74,40 +76,41 @@ def report_findings(f: dict[str, pd.DataFrame], q: Settings) -> tuple[list[str],
     return findings, headline
 
 
-def xpbd_findings(dt: pd.DataFrame, headline: dict[str, float]) -> list[str]:
-    """One sentence per scene with XPBD step searches: the largest surviving substep of
-    Gauss–Seidel and Jacobi against the bound of XPBD's own energy, and the configured
-    substep over the limits (into ``headline``: ``xpbd_setting_over_limit_<variant>``, the
-    median over scenes)."""
-    x = dt[dt.method.isin(("xpbd", "xpbd-jacobi"))]
+def own_step_findings(dt: pd.DataFrame, headline: dict[str, float]) -> list[str]:
+    """One sentence per scene with the step searches of plug-ins with their own dynamics
+    (``largest_step``, and their variants): the largest surviving step against the bound of
+    the plug-in's own energy, and its configured step over that limit (into ``headline``:
+    ``<plug-in>_setting_over_limit_<method>``, the median over scenes)."""
+    own = own_steppers(models.plugins())
+    x = dt[dt.method.isin(tuple(own))]
     out = []
     over: dict[str, list[float]] = {}
     for scene, g in x.groupby("scene", sort=False):
         parts = []
         for _, r in g.iterrows():
-            kind = "Jacobi" if r.method == "xpbd-jacobi" else "Gauss–Seidel"
             if r.ratio != r.ratio:
-                parts.append(f"{kind} fails at every substep tried ({r.failure})")
+                parts.append(f"{r.method} fails at every step tried ({r.failure})")
                 continue
             o = float(r.setting_h / r.dt_measured)
             over.setdefault(r.method, []).append(o)
             parts.append(
-                f"{kind} {r.ratio:.2f} × 2/ω_max ({r.dt_measured:.3g} s; the configured "
+                f"{r.method} {r.ratio:.2f} × 2/ω_max ({r.dt_measured:.3g} s; the configured "
                 f"{r.setting_h:.3g} s is {o:.2f} of it"
                 + (f"; beyond it: {r.failure}" if r.failure else "")
                 + ")"
             )
         out.append(
-            f"XPBD's largest surviving substep on {scene} (undamped, loads off, the explicit "
-            "runs' perturbation; against 2/ω_max of its own stable neo-Hookean energy): "
+            f"Largest surviving step of the models with their own dynamics on {scene} "
+            "(undamped, loads off, the explicit runs' perturbation; against 2/ω_max of each "
+            "one's own energy): "
             + "; ".join(parts)
             + (
-                " — on this scene XPBD's projection does not lift the explicit limit of its "
-                "energy by much: a little past it the energy grows without bound."
+                " — on this scene their own integration does not lift the explicit limit of "
+                "their energy by much: a little past it the energy grows without bound."
                 if (g.ratio < 4).all()
                 else "."
             )
         )
     for m, v in over.items():
-        headline[f"xpbd_setting_over_limit_{m}"] = round(float(pd.Series(v).median()), 3)
+        headline[f"{own[m][0]}_setting_over_limit_{m}"] = round(float(pd.Series(v).median()), 3)
     return out

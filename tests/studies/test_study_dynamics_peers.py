@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from peers.xpbd import XPBD, XPBDSettings
+from peers.xpbd.release import raised_solver
 from springfem.scene import scene_from_dict
-from studies.study_dynamics import xpbd_release
 from studies.study_dynamics.cases import Settings, beam_table, isotropic_beam, release_cases
 from studies.study_dynamics.tables import energy_change, probe_errors
 from studies.study_dynamics.work import WORK, release_case
@@ -51,7 +51,7 @@ def test_xpbd_substeps_are_raised_to_the_explicit_rule():
     substep would be far past it, so the substeps per frame rise until ``h`` is at most
     ``safety`` times it."""
     scene = isotropic_beam((6, 1, 1)).build()
-    solver, (rest, loaded) = xpbd_release.xpbd_solver(scene, 0.5)
+    solver, (rest, loaded) = raised_solver(scene, XPBDSettings(), 0.5)
     h = solver.settings.dt / solver.settings.substeps
     assert h <= 0.5 * min(rest, loaded) * (1 + 1e-12)
     assert h > 0.5 * min(rest, loaded) * (1 - 1e-2)  # not more substeps than needed

@@ -6,13 +6,22 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+from peers.plugin import XPBDModel
+from peers.xpbd.step_search import measure_step, survives
 from springfem.errors import SolverError
 from studies import models
 from studies.scenes import case_scene
 from studies.study_stability.cases import VERSION, bar, critical_step_case, grids
 from studies.study_stability.cases import Settings as StabilitySettings
 from studies.study_stability.tables import survival
-from studies.study_stability.xpbd_step import measure_xpbd_step, survives
+
+#: The plug-in's own settings and its Jacobi variant's (what the study's step search runs).
+_JACOBI = XPBDModel().with_settings(**XPBDModel.VARIANTS["xpbd-jacobi"])
+XPBD = {"xpbd": XPBDModel()._settings, "xpbd-jacobi": _JACOBI._settings}
+
+
+def measure_xpbd_step(scene, method: str, steps: int, bisections: int) -> dict:
+    return measure_step(scene, XPBD[method], steps, bisections)
 
 
 def _case(kind: str, **kw) -> dict:
@@ -64,7 +73,7 @@ def test_gauss_seidel_xpbd_survives_longer_substeps_than_jacobi():
     v0 = np.zeros(scene.mesh.points.shape)
     v0[-1, 2] = 1e-6
     for m in ("xpbd", "xpbd-jacobi"):
-        assert survives(scene, m, 0.1 * gs["dt_pred"], 200, v0) is None
+        assert survives(scene, XPBD[m], 0.1 * gs["dt_pred"], 200, v0) is None
 
 
 def test_xpbd_unstable_substep_is_caught_by_energy_growth_not_only_by_nan():
@@ -76,7 +85,7 @@ def test_xpbd_unstable_substep_is_caught_by_energy_growth_not_only_by_nan():
     rng = np.random.default_rng(0)
     v0 = 1e-6 * rng.standard_normal(scene.mesh.points.shape)
     v0.reshape(-1)[scene.dirichlet()[0]] = 0.0
-    assert survives(scene, "xpbd", 4 * gs["dt_measured"], 400, v0) is not None
+    assert survives(scene, XPBD["xpbd"], 4 * gs["dt_measured"], 400, v0) is not None
 
 
 def test_peers_join_the_series_they_apply_to():
@@ -109,10 +118,10 @@ def test_jacobi_run_to_rest_fails_where_its_substep_is_past_its_limit():
     it on the 20x2x2 bar (finer elements, higher omega_max); the run to rest at that substep
     under the bar's load (auto damping) then comes on the first and blows up on the second.
     The default 40 substeps (1/2400 s) are inside the limit on both."""
-    from peers.xpbd import XPBD, XPBDSettings
-    from studies.study_stability.xpbd_step import setting_substep
+    from peers.xpbd import XPBD as Solver
+    from peers.xpbd import XPBDSettings
 
-    assert setting_substep("xpbd-jacobi") == pytest.approx(1 / 2400)
+    assert XPBD["xpbd-jacobi"].dt / XPBD["xpbd-jacobi"].substeps == pytest.approx(1 / 2400)
     h = 1 / 1200
     for (nx, ny), fits in (((10, 1), True), ((20, 2), False)):
         sc = bar(nx, ny, ("dt", "load"))
@@ -121,7 +130,7 @@ def test_jacobi_run_to_rest_fails_where_its_substep_is_past_its_limit():
         assert (h <= limit) == fits and 1 / 2400 <= limit
         settings = XPBDSettings(substeps=20, iteration="jacobi", max_frames=3_000)
         try:
-            rests = XPBD(case_scene(sc.case("t", VERSION), 1.0), settings).solve().converged
+            rests = Solver(case_scene(sc.case("t", VERSION), 1.0), settings).solve().converged
         except SolverError:  # positions no longer finite
             rests = False
         assert rests == fits
