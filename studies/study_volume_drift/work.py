@@ -1,5 +1,5 @@
-"""The work of one case of the volume-drift study: drift measures, a static solve, an
-explicit run."""
+"""The cases' work of the volume-drift study: the spring variants, a static solve and an
+explicit run with their drift measures."""
 
 from __future__ import annotations
 
@@ -10,74 +10,69 @@ import numpy as np
 from springfem.errors import SolverError
 from springfem.result import Result, volume_summary
 from springfem.scene import Scene
+from springmodel.options import LMSOptions
 
 from .. import models
 from ..scenes import case_scene
 from ..solve import Solution
-from .cases import K_MAX, VOLUME_ON
 
-#: Static Newton of the spring variants: tolerance and iterations, no load stepping.
-NEWTON_TOL, NEWTON_ITER = 1e-9, 30
-#: Element drift above which a run counts as diverged and is stopped.
-DIVERGED = 1.0
+STUDY, VERSION = "volume_drift", 2
+VOLUME_OFF = models.spring_variant("spring-volume-off", "volume springs off", volume=False)
+VOLUME_ON = models.spring_variant("spring-volume-on", "barycentric volume springs", volume=True)
+LMS_SPEC = models.spring_variant(
+    "spring-lms-spec", "volume springs + LMS as written (eq. 2.81)", volume=True, lms="spec"
+)
+LMS_ABS = models.spring_variant(
+    "spring-lms-abs", "volume springs + LMS driven by |dV|", volume=True, lms="abs"
+)
+VOLUME_NNLS = models.spring_variant(
+    "spring-volume-nnls", "volume springs, nnls calibration", volume=True, calibration="nnls"
+)
+#: The explicit series' variants; all but the exact element are the specification's.
+DYNAMIC = (*(m.name for m in (VOLUME_OFF, VOLUME_ON, LMS_SPEC, LMS_ABS, VOLUME_NNLS)),
+           "spring-exact")  # fmt: skip
+SPEC_VARIANTS = DYNAMIC[:-1]
+#: The static spring variants (no LMS: it acts per time step).
+STATIC_SPRINGS = ("spring-volume-off", "spring-volume-on", "spring-volume-nnls", "spring-exact")
+K_MIN, K_MAX = LMSOptions().k_min, LMSOptions().k_max  # the LMS clamp the variants use
+NEWTON_TOL, NEWTON_ITER = 1e-9, 30  # static Newton of the spring variants, no load stepping
+DIVERGED = 1.0  # element drift above which a run counts as diverged and is stopped
+
+
+# -- the work of one case -----------------------------------------------------------------
 
 
 def drift_measures(scene: Scene, x: np.ndarray) -> dict[str, float]:
-    """Total and element volume drift and radial-sum change at positions ``x`` ``(n, 3)``.
-
-    ``dV`` (total change over the rest volume), ``element_drift`` (``sum_k |V_k - V0_k| /
-    V0``), ``dL`` (mean relative change of the radial sums ``sum_j |xi_j|``), ``inverted``
-    (elements with ``V <= 0``).
-    """
-    V0 = scene.mesh.volumes()
-    V = scene.mesh.volumes(x)
+    """``dV`` (total change over the rest volume), ``element_drift``, ``dL`` (mean relative
+    change of the radial sums) and ``inverted`` (elements with ``V <= 0``) at ``x``."""
+    V0, V = scene.mesh.volumes(), scene.mesh.volumes(x)
     X, X0 = x[scene.mesh.tets], scene.mesh.points[scene.mesh.tets]
     L = np.linalg.norm(X - X.mean(axis=1, keepdims=True), axis=-1).sum(axis=1)
     L0 = np.linalg.norm(X0 - X0.mean(axis=1, keepdims=True), axis=-1).sum(axis=1)
-    return {
-        "dV": float((V.sum() - V0.sum()) / V0.sum()),
-        "element_drift": float(np.abs(V - V0).sum() / V0.sum()),
-        "dL": float(np.mean(np.abs(L - L0) / L0)),
-        "inverted": int((V <= 0).sum()),
-    }
-
-
-# ------------------------------------------------------------------------------ statics
+    return {"dV": float((V.sum() - V0.sum()) / V0.sum()),
+            "element_drift": float(np.abs(V - V0).sum() / V0.sum()),
+            "dL": float(np.mean(np.abs(L - L0) / L0)), "inverted": int((V <= 0).sum())}  # fmt: skip
 
 
 def newton(model: models.Model, scene: Scene) -> Solution:
-    """Static solve for :func:`studies.models.run`: the spring variants by Newton at full
-    load (:data:`NEWTON_TOL`, :data:`NEWTON_ITER`, no load stepping), FEM as registered."""
+    """The spring variants by Newton at full load (no load stepping), FEM as registered."""
     if model.kind != "spring":
         return model.solve(scene)
     from springfem.mechanics import static
 
     system = model.system(scene)
     info = static(system, tol=NEWTON_TOL, max_iter=NEWTON_ITER, fallback=False)
-    u = info.x - system.x0
-    mesh = scene.mesh
-    counts = {"nodes": mesh.n_points, "tets": mesh.n_tets}
-    result = Result(
-        scene.name,
-        "spring",
-        "spring",
-        model.name,
-        counts,
-        scene.probe_displacements(u),
-        volume_summary(mesh, u),
-        {},
-        float("nan"),
-        True,
-        int(info.iterations),
-        status="converged",
-    )
+    u, mesh = info.x - system.x0, scene.mesh
+    result = Result(scene.name, "spring", "spring", model.name,
+                    {"nodes": mesh.n_points, "tets": mesh.n_tets}, scene.probe_displacements(u),
+                    volume_summary(mesh, u), {}, float("nan"), True, int(info.iterations),
+                    status="converged")  # fmt: skip
     return Solution(result, u)
 
 
 def static_case(case: dict[str, Any]) -> dict[str, Any]:
-    """Static equilibrium of one model at load factor ``load``: drift measures, ``status``
-    (``ok``, ``partial``, ``failed`` with ``message``), the FEM's law and, for a mixed
-    formulation, its P2 volume change."""
+    """Static equilibrium of one model at load factor ``load``: drift measures, ``status``,
+    the FEM's law and, for a mixed formulation, its P2 volume change."""
     scene = case_scene(case, case["load"])
     got = models.run(scene, case["model"], solve=newton)
     if not got.ok:
@@ -91,41 +86,19 @@ def static_case(case: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-# ------------------------------------------------------------------------------ dynamics
-
-
-def common_time_step(scene: Scene) -> float:
-    """``0.5 dt_crit / sqrt(k_max)`` of the scene's ``spring-volume-on`` (every variant).
-
-    LMS may stiffen a volume spring up to ``k_max`` times, raising ``omega_max`` by up to
-    ``sqrt(k_max)``.
-    """
-    from springfem.mechanics import stable_time_step
-
-    dt_crit, _ = stable_time_step(VOLUME_ON.system(scene))
-    return 0.5 * dt_crit / np.sqrt(K_MAX)
-
-
 def dynamic_case(case: dict[str, Any]) -> dict[str, Any]:
-    """One damped explicit run of a spring variant, recording the drift over time.
-
-    ``case``: ``model``, ``period`` (seconds), ``periods`` (run length), ``ramp`` (periods
-    of a linear load ramp, 0: the load applied suddenly), ``damping`` (mass damping as a
-    fraction of ``2 pi / period``), ``records`` (samples).
-
-    Returns lists ``t``, ``load`` (load factor), ``dV``, ``element_drift``, ``dL``,
-    ``k_median``, ``k_min``, ``k_max`` (LMS stiffness ratio ``k_s/k_s0``) and the ``final``
-    values; ``status`` is ``ok``, ``inverted`` (ended with inverted elements), ``diverged``
-    (element drift above :data:`DIVERGED`: the run is stopped there) or ``blew up`` (the
-    integrator's blow-up test); ``message`` says where and when.
-    """
-    from springfem.mechanics import explicit
+    """One damped explicit run of a spring variant (``period``, ``periods``, ``ramp`` in
+    periods, 0: a sudden load, ``damping``, ``records``), recording ``t``, ``load``, the
+    drifts and the LMS ratio ``k_s/k_s0`` (median, min, max). ``status``: ``ok``,
+    ``inverted`` (at the end), ``diverged`` (element drift above :data:`DIVERGED`: stopped)
+    or ``blew up`` (the integrator's blow-up test)."""
+    from springfem.mechanics import explicit, stable_time_step
 
     scene = case_scene(case)
     spring = models.get(case["model"])
     model = spring.system(scene)
     period = float(case["period"])
-    dt = common_time_step(scene)
+    dt = 0.5 * stable_time_step(VOLUME_ON.system(scene))[0] / np.sqrt(K_MAX)
     steps = int(np.ceil(case["periods"] * period / dt))
     every = max(1, steps // int(case["records"]))
     t_ramp = case["ramp"] * period
@@ -145,8 +118,8 @@ def dynamic_case(case: dict[str, Any]) -> dict[str, Any]:
         ratio = el.k_volume / np.where(el.k_volume0 > 0, el.k_volume0, 1.0)
         if not has_volume:
             ratio = np.zeros(1)
-        k = {"k_median": np.median(ratio), "k_min": ratio.min(), "k_max": ratio.max()}
-        row = {"t": t, "load": load(t), **m, **k}
+        row = {"t": t, "load": load(t), **m, "k_median": np.median(ratio),
+               "k_min": ratio.min(), "k_max": ratio.max()}  # fmt: skip
         for key in keys:
             rec[key].append(float(row[key]))
         if m["inverted"] and not first_inverted:
@@ -156,32 +129,21 @@ def dynamic_case(case: dict[str, Any]) -> dict[str, Any]:
     sample(0.0, model.x0)
     status, message, x_end = "ok", "", None
     try:
-        traj = explicit(
-            model,
-            dt=dt,
-            steps=steps,
-            mass_damping=case["damping"] * 2.0 * np.pi / period,
-            scale=load,
-            record_every=steps,
-            callback=lambda k, t, x, v: k % every == 0 and sample(t, x),
-        )
+        traj = explicit(model, dt=dt, steps=steps, scale=load, record_every=steps,
+                        mass_damping=case["damping"] * 2.0 * np.pi / period,
+                        callback=lambda k, t, x, v: k % every == 0 and sample(t, x))  # fmt: skip
         x_end = traj.x
         if traj.steps < steps:
             status = "diverged"
             message = (
-                f"element drift above {DIVERGED:g} at t = {rec['t'][-1]:.4g} s (first inverted "
-                f"element at t = {first_inverted[0]:.4g} s); run stopped"
+                f"element drift above {DIVERGED:g} at t = {rec['t'][-1]:.4g} s (first "
+                f"inverted element at t = {first_inverted[0]:.4g} s); run stopped"
             )
     except SolverError as exc:  # the integrator's blow-up test: an outcome of the run
         status, message = "blew up", str(exc)[:200]
-    out: dict[str, Any] = {
-        **rec,
-        "status": status,
-        "message": message,
-        "dt": dt,
-        "steps": steps,
-        "first_inverted": first_inverted[0] if first_inverted else None,
-    }
+    first = first_inverted[0] if first_inverted else None
+    out: dict[str, Any] = {**rec, "status": status, "message": message, "dt": dt,
+                           "steps": steps, "first_inverted": first}  # fmt: skip
     if x_end is not None:
         final = drift_measures(scene, x_end)
         if status == "ok" and final["inverted"]:
@@ -195,8 +157,5 @@ def dynamic_case(case: dict[str, Any]) -> dict[str, Any]:
 
 
 #: Series -> (the work of one case, progress label).
-WORK = {
-    "static": (static_case, "statics"),
-    "step": (dynamic_case, "sudden load"),
-    "ramp": (dynamic_case, "slow ramps"),
-}
+WORK = {"static": (static_case, "statics"), "step": (dynamic_case, "sudden load"),
+        "ramp": (dynamic_case, "slow ramps")}  # fmt: skip

@@ -13,9 +13,18 @@ from studies.analytic import volume_change
 from studies.cache import CaseCache
 from studies.registry import StudyContext
 from studies.scenes import StudyScene
-from studies.study_volume_drift import Settings, run
-from studies.study_volume_drift.cases import K_MAX, K_MIN, VERSION, quarter_wave_period, time_scale
-from studies.study_volume_drift.work import drift_measures, dynamic_case, static_case
+from studies.study_volume_drift import (
+    K_MAX,
+    K_MIN,
+    VERSION,
+    Settings,
+    drift_measures,
+    dynamic_case,
+    quarter_wave_period,
+    run,
+    static_case,
+    time_scale,
+)
 
 E, NU, L, RHO = 5.0e3, 0.49, 0.01, 1000.0
 SIGMA = 0.1 * E
