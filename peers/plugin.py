@@ -8,16 +8,18 @@
     are its own frames (:meth:`XPBDModel.run`);
 ``mass-spring``
     :class:`peers.mass_spring.MassSpring` through :class:`~springfem.model_api.SystemModel`:
-    Newton for the static answer, the core's integrators for timed runs.
+    Newton for the static answer, the core's integrators for timed runs;
+``vbd``
+    Vertex Block Descent's run to rest (:class:`peers.vbd.model.VBDModel`).
 
-Both are weighed by default where they apply (``default`` true: the verdict and the
+All are weighed by default where they apply (``default`` true: the verdict and the
 studies of docs/peers.rst#in-the-studies). The entry
 point ``peers = "peers.plugin:models"`` of group ``springfem.models`` registers them.
 
 Examples
 --------
 >>> [m.name for m in models()], models()[0].settings["substeps"]
-(['xpbd', 'mass-spring'], 40)
+(['xpbd', 'mass-spring', 'vbd'], 40)
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from springfem.scene import Scene
 
 from .mass_spring.network import MassSpring
 from .mass_spring.network import why_not as mass_spring_why_not
+from .vbd.model import VBDModel
 from .xpbd.solver import XPBD, XPBDSettings
 from .xpbd.solver import why_not as xpbd_why_not
 
@@ -218,8 +221,8 @@ def build_mass_spring(
 
 
 @cache
-def models() -> tuple[XPBDModel | SystemModel, ...]:
-    """The two peers (one object each per process).
+def models() -> tuple[XPBDModel | SystemModel | VBDModel, ...]:
+    """The peers (one object each per process).
 
     Returns
     -------
@@ -232,6 +235,7 @@ def models() -> tuple[XPBDModel | SystemModel, ...]:
             law="mass-spring", applies=mass_spring_why_not,
             calibration="van-gelder", damping=0.0,
         ),
+        VBDModel(),
     )  # fmt: skip
 
 

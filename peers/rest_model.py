@@ -1,0 +1,152 @@
+"""A plug-in model (:class:`springfem.model_api.ModelPlugin`) for a peer whose static answer
+is a run of its own frames to rest: Vertex Block Descent and Projective Dynamics.
+
+A subclass names its settings dataclass, its solver (``Solver(scene, settings)`` with
+``solve() -> RestResult``-like and ``run(frames) -> (x, v)``), its ``why_not(scene)``, its
+law and a label; the sweep (substeps x iterations) is shared.
+
+Examples
+--------
+>>> SWEEP[0], len(SWEEP)
+({'substeps': 40, 'iterations': 2}, 6)
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import asdict
+from typing import Any, ClassVar
+
+import numpy as np
+
+from springfem.errors import InputError, SolverError
+from springfem.mechanics.limits import Deadline
+from springfem.mechanics.system import MechanicalSystem
+from springfem.model_api import ModelSolution, model_result
+from springfem.scene import Scene
+
+#: Substeps x iterations, most telling first (a quick study takes the first few): the
+#: default and 80 substeps, the rest of the substep series at 2 iterations, then 1 and 4
+#: iterations at the default 40 substeps.
+SWEEP: tuple[Mapping[str, Any], ...] = tuple(
+    {"substeps": n, "iterations": k} for n, k in ((40, 2), (80, 2), (20, 2), (10, 2), (40, 1),
+                                                 (40, 4))
+)  # fmt: skip
+
+
+class RestModel:
+    """A peer solved by frames to rest, as a plug-in model.
+
+    Parameters
+    ----------
+    name, label
+        See :class:`~springfem.model_api.ModelPlugin` (label ``None``: :meth:`make_label`).
+    default
+        Weighed by the studies without being named.
+    **settings
+        Fields of the subclass's settings dataclass.
+    """
+
+    Settings: ClassVar[Callable[..., Any]]
+    Solver: ClassVar[Callable[..., Any]]
+    #: ``why_not(scene)``: why the peer cannot take a scene (``None``: it can).
+    why_not: ClassVar[staticmethod[[Scene], str | None]]
+    #: What it solves (the verdict's ``law vs reference``; a solver's ``law`` attribute,
+    #: where it has one, names the result's law on a scene).
+    law: str = ""
+    #: The default name.
+    default_name: ClassVar[str] = ""
+
+    def __init__(self, name: str | None = None, label: str | None = None, default: bool = True,
+                 **settings: Any):  # fmt: skip
+        self.name = name or self.default_name
+        self._settings = type(self).Settings(**settings)
+        self.settings: Mapping[str, Any] = asdict(self._settings)
+        self.label = label or self.make_label()
+        self.default = default
+        self.sweep: tuple[Mapping[str, Any], ...] = SWEEP
+
+    def make_label(self) -> str:
+        """The label of the current settings."""
+        return self.name
+
+    def with_settings(self, **settings: Any) -> RestModel:
+        """The same model with some settings changed (its label follows them)."""
+        return type(self)(self.name, None, self.default, **{**self.settings, **settings})
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.name!r}, settings={dict(self.settings)!r})"
+
+    def applies(self, scene: Scene) -> str | None:
+        return type(self).why_not(scene)
+
+    def system(self, scene: Scene) -> MechanicalSystem | None:
+        """``None``: the peer moves positions by its own iterations, not by forces."""
+        return None
+
+    def _solver(self, scene: Scene) -> Any:
+        why = self.applies(scene)
+        if why is not None:
+            raise InputError(why)
+        return type(self).Solver(scene, self._settings)
+
+    def solve(self, scene: Scene, verbose: bool = False) -> ModelSolution:
+        """The rest state under the scene's loads.
+
+        Raises
+        ------
+        SolverError
+            When rest does not come within ``max_frames`` or the positions stop being finite.
+        SolveStopped
+            At the time cap of :func:`springfem.mechanics.limits.solve_limits`.
+        """
+        deadline = Deadline()
+        deadline.progress = "frames to rest"
+        try:
+            with deadline.watch():
+                solver = self._solver(scene)
+                out = solver.solve()
+        except KeyboardInterrupt:
+            raise deadline.stopped(interrupted=True) from None
+        if not out.converged:
+            raise SolverError(
+                f"{self.name}: no rest after {out.frames} frames: still moving by more than "
+                f"rest_tol = {self.settings['rest_tol']:g} of its displacement"
+            )
+        if verbose:
+            print(f"{self.name}: rest after {out.frames} frames", file=sys.stderr)
+        info = {"frames": out.frames, "substeps": out.substeps, "settings": dict(self.settings),
+                "equilibrium_residual": out.residual, **out.info}  # fmt: skip
+        info["settings"] = dict(self.settings)
+        result = model_result(
+            scene, out.u, model=self.name, element="P1", law=getattr(solver, "law", self.law),
+            wall_time=out.wall_time, converged=True, iterations=out.substeps, info=info,
+        )  # fmt: skip
+        return ModelSolution(result, out.u)
+
+    def run(self, scene: Scene, frames: int) -> ModelSolution:
+        """``frames`` frames of the peer's dynamics from rest under the loads.
+
+        Returns
+        -------
+        ModelSolution
+            ``status`` "end of run at t = ...".
+        """
+        solver = self._solver(scene)
+        t0 = time.perf_counter()
+        x, _ = solver.run(frames)
+        t = frames * self._settings.dt
+        result = model_result(
+            scene, x - solver.x0, model=self.name, element="P1",
+            law=getattr(solver, "law", self.law),
+            wall_time=time.perf_counter() - t0, converged=False,
+            iterations=frames * self._settings.substeps,
+            info={"frames": frames, "settings": dict(self.settings)},
+            status=f"end of run at t = {t:.4g} s after {frames} frames",
+        )  # fmt: skip
+        return ModelSolution(result, np.asarray(x - solver.x0))
+
+
+__all__ = ["SWEEP", "RestModel"]
