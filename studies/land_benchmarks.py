@@ -11,7 +11,7 @@ axis_size``) shrinks in proportion, because its fibre field is singular on the l
 axis, ``3c`` with ``[fem] geometry = "curved"`` (the walls' P2 edge nodes on the true
 ellipsoids). The observed order and the Richardson value
 of the three finest levels come from
-:func:`studies.study_tissue.convergence.observed_order`; ``h`` is the beam's element length
+:func:`studies.metrics.observed_order`; ``h`` is the beam's element length
 ``10 / n`` mm, and for the ventricles the edge of the regular tet of the mean tet volume,
 ``(6 sqrt(2) V_wall / n_tets)^(1/3)`` (gmsh's size is only the bound it meshes to, as in
 :mod:`studies.study_tissue.convergence`). With a fourth level, the coarser triple's order
@@ -45,8 +45,8 @@ from pathlib import Path
 from springfem.ellipsoid import wall_volume
 from springfem.files import atomic_write_text
 
+from .metrics import observed_order
 from .scenes import bundled_table
-from .study_tissue.convergence import observed_order
 
 #: Problem 1: the beam's divisions (nested: each level halves the elements' edges).
 P1_LEVELS = ((10, 1, 1), (20, 2, 2), (40, 4, 4))

@@ -63,6 +63,43 @@ def fitted_rate(h: np.ndarray, err: np.ndarray) -> float:
     return float(np.polyfit(np.log(h[ok]), np.log(err[ok]), 1)[0])
 
 
+def observed_order(h: np.ndarray, f: np.ndarray) -> tuple[float, float, str]:
+    """Observed order ``p`` and Richardson value ``f0`` of ``f = f0 + C h^p`` through three
+    (h, f) pairs (any order), and a note: NaN and the reason when there are not three
+    finite values on distinct meshes, when the differences change sign (oscillating), or
+    when no order in (0.05, 12) fits (else ``""``).
+
+    Examples
+    --------
+    >>> h = np.array([4.0, 2.0, 1.0])
+    >>> p, f0, note = observed_order(h, 1.0 + 0.5 * h**2)
+    >>> round(p, 9), round(f0, 9), note
+    (2.0, 1.0, '')
+    """
+    from scipy.optimize import brentq
+
+    nan = float("nan")
+    h, f = np.asarray(h, float), np.asarray(f, float)
+    if len(h) != 3 or len(f) != 3:
+        return nan, nan, "needs three finite values on distinct meshes"
+    order = np.argsort(-h)
+    (h1, h2, h3), (f1, f2, f3) = h[order], f[order]
+    if not (np.isfinite([f1, f2, f3]).all() and h1 > h2 > h3 > 0):
+        return nan, nan, "needs three finite values on distinct meshes"
+    if f2 == f3 or (f1 - f2) / (f2 - f3) <= 0:
+        return nan, nan, "oscillating"
+    r = (f1 - f2) / (f2 - f3)
+
+    def g(p):
+        return (h1**p - h2**p) / (h2**p - h3**p) - r
+
+    lo, hi = 0.05, 12.0
+    if g(lo) * g(hi) > 0:
+        return nan, nan, f"no order in ({lo}, {hi:g}) fits"
+    p = brentq(g, lo, hi, xtol=1e-12)
+    return float(p), float(f3 - (f2 - f3) / (h2**p - h3**p) * h3**p), ""
+
+
 def timoshenko_tip_deflection(
     force: float, length: float, width: float, height: float, E: float, nu: float
 ) -> float:

@@ -5,7 +5,7 @@ The deflection is one component of the probe's displacement (Cook: ``u_y`` of th
 Land's beam: ``u_z`` of the tip; a user's scene: the component of the reference's largest
 ``|u|``). The reference at each Poisson ratio is :data:`~.cases.REFERENCE` on the finest
 level; its Richardson extrapolation through the three levels
-(:func:`studies.study_convergence.cases.richardson_limit`) is shown beside it with the
+(:func:`studies.study_convergence.richardson_limit`) is shown beside it with the
 observed order, not used: the study's levels are not fine enough to show that the order is
 asymptotic.
 
@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 from ..registry import StudyContext, Table
-from ..study_convergence.cases import richardson_limit
+from ..study_convergence import richardson_limit
 from .cases import LINEAR_TETS, REFERENCE, TOLERANCE
 
 AXES = "xyz"

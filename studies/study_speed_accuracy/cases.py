@@ -38,9 +38,9 @@ from springfem.result import Result
 from springfem.scene import Scene
 
 from .. import models
+from .. import study_convergence as convergence
 from ..scenes import StudyScene
 from ..solve import Solution
-from ..study_convergence import cases as convergence
 from ..study_convergence.levels import case_level, coarse_index
 
 VERSION = 3
@@ -116,7 +116,7 @@ def bundled_scenes(settings: Settings) -> list[StudyScene]:
 
 
 def reference_model(law: str) -> str:
-    """P2 with the scene's law (:func:`studies.study_convergence.cases.fem_models`)."""
+    """P2 with the scene's law (:func:`studies.study_convergence.fem_models`)."""
     return convergence.fem_models(law)[1]
 
 

@@ -1,4 +1,4 @@
-"""Mesh convergence of the Land ventricles' apex positions (P2/P1 mixed FEM), extrapolated.
+"""Mesh convergence of the Land ventricles' apex (P2/P1 mixed FEM) and beam, extrapolated.
 
 Land et al. 2015 measure the deformed z of the endocardial and epicardial apex, the points
 ``(0, 0, -17)`` and ``(0, 0, -20)`` mm at rest (the lowest points of the undeformed surfaces
@@ -19,12 +19,19 @@ finsberg/pulse pull request 98, 2024), and Land et al. report typical difference
 0.5 % between the groups' fine solutions: the band drawn. Problem 3 adds an active tension
 springfem does not model; the passive inflation here has no published value.
 
+Land's problem-1 beam is refined the same way (:func:`beam_level_scenes`): three
+structured meshes of the 10 x 1 x 1 mm beam (``n x n/10 x n/10`` divisions, so the element
+length ``h = 10 / n`` mm is exact), the finest the study's own beam mesh (its FEM case is
+shared with the beam measurement), extrapolated beside the 11 codes' published
+4.14-4.20 mm.
+
 Examples
 --------
->>> h = np.array([4.0, 2.0, 1.0])
->>> p, f0, note = observed_order(h, 1.0 + 0.5 * h**2)
->>> round(p, 9), round(f0, 9), note
-(2.0, 1.0, '')
+>>> cases = [{"divisions": [n, n // 10, n // 10]} for n in (10, 20, 40)]
+>>> results = [{"tip_z": 4.17 - 0.1 / n**2, "wall_time": 1.0, "error": ""} for n in (10, 20, 40)]
+>>> df = beam_levels_frame(cases, results)
+>>> round(float(df.tip_z.iloc[-1]), 6), df.mesh.iloc[-1]
+(4.17, 'Richardson (p = 2)')
 """
 
 from __future__ import annotations
@@ -36,41 +43,18 @@ import pandas as pd
 
 from springfem.ellipsoid import wall_volume
 
+from ..metrics import observed_order
+from ..scenes import StudyScene
 from ..tables import pyplot
 
 #: Published apex z (mm) per bundled scene: FEniCS-pulse's problem 2 (pulse PR 98).
 PUBLISHED = {"land-ventricle": {"endo": -26.5328, "epi": -28.1790}}
 #: Land et al. 2015: typical relative difference between the groups' fine solutions.
 BAND = 0.005
+#: The published range of the deformed z of (10, 0.5, 1) mm over Land et al.'s 11 codes.
+PUBLISHED_RANGE = (4.14, 4.20)
 #: Problem numbers of the bundled scenes.
 PROBLEM = {"land-ventricle": "2", "land-ventricle-fibres": "3 (passive)"}
-
-
-def observed_order(h: np.ndarray, f: np.ndarray) -> tuple[float, float, str]:
-    """Observed order ``p`` and Richardson value ``f0`` of ``f = f0 + C h^p`` from three
-    (h, f) pairs (any order), and a ``note``: NaN with the reason in ``note`` when the
-    differences change sign (oscillating) or no order in (0.05, 12) fits (else ``""``).
-    """
-    from scipy.optimize import brentq
-
-    order = np.argsort(-np.asarray(h, dtype=float))
-    (h1, h2, h3), (f1, f2, f3) = np.asarray(h, float)[order], np.asarray(f, float)[order]
-    nan = math.nan
-    if not (np.isfinite([f1, f2, f3]).all() and h1 > h2 > h3 > 0):
-        return nan, nan, "needs three finite values on distinct meshes"
-    if f2 == f3 or (f1 - f2) / (f2 - f3) <= 0:
-        return nan, nan, "oscillating"
-    r = (f1 - f2) / (f2 - f3)
-
-    def g(p):
-        return (h1**p - h2**p) / (h2**p - h3**p) - r
-
-    lo, hi = 0.05, 12.0
-    if g(lo) * g(hi) > 0:
-        return nan, nan, f"no order in ({lo}, {hi:g}) fits"
-    p = brentq(g, lo, hi, xtol=1e-12)
-    c = (f2 - f3) / (h2**p - h3**p)
-    return float(p), float(f3 - c * h3**p), ""
 
 
 def convergence_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
@@ -188,3 +172,71 @@ def convergence_findings(rich: pd.DataFrame) -> list[str]:
                   " mm)")  # fmt: skip
         text.append(s + ".")
     return text
+
+
+def beam_level_scenes(finest: tuple[int, int, int]) -> list[StudyScene]:
+    """The beam at a third, two thirds and all of ``finest``'s divisions (role ``beam-level``).
+
+    Parameters
+    ----------
+    finest
+        The study's beam divisions; three levels need the cross-section's divisions to be a
+        multiple of 3 (otherwise the one level).
+
+    Returns
+    -------
+    list of StudyScene
+    """
+    nx, ny, nz = finest
+    if ny % 3 or nz % 3 or nx % 3:
+        levels = [finest]
+    else:
+        levels = [(nx * k // 3, ny * k // 3, nz * k // 3) for k in (1, 2, 3)]
+    out = []
+    for d in levels:
+        s = StudyScene.bundled("land-beam", {"mesh.divisions": list(d)}, roles=("beam-level",))
+        out.append(s)
+    return out
+
+
+def beam_levels_frame(cases: list[dict], results: list[dict]) -> pd.DataFrame:
+    """One row per level (``h``, tip z, wall time) and a Richardson row when three converged.
+
+    Parameters
+    ----------
+    cases
+        The level cases (their ``divisions``, or the table's ``mesh.divisions``).
+    results
+        :func:`~.cases.beam_case` results.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``mesh``, ``h``, ``tip_z``, ``wall_time``, ``error``, ``published_range``.
+    """
+    rows = []
+    for c, r in zip(cases, results, strict=True):
+        d = c.get("divisions") or c["table"]["mesh"]["divisions"]
+        rows.append({"mesh": "x".join(map(str, d)), "h": 10.0 / d[0], "tip_z": r["tip_z"],
+                     "wall_time": r["wall_time"], "error": r["error"]})  # fmt: skip
+    ok = [r for r in rows if not r["error"] and math.isfinite(r["tip_z"])]
+    if len(ok) >= 3:
+        p, f0, note = observed_order([r["h"] for r in ok[-3:]], [r["tip_z"] for r in ok[-3:]])
+        label = f"Richardson (p = {p:.2g})" if math.isfinite(p) else f"Richardson: {note}"
+        rows.append({"mesh": label, "h": 0.0, "tip_z": f0, "wall_time": math.nan, "error": ""})
+    df = pd.DataFrame(rows)
+    df["published_range"] = "{:.2f}-{:.2f}".format(*PUBLISHED_RANGE)
+    return df
+
+
+def beam_levels_finding(df: pd.DataFrame) -> list[str]:
+    """One sentence: the finest level and the extrapolated tip z against the published range."""
+    rich = df[df.mesh.str.startswith("Richardson")]
+    if not len(rich):
+        return []
+    f0, finest = float(rich.tip_z.iloc[0]), df.iloc[-2]
+    lo, hi = PUBLISHED_RANGE
+    inside = "inside" if lo <= f0 <= hi else "outside"
+    return [f"Land problem 1 (beam), P2/P1 mixed on {len(df) - 1} meshes: tip z "
+            f"{finest.tip_z:.4f} mm on {finest.mesh}, {rich.mesh.iloc[0]} {f0:.4f} mm, "
+            f"{inside} the 11 codes' {lo:.2f}-{hi:.2f} mm."]  # fmt: skip

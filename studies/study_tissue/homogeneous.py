@@ -30,7 +30,17 @@ from springfem.scene import scene_from_dict
 
 from .. import models
 from ..registry import StudyContext, Table
-from .cases import STRETCH_LAWS
+
+#: Land's problem-1/3 Guccione constants (kPa) with a volumetric penalty the spring model
+#: can carry (kappa = 50 C: nearly incompressible, Poisson's ratio near 0.5 at rest).
+GUCCIONE = {"law": "guccione", "C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0, "kappa": 100.0}
+#: Holzapfel & Ogden's (2009) fit to myocardium shear data (kPa), with a penalty
+#: kappa = 1000 kPa (nearly incompressible against the fibre's small-strain 4 a_f = 74 kPa).
+HOLZAPFEL_OGDEN = {"law": "holzapfel-ogden", "a": 0.059, "b": 8.023, "a_f": 18.472,
+                   "b_f": 16.026, "a_s": 2.481, "b_s": 11.120, "a_fs": 0.216, "b_fs": 11.436,
+                   "kappa": 1000.0}  # fmt: skip
+#: The stress-stretch cube's laws by name.
+STRETCH_LAWS = {"guccione": GUCCIONE, "holzapfel-ogden": HOLZAPFEL_OGDEN}
 
 #: The spring elements measured: the tissue element and today's stiffened one.
 HOMOGENEOUS_MODELS = ("spring-tissue", "spring-stiffened")

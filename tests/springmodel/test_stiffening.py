@@ -220,7 +220,7 @@ def jittered_cube(tmp_path_factory):
 
 def stretch_scene(direction, stretch, spring, mesh_file, loads=()):
     """The tissue study's cube pulled along x (fibre along or across), on ``mesh_file``."""
-    from studies.study_tissue.cases import stretch_data
+    from studies.study_tissue import stretch_data
 
     data = stretch_data(direction, stretch, 1)
     data["load"] = list(loads)

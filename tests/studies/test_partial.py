@@ -17,7 +17,7 @@ from springfem.errors import SolverError
 from springfem.scene import scene_from_dict
 from studies.compare import Comparison, comparison_table
 from studies.partial import partial_solution
-from studies.study_tissue.report import ventricle_frame
+from studies.study_tissue import ventricle_frame
 
 BOX = {
     "mesh": {"generator": "box", "size": [1.0, 1.0, 1.0], "divisions": [2, 2, 2]},

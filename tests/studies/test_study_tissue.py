@@ -11,7 +11,7 @@ import studies.study_tissue as st
 from springfem.materials.tissue import guccione_tangent, holzapfel_ogden_tangent
 from studies.cache import CaseCache
 from studies.registry import StudyContext
-from studies.study_tissue.cases import GUCCIONE, HOLZAPFEL_OGDEN, VERSION, cube, stretch_case
+from studies.study_tissue import GUCCIONE, HOLZAPFEL_OGDEN, VERSION, cube, stretch_case
 
 # the study's quick run takes tens of seconds: -m slow
 pytestmark = pytest.mark.slow

@@ -9,12 +9,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from studies.study_tissue.convergence import (
-    PUBLISHED,
-    convergence_findings,
-    observed_order,
-    richardson_frame,
-)
+from studies.metrics import observed_order
+from studies.study_tissue.convergence import PUBLISHED, convergence_findings, richardson_frame
 
 
 @pytest.mark.parametrize("p", [1.0, 2.0, 3.3])
