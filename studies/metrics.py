@@ -10,6 +10,7 @@ import time
 from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
 def relative_l2_error(u: np.ndarray, u_ref: np.ndarray) -> float:
@@ -63,7 +64,7 @@ def fitted_rate(h: np.ndarray, err: np.ndarray) -> float:
     return float(np.polyfit(np.log(h[ok]), np.log(err[ok]), 1)[0])
 
 
-def observed_order(h: np.ndarray, f: np.ndarray) -> tuple[float, float, str]:
+def observed_order(h: ArrayLike, f: ArrayLike) -> tuple[float, float, str]:
     """Observed order ``p`` and Richardson value ``f0`` of ``f = f0 + C h^p`` through three
     (h, f) pairs (any order), and a note: NaN and the reason when there are not three
     finite values on distinct meshes, when the differences change sign (oscillating), or

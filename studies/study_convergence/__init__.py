@@ -354,10 +354,10 @@ def _scene(ctx: StudyContext, p: Plan, results: list[dict], suffix: str, out: St
     out.findings += findings
 
     # headline: rates, w errors at the finest level, the gap; <w> is the tracked probe (tip)
-    w = track.name
+    tip = track.name
     head = {f"rate_l2_{m}": r["l2"] for m, r in rate.items()}
-    head.update({f"rate_{w}_{m}": rate[m]["tip"] for m in (p1, p2) if m in rate})
-    head.update({f"{w}_err_finest_{m}": float(fin[m]) for m in (SPRING, EXACT, p1) if m in rate})
+    head.update({f"rate_{tip}_{m}": rate[m]["tip"] for m in (p1, p2) if m in rate})
+    head.update({f"{tip}_err_finest_{m}": float(fin[m]) for m in (SPRING, EXACT, p1) if m in rate})
     if len(gap):
         head[f"{SPRING}_over_{p1}_finest"] = float(gap.iloc[-1] + 1.0)
         head[f"rate_{SPRING}_{p1}_gap"] = gap_rate
@@ -425,7 +425,7 @@ def _scene(ctx: StudyContext, p: Plan, results: list[dict], suffix: str, out: St
     ax.legend(fontsize=8)
     gap_name = f"|{SPRING} / {p1} − 1| (same mesh)"
     h = p.h1 / np.asarray(gap.index, float)
-    loglog_rates(bx, {gap_name: (h, gap.abs().values)}, hx, f"|{SPRING} / {p1} − 1| of w",
+    loglog_rates(bx, {gap_name: (list(h), list(gap.abs()))}, hx, f"|{SPRING} / {p1} − 1| of w",
                  {gap_name: gap_rate}, xticks=sorted(h))  # fmt: skip
     bx.set_title("does the spring–P1 gap close under refinement?", fontsize=10)
     fig.tight_layout()
