@@ -20,11 +20,13 @@ corrections cancel exactly, where the sequential solve moves it by ``O(h^2)`` pe
 ``w`` are inverse masses per DOF (zero on supported DOFs, which therefore never move).
 Gauss–Seidel visits the elements colour by colour (:func:`springfem.mesh.element_colouring`:
 elements of one colour share no node, so a colour could run in parallel and gives the same
-answer as this serial sweep); Jacobi computes every correction from the same ``p`` and adds
-them all, each (its ``d_lambda`` and its ``d p`` alike, so that ``p - x~ = M^-1 grad C^T
-lambda`` still holds) times a relaxation ``omega``. Averaging the position corrections over
-a node's constraints instead (Macklin et al. 2014) would scale the forces at rest and
-change the rest state; it is not done.
+answer as this serial sweep), and the element arrays are stored in that order
+(:func:`sweep_order`) so that the sweep reads them front to back; an element's ``F`` is
+computed once per visit for both constraints. Jacobi computes every correction from the
+same ``p`` and adds them all, each (its ``d_lambda`` and its ``d p`` alike, so that
+``p - x~ = M^-1 grad C^T lambda`` still holds) times a relaxation ``omega``. Averaging the
+position corrections over a node's constraints instead (Macklin et al. 2014) would scale
+the forces at rest and change the rest state; it is not done.
 
 Damping: the velocities are multiplied by ``damp`` after each substep; with ``kinetic``
 they are zeroed when the kinetic energy falls (at its peak), as dynamic relaxation does.
@@ -38,8 +40,8 @@ Examples
 >>> R = np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]])
 >>> x, v = X @ R.T + 0.5, np.zeros((4, 3))  # rigid motion of the rest shape (mu = lam = 1)
 >>> moved = frame(x, v, np.ones((4, 3)), np.ones(4), np.zeros((4, 3)), np.array([[0, 1, 2, 3]]),
-...     G, 1.0 / V, 1.0 / V, 2.0, 1e-3, 2, 3, np.arange(1), 0, 1, 1.0, np.zeros(4), 1.0, False,
-...     np.zeros(1), np.zeros(1), np.zeros((4, 3)))
+...     G, 1.0 / V, 1.0 / V, 2.0, 1e-3, 2, 3, 0, 1, 1.0, 1.0, False, np.zeros(1), np.zeros(1),
+...     np.zeros((4, 3)))
 >>> bool(moved < 1e-12), bool(np.allclose(x, X @ R.T + 0.5))  # it stays where it is
 (True, True)
 """
@@ -113,20 +115,61 @@ def _project(k, c, p, w, tets, G, alpha, gamma, lam, out, scale, g, F, D):  # pr
 
 @njit(**_FLAGS)
 def _project_pair(
-    k, p, w, tets, G, ad, ah, gamma, lam_d, lam_h, out, scale, gd, gh, F, D
-):  # pragma: no cover
-    """Both constraints of element ``k`` at once (a 2 x 2 solve): adds ``scale`` times the
-    correction to ``out`` and to ``lam_d[k], lam_h[k]``."""
-    cd = _gradients(k, 0, p, tets, G, gamma, gd, F, D)
-    ch = _gradients(k, 1, p, tets, G, gamma, gh, F, D)
+    k, p, w, tets, G, ad, ah, gamma, lam_d, lam_h, out, scale, gd, gh
+):  # pragma: no cover - compiled
+    """Both constraints of element ``k`` at once (a 2 x 2 solve), from one ``F``: adds
+    ``scale`` times the correction to ``out`` and to ``lam_d[k], lam_h[k]`` (``gd, gh``:
+    ``(4, 3)`` scratch for the node gradients)."""
+    i0, i1, i2, i3 = tets[k, 0], tets[k, 1], tets[k, 2], tets[k, 3]
+    # F = sum_a (p_a - p_0) (x) g_a, one row r at a time: F[r, d] = f{r}{d}
+    e1, e2, e3 = p[i1, 0] - p[i0, 0], p[i2, 0] - p[i0, 0], p[i3, 0] - p[i0, 0]
+    f00 = e1 * G[k, 0, 0] + e2 * G[k, 1, 0] + e3 * G[k, 2, 0]
+    f01 = e1 * G[k, 0, 1] + e2 * G[k, 1, 1] + e3 * G[k, 2, 1]
+    f02 = e1 * G[k, 0, 2] + e2 * G[k, 1, 2] + e3 * G[k, 2, 2]
+    e1, e2, e3 = p[i1, 1] - p[i0, 1], p[i2, 1] - p[i0, 1], p[i3, 1] - p[i0, 1]
+    f10 = e1 * G[k, 0, 0] + e2 * G[k, 1, 0] + e3 * G[k, 2, 0]
+    f11 = e1 * G[k, 0, 1] + e2 * G[k, 1, 1] + e3 * G[k, 2, 1]
+    f12 = e1 * G[k, 0, 2] + e2 * G[k, 1, 2] + e3 * G[k, 2, 2]
+    e1, e2, e3 = p[i1, 2] - p[i0, 2], p[i2, 2] - p[i0, 2], p[i3, 2] - p[i0, 2]
+    f20 = e1 * G[k, 0, 0] + e2 * G[k, 1, 0] + e3 * G[k, 2, 0]
+    f21 = e1 * G[k, 0, 1] + e2 * G[k, 1, 1] + e3 * G[k, 2, 1]
+    f22 = e1 * G[k, 0, 2] + e2 * G[k, 1, 2] + e3 * G[k, 2, 2]
+    # deviatoric: C_D = |F|, dC_D/dF = F / C_D
+    cd = np.sqrt(f00 * f00 + f01 * f01 + f02 * f02 + f10 * f10 + f11 * f11 + f12 * f12
+                 + f20 * f20 + f21 * f21 + f22 * f22)  # fmt: skip
+    r = 1.0 / cd if cd > 0.0 else 0.0
+    # hydrostatic: C_H = det F - gamma, dC_H/dF = cof F (columns f_{j+1} x f_{j+2})
+    c00, c01, c02 = f11 * f22 - f21 * f12, f12 * f20 - f22 * f10, f10 * f21 - f20 * f11
+    c10, c11, c12 = f21 * f02 - f01 * f22, f22 * f00 - f02 * f20, f20 * f01 - f00 * f21
+    c20, c21, c22 = f01 * f12 - f11 * f02, f02 * f10 - f12 * f00, f00 * f11 - f10 * f01
+    ch = f00 * c00 + f10 * c10 + f20 * c20 - gamma
+    for r_ in range(3):
+        gd[0, r_] = 0.0
+        gh[0, r_] = 0.0
+    for a in range(3):  # node a + 1: dC/dF g_a; node 0: minus their sum
+        g0, g1, g2 = G[k, a, 0], G[k, a, 1], G[k, a, 2]
+        s0 = (f00 * g0 + f01 * g1 + f02 * g2) * r
+        s1 = (f10 * g0 + f11 * g1 + f12 * g2) * r
+        s2 = (f20 * g0 + f21 * g1 + f22 * g2) * r
+        gd[a + 1, 0], gd[a + 1, 1], gd[a + 1, 2] = s0, s1, s2
+        gd[0, 0] -= s0
+        gd[0, 1] -= s1
+        gd[0, 2] -= s2
+        s0 = c00 * g0 + c01 * g1 + c02 * g2
+        s1 = c10 * g0 + c11 * g1 + c12 * g2
+        s2 = c20 * g0 + c21 * g1 + c22 * g2
+        gh[a + 1, 0], gh[a + 1, 1], gh[a + 1, 2] = s0, s1, s2
+        gh[0, 0] -= s0
+        gh[0, 1] -= s1
+        gh[0, 2] -= s2
     a11, a12, a22 = ad, 0.0, ah
     for a in range(4):
         node = tets[k, a]
-        for r in range(3):
-            wr = w[node, r]
-            a11 += wr * gd[a, r] * gd[a, r]
-            a12 += wr * gd[a, r] * gh[a, r]
-            a22 += wr * gh[a, r] * gh[a, r]
+        for c in range(3):
+            wr = w[node, c]
+            a11 += wr * gd[a, c] * gd[a, c]
+            a12 += wr * gd[a, c] * gh[a, c]
+            a22 += wr * gh[a, c] * gh[a, c]
     b1 = -cd - ad * lam_d[k]
     b2 = -ch - ah * lam_h[k]
     det = a11 * a22 - a12 * a12
@@ -138,8 +181,8 @@ def _project_pair(
     lam_h[k] += d2
     for a in range(4):
         node = tets[k, a]
-        for r in range(3):
-            out[node, r] += w[node, r] * (gd[a, r] * d1 + gh[a, r] * d2)
+        for c in range(3):
+            out[node, c] += w[node, c] * (gd[a, c] * d1 + gh[a, c] * d2)
 
 
 @njit(**_FLAGS)
@@ -157,11 +200,9 @@ def frame(
     h,
     substeps,
     iterations,
-    order,
     jacobi,
     coupled,
     omega,
-    inv_count,
     damp,
     kinetic,
     lam_d,
@@ -172,11 +213,12 @@ def frame(
     the largest nodal motion ``max |p - x|`` of any one substep: how far the body would move
     in a frame at its fastest speed of the frame (what the rest test reads).
 
-    ``order`` lists the elements by colour (Gauss–Seidel); ``coupled`` solves an element's
-    two constraints together (a 2 x 2 system), else one after the other; ``jacobi`` selects
-    Jacobi with relaxation ``omega`` and per-node ``inv_count = 1 / (constraints at the
-    node)``, unused; ``alpha_d, alpha_h`` are the compliances ``1 / (mu' V), 1 / (lam' V)`` per
-    element; ``lam_d, lam_h`` ``(m,)`` and ``dp`` ``(n, 3)`` are work arrays.
+    The elements (``tets``, ``G`` and the compliances ``alpha_d, alpha_h = 1 / (mu' V),
+    1 / (lam' V)``) are stored in the order Gauss–Seidel visits them, colour by colour
+    (:func:`sweep_order`), so that the sweep reads them contiguously; ``coupled`` solves an
+    element's two constraints together (a 2 x 2 system from one ``F``), else one after the
+    other; ``jacobi`` selects Jacobi with relaxation ``omega``; ``lam_d, lam_h`` ``(m,)``
+    and ``dp`` ``(n, 3)`` are work arrays.
     """
     n = x.shape[0]
     m = tets.shape[0]
@@ -186,6 +228,8 @@ def frame(
     gd = np.empty((4, 3))
     gh = np.empty((4, 3))
     h2 = h * h
+    ad = alpha_d / h2  # the compliances over h^2, once per frame
+    ah = alpha_h / h2
     ke_prev = 0.0
     for r in range(n):
         for c in range(3):
@@ -202,67 +246,21 @@ def frame(
             lam_d[k] = 0.0
             lam_h[k] = 0.0
         for _it in range(iterations):
+            # Jacobi: every correction from the same p, summed into dp, times omega
+            out, scale = (dp, omega) if jacobi else (p, 1.0)
             if jacobi:
                 dp[:, :] = 0.0
-                for k in range(m):
-                    if coupled:
-                        _project_pair(
-                            k,
-                            p,
-                            w,
-                            tets,
-                            G,
-                            alpha_d[k] / h2,
-                            alpha_h[k] / h2,
-                            gamma,
-                            lam_d,
-                            lam_h,
-                            dp,
-                            omega,
-                            gd,
-                            gh,
-                            F,
-                            D,
-                        )
-                    else:
-                        _project(
-                            k, 0, p, w, tets, G, alpha_d[k] / h2, gamma, lam_d, dp, omega, gd, F, D
-                        )
-                        _project(
-                            k, 1, p, w, tets, G, alpha_h[k] / h2, gamma, lam_h, dp, omega, gd, F, D
-                        )
+            for k in range(m):
+                if coupled:
+                    _project_pair(k, p, w, tets, G, ad[k], ah[k], gamma, lam_d, lam_h, out,
+                                  scale, gd, gh)  # fmt: skip
+                else:
+                    _project(k, 0, p, w, tets, G, ad[k], gamma, lam_d, out, scale, gd, F, D)
+                    _project(k, 1, p, w, tets, G, ah[k], gamma, lam_h, out, scale, gd, F, D)
+            if jacobi:
                 for r in range(n):
                     for c in range(3):
                         p[r, c] += dp[r, c]
-            else:
-                for q in range(order.shape[0]):
-                    k = order[q]
-                    if coupled:
-                        _project_pair(
-                            k,
-                            p,
-                            w,
-                            tets,
-                            G,
-                            alpha_d[k] / h2,
-                            alpha_h[k] / h2,
-                            gamma,
-                            lam_d,
-                            lam_h,
-                            p,
-                            1.0,
-                            gd,
-                            gh,
-                            F,
-                            D,
-                        )
-                    else:
-                        _project(
-                            k, 0, p, w, tets, G, alpha_d[k] / h2, gamma, lam_d, p, 1.0, gd, F, D
-                        )
-                        _project(
-                            k, 1, p, w, tets, G, alpha_h[k] / h2, gamma, lam_h, p, 1.0, gd, F, D
-                        )
         ke = 0.0
         for r in range(n):
             for c in range(3):
@@ -277,3 +275,15 @@ def frame(
             ke = 0.0
         ke_prev = ke
     return moved * substeps
+
+
+def sweep_order(colours: np.ndarray) -> np.ndarray:
+    """The elements colour by colour, each colour in mesh order: the Gauss–Seidel sweep,
+    in which :func:`frame` wants the element arrays stored.
+
+    Examples
+    --------
+    >>> sweep_order(np.array([1, 0, 1, 0])).tolist()
+    [1, 3, 0, 2]
+    """
+    return np.argsort(colours, kind="stable").astype(np.int64)

@@ -53,7 +53,7 @@ from springfem.scene import Scene
 
 from .constraints import rest_shape, stable_neo_hookean
 from .energy import StableNeoHookean
-from .kernels import frame
+from .kernels import frame, sweep_order
 
 Iteration = Literal["gauss-seidel", "jacobi"]
 ITERATIONS = ("gauss-seidel", "jacobi")
@@ -185,9 +185,12 @@ class XPBD:
         self._x_fixed = self.x0.ravel()[self.fixed_dofs] + fixed_values
         self._follower = has_follower_loads(scene)
         self.colours = element_colouring(self.tets, n)
-        self.order = np.argsort(self.colours, kind="stable").astype(np.int64)
-        counts = np.bincount(self.tets.ravel(), minlength=n).astype(float)
-        self.inv_count = 1.0 / np.maximum(2.0 * counts, 1.0)
+        #: The Gauss–Seidel sweep (colour by colour) and the element arrays stored in it.
+        self.order = sweep_order(self.colours)
+        self.sweep_tets = np.ascontiguousarray(self.tets[self.order])
+        self.sweep_G = np.ascontiguousarray(self.G[self.order])
+        self.sweep_alpha_d = np.ascontiguousarray(self.alpha_d[self.order])
+        self.sweep_alpha_h = np.ascontiguousarray(self.alpha_h[self.order])
         m = self.tets.shape[0]
         self._lam_d, self._lam_h, self._dp = np.zeros(m), np.zeros(m), np.zeros((n, 3))
         self.damping_rate = self._damping_rate()
@@ -239,9 +242,9 @@ class XPBD:
         damp = math.exp(-self.damping_rate * self.h)
         return float(
             frame(
-                x, v, self.w, self.masses, a_ext, self.tets, self.G, self.alpha_d, self.alpha_h,
-                self.gamma, self.h, s.substeps, s.iterations, self.order,
-                s.iteration == "jacobi", s.coupling == "coupled", s.omega, self.inv_count,
+                x, v, self.w, self.masses, a_ext, self.sweep_tets, self.sweep_G,
+                self.sweep_alpha_d, self.sweep_alpha_h, self.gamma, self.h, s.substeps,
+                s.iterations, s.iteration == "jacobi", s.coupling == "coupled", s.omega,
                 damp, kinetic, self._lam_d, self._lam_h, self._dp,
             )
         )  # fmt: skip
