@@ -16,7 +16,7 @@ the scene's material and element frames), the law's stress in the element frame
 (:mod:`reference_fem.explicit_anisotropic`), and scatters ``f_a = -V P grad N_a``
 (``f_0 = -(f_1 + f_2 + f_3)``, so each element's net force is zero by construction). The
 energies are those of :mod:`reference_fem.hyperelastic` (``psi = mu/2 (I1 - 3) - mu ln J +
-lam/2 ln^2 J``), of small-strain elasticity and of :mod:`reference_fem.laws`; per element
+lam/2 ln^2 J``), of small-strain elasticity and of :mod:`springfem.materials.laws`; per element
 the kernel reads 4 int32 node ids and 10 constants (three shape gradients, rotated into the
 element frame for the tissue laws, and the rest volume; ``transverse-linear`` adds the
 frame, 19).
@@ -54,26 +54,27 @@ import scipy.sparse as sp
 from springfem.blocks import chunks
 from springfem.errors import InputError, SolverError
 from springfem.loads import external_forces, has_follower_loads, lumped_masses
+from springfem.materials.laws import TISSUE_LAWS, LawNames, TissueLaw, tissue_law
+from springfem.materials.laws.kinematics import det
 from springfem.mesh import tet_volumes
 from springfem.scene import Scene, model_precision
 
 from .explicit_anisotropic import (
     ANISOTROPIC_LAWS,
+    KERNEL_LAWS,
     anisotropic_kernel,
     anisotropic_layout,
     law_parameters,
 )
+from .explicit_generic import generic_kernel
 from .explicit_kernels import fem_kernel, fem_layout
-from .laws import TISSUE_LAWS, TissueLaw, tissue_law
 from .space import p1_gradients
 
-Law = Literal["neo-hookean", "linear", "transverse-linear", "guccione", "holzapfel-ogden"]
+Law = str
 Precision = Literal["float64", "mixed", "float32"]
 OnInverted = Literal["raise", "nan", "ignore"]
-LAWS = ("neo-hookean", "neo-hookean/coupled", "linear") + ANISOTROPIC_LAWS
+LAWS = LawNames(("neo-hookean", "neo-hookean/coupled", "linear", "transverse-linear"))
 _NEO, _LINEAR, _ANISOTROPIC = 0, 1, 2
-#: Index of the active tension in the tissue kernels' parameters (law_parameters).
-_ACTIVE = {"guccione": 5, "holzapfel-ogden": 9}
 #: ``ExplicitFem(parallel=None)`` runs serially unless this is on, as the spring kernel: two
 #: threads were never faster than one here (neo-Hookean 0.64-0.73x wall at 210,912 tets on
 #: the shared 2-core machine, reference_fem.explicit_kernels).
@@ -114,11 +115,10 @@ def strain_energy_density(F: np.ndarray, mu: float, lam: float, law: int) -> np.
 
 
 def tissue_energy_density(law: TissueLaw, F: np.ndarray, frames: np.ndarray | None) -> np.ndarray:
-    """``W(F)`` of a tissue law per element (``inf`` where ``J <= 0``), without its tangent.
+    """``W(F)`` of a tissue law per element, ``inf`` where ``J <= 0`` (``law.energy`` is NaN).
 
-    The same energy as ``law.energy(F, frames)`` (:class:`~reference_fem.laws.TissueLaw`:
-    the law's own term, the active tension, the penalty ``U(J)``), which also builds the
-    penalty's fourth-order tangent; this one does not, so a recorded run stays cheap.
+    ``law.energy(F, frames)`` (:class:`~springfem.materials.laws.TissueLaw`: the law's own
+    term, the active tension, the penalty ``U(J)``; no tangent is built).
 
     Parameters
     ----------
@@ -136,25 +136,14 @@ def tissue_energy_density(law: TissueLaw, F: np.ndarray, frames: np.ndarray | No
 
     Examples
     --------
-    >>> from reference_fem.laws import Guccione
+    >>> from springfem.materials.laws import Guccione
     >>> law = Guccione(C=2.0, b_f=8.0, kappa=10.0, active_tension=1.0)
     >>> F = np.diag([1.1, 0.95, 1.0])[None]
     >>> bool(np.isclose(tissue_energy_density(law, F, None)[0], law.energy(F)[0], rtol=1e-14))
     True
     """
-    from .hyperelastic import _det, _volumetric
-    from .laws.kinematics import to_frame
-
-    J = _det(F)
-    ok = J > 0
-    Fl = to_frame(F, frames)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        W, _, _ = law.local(Fl, False)
-        if law.active_tension != 0.0:
-            W = W + 0.5 * law.active_tension * (np.einsum("kj,kj->k", Fl[:, :, 0], Fl[:, :, 0]) - 1)
-        if law.kappa > 0:
-            W = W + _volumetric(np.where(ok, J, 1.0), law.kappa, law.volumetric)[0]
-    return np.where(ok, W, np.inf)
+        return np.where(det(F) > 0, law.energy(F, frames), np.inf)
 
 
 # --------------------------------------------------------------------------- the system
@@ -283,8 +272,17 @@ class ExplicitFem:
                 self.tissue = tissue_law(mat)
                 self._active = self.tissue.active_tension
             self._params: tuple = (law_parameters(law, mat, self.tissue),)
-            self._serial, self._parallel = anisotropic_kernel(law, mat.volumetric, precision)
-            self._T, self._K = anisotropic_layout(self.tets, self.x0, self.frames, law, precision)
+            if law in KERNEL_LAWS:
+                self._serial, self._parallel = anisotropic_kernel(law, mat.volumetric, precision)
+                self._T, self._K = anisotropic_layout(
+                    self.tets, self.x0, self.frames, law, precision
+                )
+            else:  # a tissue law without a compiled kernel: numpy, same forces
+                assert self.tissue is not None
+                self._serial, self._parallel = generic_kernel(
+                    self.tissue, self.tets, self.x0, self.frames
+                )
+                self._T, self._K = self.tets, None
         else:
             self._params = (self.mu, self.lam)
             self._serial, self._parallel = fem_kernel(self.law, precision)
@@ -339,7 +337,7 @@ class ExplicitFem:
         0.5
         """
         if self._active and level != self.activation:
-            self._params[0][_ACTIVE[self.law]] = level * self._active
+            self._params[0][len(TISSUE_LAWS[self.law]) + 1] = level * self._active
         self.activation = level
 
     def _law_now(self) -> TissueLaw:
@@ -417,7 +415,7 @@ class ExplicitFem:
     def strain_energy(self, x: np.ndarray) -> float:
         """``sum_e V_e psi(F_e)`` (``inf`` when a neo-Hookean or tissue element is inverted).
 
-        The anisotropic laws' ``psi`` is the numpy law's (:mod:`reference_fem.laws`, or
+        The anisotropic laws' ``psi`` is the numpy law's (:mod:`springfem.materials.laws`, or
         ``eps : C : eps / 2`` of :mod:`reference_fem.materials`), at the current activation.
         """
         x = np.ascontiguousarray(x, dtype=np.float64).reshape(self.n_points, 3)
@@ -453,7 +451,7 @@ class ExplicitFem:
 
         Assembled with :mod:`reference_fem.assembly` from the law's tangent
         (:class:`~reference_fem.hyperelastic.NeoHookean`, the tissue law of
-        :mod:`reference_fem.laws` in the element frames), constant for the linear laws.
+        :mod:`springfem.materials.laws` in the element frames), constant for the linear laws.
         """
         if self._follower:
             return None

@@ -5,15 +5,16 @@ drivers, same precisions), one kernel per anisotropic law and volumetric penalty
 
 - ``transverse-linear``: small-strain transversely isotropic elasticity
   (:mod:`reference_fem.materials`), ``sigma' = C' : eps'`` in the element frame;
-- ``guccione``: :class:`~reference_fem.laws.Guccione` with its penalty ``U(J)``;
-- ``holzapfel-ogden``: :class:`~reference_fem.laws.HolzapfelOgden` with its penalty.
+- ``guccione``: :class:`~springfem.materials.laws.Guccione` with its penalty ``U(J)``;
+- ``holzapfel-ogden``: :class:`~springfem.materials.laws.HolzapfelOgden` with its penalty.
 
 The element frame ``R`` (rows: fibre, sheet, normal) is folded into the stored shape
 gradients, ``g'_a = R grad N_a``: then ``F' = sum_a (x_a - x_0) (x) g'_a = F R^T`` is the
-deformation gradient in the frame (the tissue laws' ``F'``, :mod:`reference_fem.laws.kinematics`)
-and ``f_a = -V P grad N_a = -V P' g'_a`` with the frame stress ``P'`` (since ``P = P' R``),
-so a tissue law reads the same 10 constants per element as the isotropic kernels (three
-rotated gradients and the rest volume) and never rotates a stress. The linear law needs
+deformation gradient in the frame (the tissue laws' ``F'``,
+:mod:`springfem.materials.laws.kinematics`) and ``f_a = -V P grad N_a = -V P' g'_a`` with
+the frame stress ``P'`` (since ``P = P' R``), so a tissue law reads the same 10 constants
+per element as the isotropic kernels (three rotated gradients and the rest volume) and never
+rotates a stress. The linear law needs
 ``eps' = sym(R F') - I`` and ``f_a = -V R^T sigma' g'_a``, so it also stores ``R``
 (19 constants). Per element, in the frame::
 
@@ -60,13 +61,15 @@ from functools import cache
 import numpy as np
 
 from springfem.blocks import BLOCK, block_drivers, block_layout, compile_named
-
-from .laws.holzapfel_ogden import TENSION
+from springfem.materials.laws import TISSUE_LAWS, LawNames
+from springfem.materials.laws.holzapfel_ogden import TENSION
 
 _NO_VELOCITY = np.zeros((1, 3))  # the drivers pass velocities; the FEM forces need none
 PRECISIONS = ("float64", "mixed", "float32")
-#: The laws with a kernel here, and the volumetric penalties of the tissue laws.
-ANISOTROPIC_LAWS = ("transverse-linear", "guccione", "holzapfel-ogden")
+#: The anisotropic laws: transverse-linear and every tissue law of the table.
+ANISOTROPIC_LAWS = LawNames(("transverse-linear",))
+#: The laws with a compiled kernel here; another tissue law runs :func:`generic_kernel`.
+KERNEL_LAWS = ("transverse-linear", "guccione", "holzapfel-ogden")
 VOLUMETRIC = ("log", "quadratic", "simo-taylor")
 #: Length of the parameter vector every kernel takes (unused entries are zero).
 NPARAM = 10
@@ -110,7 +113,7 @@ def anisotropic_layout(
     frames
         ``(m, 3, 3)`` orthonormal element frames (rows: fibre, sheet, normal).
     law
-        One of :data:`ANISOTROPIC_LAWS`.
+        One of :data:`KERNEL_LAWS`.
     precision
         Storage is float32 for ``mixed`` and ``float32``.
 
@@ -128,8 +131,8 @@ def anisotropic_layout(
     >>> K.shape, round(float(K[0, 9 * 16]), 12)  # 19 constants of 16 lanes; V = 8/6
     ((1, 304), 1.333333333333)
     """
-    if law not in ANISOTROPIC_LAWS:
-        raise ValueError(f"law {law!r} is not one of {', '.join(ANISOTROPIC_LAWS)}")
+    if law not in KERNEL_LAWS:
+        raise ValueError(f"law {law!r} is not one of {', '.join(KERNEL_LAWS)}")
     x = np.asarray(points, dtype=float)[tets]
     E = x[:, 1:] - x[:, :1]
     G = np.linalg.inv(E).transpose(0, 2, 1)  # rows: grad N_1..3
@@ -154,16 +157,15 @@ def law_parameters(law: str, material=None, tissue=None) -> np.ndarray:
         For ``transverse-linear``: a :class:`~springfem.scene.Material` with the five
         transverse constants.
     tissue
-        For the tissue laws: the :class:`~reference_fem.laws.TissueLaw` (its constants,
+        For the tissue laws: the :class:`~springfem.materials.laws.TissueLaw` (its constants,
         ``kappa`` and ``active_tension``).
 
     Returns
     -------
     ndarray
         ``transverse-linear``: the frame's Voigt stiffness ``C00, C01, C02, C11, C12, C22,
-        C33, C44, C55``; ``guccione``: ``C, b_f, b_t, b_fs, kappa, T_a``;
-        ``holzapfel-ogden``: ``a, b, a_f, b_f, a_s, b_s, a_fs, b_fs, kappa, T_a``; zero
-        padded.
+        C33, C44, C55``; a tissue law: its constants (:meth:`~springfem.materials.laws.
+        base.TissueLaw.keys`), ``kappa``, ``T_a`` (index :func:`active_index`); zero padded.
 
     Raises
     ------
@@ -172,7 +174,7 @@ def law_parameters(law: str, material=None, tissue=None) -> np.ndarray:
 
     Examples
     --------
-    >>> from reference_fem.laws import Guccione
+    >>> from springfem.materials.laws import Guccione
     >>> law_parameters("guccione", tissue=Guccione(C=2.0, b_f=8.0, kappa=50.0))[:6].tolist()
     [2.0, 8.0, 1.0, 1.0, 50.0, 0.0]
     """
@@ -189,14 +191,13 @@ def law_parameters(law: str, material=None, tissue=None) -> np.ndarray:
             raise ValueError("the transverse stiffness is not orthotropic in its frame")
         p[:9] = [C[0, 0], C[0, 1], C[0, 2], C[1, 1], C[1, 2], C[2, 2], C[3, 3], C[4, 4], C[5, 5]]
         return p
-    t = tissue
-    if law == "guccione":
-        p[:6] = [t.C, t.b_f, t.b_t, t.b_fs, t.kappa, t.active_tension]
-        return p
-    if law == "holzapfel-ogden":
-        p[:10] = [t.a, t.b, t.a_f, t.b_f, t.a_s, t.b_s, t.a_fs, t.b_fs, t.kappa, t.active_tension]
-        return p
-    raise ValueError(f"law {law!r} is not one of {', '.join(ANISOTROPIC_LAWS)}")
+    if tissue is None or law != tissue.label:
+        raise ValueError(f"law {law!r} needs its tissue law, one of {', '.join(TISSUE_LAWS)}")
+    values = [getattr(tissue, k) for k in tissue.keys()] + [tissue.kappa, tissue.active_tension]
+    if len(values) > NPARAM:
+        raise ValueError(f"law {law!r} has {len(values) - 2} constants; the kernels take 8")
+    p[: len(values)] = values
+    return p
 
 
 def _block_run(law: str, volumetric: str, at):
@@ -480,7 +481,7 @@ def anisotropic_kernel(law: str, volumetric: str = "log", precision: str = "floa
     Parameters
     ----------
     law
-        One of :data:`ANISOTROPIC_LAWS`.
+        One of :data:`KERNEL_LAWS`.
     volumetric
         The tissue laws' penalty ``U(J)``: ``log``, ``quadratic`` or ``simo-taylor``
         (ignored for ``transverse-linear``).
@@ -514,8 +515,8 @@ def anisotropic_kernel(law: str, volumetric: str = "log", precision: str = "floa
     >>> bool(abs(out.sum(axis=0)).max() < 1e-15), bool(out[1, 0] < 0)  # net zero; restoring
     (True, True)
     """
-    if law not in ANISOTROPIC_LAWS:
-        raise ValueError(f"law {law!r} is not one of {', '.join(ANISOTROPIC_LAWS)}")
+    if law not in KERNEL_LAWS:
+        raise ValueError(f"law {law!r} is not one of {', '.join(KERNEL_LAWS)}")
     if volumetric not in VOLUMETRIC:
         raise ValueError(f"volumetric {volumetric!r} is not one of {', '.join(VOLUMETRIC)}")
     if precision not in PRECISIONS:

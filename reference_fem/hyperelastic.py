@@ -27,28 +27,14 @@ from typing import Literal, cast
 import numpy as np
 
 from springfem.errors import InputError
+from springfem.materials.laws.kinematics import det as _det
 from springfem.scene import FORMULATIONS, VOLUMETRIC, Material
+from springfem.volumetric import volumetric_energy as _volumetric
 
 Formulation = Literal["coupled", "uncoupled"]
 Volumetric = Literal["log", "quadratic", "simo-taylor"]
 
 _I = np.eye(3)
-
-
-def _volumetric(J: np.ndarray, kappa: float, kind: str):
-    """``U(J)``, ``U'(J)``, ``U''(J)``."""
-    lnJ = np.log(J)
-    if kind == "log":
-        return 0.5 * kappa * lnJ**2, kappa * lnJ / J, kappa * (1.0 - lnJ) / J**2
-    if kind == "quadratic":
-        return 0.5 * kappa * (J - 1.0) ** 2, kappa * (J - 1.0), kappa + 0.0 * J
-    if kind == "simo-taylor":
-        return (
-            0.25 * kappa * (J**2 - 1.0 - 2.0 * lnJ),
-            0.5 * kappa * (J - 1.0 / J),
-            0.5 * kappa * (1.0 + 1.0 / J**2),
-        )
-    raise InputError(f"volumetric {kind!r} is not one of {', '.join(VOLUMETRIC)}")
 
 
 @dataclass(frozen=True)
@@ -175,12 +161,3 @@ class NeoHookean:
         """Cauchy stress ``sigma = P F^T / J``."""
         P, _ = self.stress_tangent(F)
         return np.einsum("...ij,...kj->...ik", P, F) / _det(F)[..., None, None]
-
-
-def _det(F: np.ndarray) -> np.ndarray:
-    """Determinant of ``(..., 3, 3)`` arrays (explicit formula, fast for many small ones)."""
-    return (
-        F[..., 0, 0] * (F[..., 1, 1] * F[..., 2, 2] - F[..., 1, 2] * F[..., 2, 1])
-        - F[..., 0, 1] * (F[..., 1, 0] * F[..., 2, 2] - F[..., 1, 2] * F[..., 2, 0])
-        + F[..., 0, 2] * (F[..., 1, 0] * F[..., 2, 1] - F[..., 1, 1] * F[..., 2, 0])
-    )

@@ -25,10 +25,10 @@ springfem.errors.InputError: formulation 'elastic' is not one of ...
 from __future__ import annotations
 
 from springfem.errors import InputError
+from springfem.materials.laws import TISSUE_LAWS, TissueLaw, tissue_law
 from springfem.scene import FORMULATIONS, VOLUMETRIC, Scene
 
 from .hyperelastic import NeoHookean
-from .laws import TISSUE_LAWS, TissueLaw, tissue_law
 
 #: Every law name the FEM reference accepts.
 LAW_NAMES = (
@@ -58,7 +58,7 @@ def parse_law(scene: Scene, law: str | None) -> tuple[str, NeoHookean | TissueLa
         ``kind`` is ``linear``, ``transverse-linear``, ``neo-hookean`` or the tissue law's
         name; ``law`` is None for the linear kinds, else the
         :class:`~reference_fem.hyperelastic.NeoHookean` or
-        :class:`~reference_fem.laws.TissueLaw` object.
+        :class:`~springfem.materials.laws.TissueLaw` object.
 
     Raises
     ------

@@ -49,11 +49,11 @@ import scipy.sparse as sp
 import skfem
 
 from springfem.errors import InputError
+from springfem.materials.laws import TissueLaw
 from springfem.scene import Scene
 
 from .assembly import CHUNK, _gradient_products, displacement_gradient
 from .hyperelastic import _det
-from .laws import TissueLaw
 from .options import FemOptions
 from .problem import FemProblem
 from .volumetric_split import volumetric_split

@@ -9,7 +9,7 @@ treat the volumetric energy on their own and the rest of the law element by elem
 - coupled neo-Hookean ``mu/2 (I1 - 3) - mu ln J + lam/2 ln^2 J``: the first two terms and
   ``U = lam/2 ln^2 J`` (the ``log`` energy with ``kappa = lam``);
 - a tissue law (Guccione, Holzapfel–Ogden): the law without its penalty and its ``U(J)``
-  (:mod:`reference_fem.laws.base`); an incompressible material gets the penalty of its
+  (:mod:`springfem.materials.laws.base`); an incompressible material gets the penalty of its
   isotropic equivalent, ``Material.kappa``.
 
 Every split adds up to the law: ``W(F) = W_base(F) + U(J)``.
@@ -37,9 +37,9 @@ from typing import Any
 import numpy as np
 
 from springfem.errors import InputError
+from springfem.materials.laws import TissueLaw
 
 from .hyperelastic import NeoHookean, _volumetric
-from .laws import TissueLaw
 
 
 @dataclass(frozen=True)
@@ -75,7 +75,7 @@ def volumetric_split(law, material=None) -> VolumetricSplit:
     ----------
     law
         A :class:`~reference_fem.hyperelastic.NeoHookean` or
-        :class:`~reference_fem.laws.TissueLaw`.
+        :class:`~springfem.materials.laws.TissueLaw`.
     material
         The scene material; its ``kappa`` is the penalty of a tissue law without one
         (an incompressible material). Without it such a law keeps ``kappa = 0``

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from springfem.materials.tissue import TISSUE_LAWS
+from springfem.materials.laws import TISSUE_LAWS, LawNames
 from springfem.scene import TableReader
 
 #: ``axial = "green"`` in a scene: the cubic law with these ``(b2, b3)``, whose energy is
@@ -66,7 +66,11 @@ ELEMENT_KEYS = (
 )
 #: Laws with an anisotropic small-strain tangent: every named element but the seed's adds
 #: the Poisson-coupling springs on them (the exact calibration needs them there).
-ANISOTROPIC_LAWS = ("transverse-linear", *TISSUE_LAWS)
+ANISOTROPIC_LAWS = LawNames(("transverse-linear",))
+#: The tissue laws whose terms the ``tissue`` element carries (:mod:`springmodel.tissue_element`,
+#: ``stiffening = "law"``); another tissue law gets the ``exact`` element, calibrated on its
+#: small-strain tangent.
+LAW_TERMS = ("guccione", "holzapfel-ogden")
 
 
 def element_for_law(law: str) -> str:
@@ -80,14 +84,14 @@ def element_for_law(law: str) -> str:
     Returns
     -------
     str
-        ``tissue`` for a tissue law (Guccione, Holzapfel–Ogden), else ``exact``.
+        ``tissue`` for a tissue law of :data:`LAW_TERMS`, else ``exact``.
 
     Examples
     --------
     >>> element_for_law("linear")
     'exact'
     """
-    return "tissue" if law in TISSUE_LAWS else "exact"
+    return "tissue" if law in LAW_TERMS else "exact"
 
 
 def element_options(name: str, law: str) -> dict[str, Any]:
@@ -127,9 +131,9 @@ def named_element(r: TableReader) -> tuple[str, dict[str, Any]]:
         name = "seed"  # parts picked one by one build on the specification's element
     if name == DEFAULT_ELEMENT:
         name = element_for_law(law)
-    if name == "tissue" and law not in TISSUE_LAWS:
+    if name == "tissue" and law not in LAW_TERMS:
         raise r.fail(
-            "element", f'"tissue" needs a tissue law ({", ".join(TISSUE_LAWS)}), not {law!r}'
+            "element", f'"tissue" needs a tissue law ({", ".join(LAW_TERMS)}), not {law!r}'
         )
     if name == "stiffened" and law not in TISSUE_LAWS and "stiffening_modulus" not in r.t:
         raise r.fail(

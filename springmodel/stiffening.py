@@ -37,6 +37,7 @@ from dataclasses import replace
 import numpy as np
 
 from springfem.errors import InputError
+from springfem.materials.laws import LAWS
 
 from .hessian import TORSION_CODES, SpringHessian
 from .hessian_numpy import polynomial_coefficients
@@ -61,10 +62,8 @@ MAX_EXPONENT = 60.0
 def stiffening_modulus(options: SpringOptions, material) -> float:
     """The modulus ``C`` (Pa) of the stiffening: ``stiffening_modulus``, else the law's.
 
-    ``guccione``: its ``C``. ``holzapfel-ogden``: ``a_f / b_f``, for which the wrapper is the
-    law's fibre term ``a_f/(2 b_f) (exp(b_f (I4f - 1)^2) - 1)`` under a stretch along the
-    fibre (``2 W_q / (C V) = b_f (I4f - 1)^2`` to leading order, ``W_q / V = 2 a_f E_ff^2``);
-    one exponent per element cannot also be the sheet's ``b_s`` or the isotropic ``b``.
+    The law's is its :meth:`~springfem.materials.laws.base.TissueLaw.stiffening_modulus`
+    (``guccione``: its ``C``; ``holzapfel-ogden``: ``a_f / b_f``).
 
     Parameters
     ----------
@@ -95,10 +94,9 @@ def stiffening_modulus(options: SpringOptions, material) -> float:
         return float(options.stiffening_modulus)
     law = getattr(material, "law", None)
     p = getattr(material, "parameters", {}) or {}
-    if law == "guccione":
-        return float(p["C"])
-    if law == "holzapfel-ogden" and p.get("a_f", 0) > 0 and p.get("b_f", 0) > 0:
-        return float(p["a_f"]) / float(p["b_f"])
+    modulus = LAWS[law].stiffening_modulus(p) if law in LAWS else None
+    if modulus is not None:
+        return modulus
     raise InputError(
         f'[spring] stiffening = "exponential" needs stiffening_modulus for law {law!r} '
         "(the defaults: guccione's C, holzapfel-ogden's a_f / b_f when both are positive)"

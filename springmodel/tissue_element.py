@@ -55,10 +55,11 @@ import numpy as np
 
 from springfem.errors import InputError
 from springfem.materials.elastic import tissue_matrix
-from springfem.materials.tissue import TISSUE_LAWS, tissue_tangent
+from springfem.materials.laws import TISSUE_LAWS, small_strain_tangent
 
 from .hessian_numpy import polynomial_coefficients
 from .options import SpringOptions
+from .presets import LAW_TERMS
 from .rest_geometry import TORSION_PAIRS
 
 __all__ = [
@@ -80,7 +81,7 @@ MAX_EXPONENT = 60.0
 #: ``I4 - 1`` above which a Holzapfel–Ogden fibre or sheet counts as in tension (the FEM's).
 TENSION = 1e-12
 #: The element's energy by code: quadratic springs, exponential stiffening, Guccione, HO.
-MODES = {"springs": 0, "exponential": 1, "guccione": 2, "holzapfel-ogden": 3}
+MODES = {"springs": 0, "exponential": 1, **{law: 2 + i for i, law in enumerate(LAW_TERMS)}}
 #: ``(l, m)`` of measure ``3 + p`` (the torsion pairs (0,1), (0,2), (1,2)).
 _PAIRS = np.array(TORSION_PAIRS, dtype=np.int64)
 
@@ -140,10 +141,9 @@ def law_parameters(options: SpringOptions, material, modulus: float | None) -> T
     if options.stiffening == "exponential":
         return TissueLawParameters("exponential", float(modulus or 1.0), b2=b2, b3=b3)
     law = getattr(material, "law", None)
-    if law not in TISSUE_LAWS:
+    if law not in LAW_TERMS:
         raise InputError(
-            f'[spring] stiffening = "law" needs a tissue law ({", ".join(TISSUE_LAWS)}), '
-            f"got {law!r}"
+            f'[spring] stiffening = "law" needs a tissue law ({", ".join(LAW_TERMS)}), got {law!r}'
         )
     p = material.parameters
     values = tuple(float(p[k]) for k in TISSUE_LAWS[law])
@@ -159,7 +159,7 @@ def law_kappa(material) -> float:
     """
     params = {k: float(v) for k, v in material.parameters.items()}
     with_penalty = tissue_matrix(material)[1, 2]
-    return float(with_penalty - tissue_tangent(material.law, params, kappa=0.0)[1, 2])
+    return float(with_penalty - small_strain_tangent(material.law, params, kappa=0.0)[1, 2])
 
 
 def law_elements(elements, options: SpringOptions, material):

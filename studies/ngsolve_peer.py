@@ -218,7 +218,7 @@ class PeerSolution:
 
 def _guccione(scene: Scene):
     from reference_fem.law_names import parse_law
-    from reference_fem.laws import Guccione
+    from springfem.materials.laws import Guccione
 
     _, law = parse_law(scene, None)
     if not isinstance(law, Guccione):

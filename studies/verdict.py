@@ -62,10 +62,12 @@ from pathlib import Path
 
 import numpy as np
 
+from springfem.materials.laws import LAWS
 from springfem.mechanics.limits import solve_limits
 from springfem.mechanics.memory import MemoryLimitExceeded, memory_limit
 from springfem.mesh.thickness import thin_wall_note
 from springfem.scene import Scene
+from springmodel.presets import LAW_TERMS
 
 from . import fem_laws, model_set, models
 from .compare import LARGE_STRAIN, max_principal_strain
@@ -122,8 +124,11 @@ def _spring_builds(m: models.Model, scene: Scene) -> bool:
         opts = m.spring_options(scene)
     except (ValueError, TypeError):
         return False
+    law = scene.material.law
+    if opts.stiffening == "law":
+        return law in LAW_TERMS
     if opts.stiffening != "off" and opts.stiffening_modulus is None:
-        return scene.material.law in ("guccione", "holzapfel-ogden")
+        return law in LAWS and LAWS[law].stiffening_modulus(scene.material.parameters) is not None
     return True
 
 

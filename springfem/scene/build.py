@@ -29,6 +29,7 @@ from ..plugins import entry_points, load
 from .reader import TableReader, _key_label, _show, suggestion
 from .sections import (
     SECTION_KEYS,
+    material_keys,
     parse_axes,
     parse_boundary,
     parse_load,
@@ -161,7 +162,7 @@ def scene_from_dict(data: dict, path: str | os.PathLike | None = None) -> Scene:
         material = data["material"]
     else:
         material = parse_material(
-            TableReader(data["material"], "material", file, SECTION_KEYS["material"]), units
+            TableReader(data["material"], "material", file, material_keys()), units
         )
     top.used.add("material")
     frames = parse_axes(TableReader(data.get("axes", {}), "axes", file, SECTION_KEYS["axes"]), mesh)

@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import SpringFemError
+from ..materials.laws import LAWS as TABLE
 from .build import model_sections, scene_from_dict
 from .reader import ASK_RECORDERS, TableReader
 from .types import LAWS
@@ -43,10 +44,8 @@ _MATERIALS = {
     "transverse-linear": {"E_fiber": 3e3, "E_cross": 1e3, "nu_fiber_cross": 0.3,
                           "nu_cross": 0.3, "G_fiber": 500.0},
     "neo-hookean": {"E": 1e3, "nu": 0.3},
-    "guccione": {"C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0, "kappa": 100.0},
-    "holzapfel-ogden": {"a": 1.0, "b": 1.0, "a_f": 1.0, "b_f": 1.0, "a_s": 1.0, "b_s": 1.0,
-                        "a_fs": 1.0, "b_fs": 1.0, "kappa": 100.0},
 }  # fmt: skip
+_MATERIALS.update({name: {**law.example, "kappa": 100.0} for name, law in TABLE.items()})
 _FIX = [{"region": "x_min", "fix": ["x", "y", "z"]}]
 
 

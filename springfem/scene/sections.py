@@ -59,7 +59,6 @@ SECTION_KEYS = {
     "material": (
         *("law", "density", "E", "nu", "mu", "kappa", "formulation", "volumetric"),
         *("E_fiber", "E_cross", "nu_fiber_cross", "nu_cross", "G_fiber"),
-        *sorted({k for keys in TISSUE_LAWS.values() for k in keys}),
         *TISSUE_KEYS[1:],
     ),
     "axes": (
@@ -70,6 +69,11 @@ SECTION_KEYS = {
     "load": ("type", "value", "region"),
     "probe": ("name", "point"),
 }
+
+
+def material_keys() -> tuple[str, ...]:
+    """The ``[material]`` keys: the fixed ones and every registered tissue law's constants."""
+    return (*SECTION_KEYS["material"], *sorted({k for ks in TISSUE_LAWS.values() for k in ks}))
 
 
 #: A probe outside the mesh by at most this share of the nearest element's size (its mean

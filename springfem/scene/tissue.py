@@ -1,4 +1,4 @@
-"""The ``[material]`` keys of the finite-strain tissue laws (Guccione, Holzapfel–Ogden).
+"""The ``[material]`` keys of the finite-strain tissue laws (:mod:`springfem.materials.laws`).
 
 Examples
 --------
@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..materials.tissue import TISSUE_LAWS, tissue_tangent
+from ..materials.laws import law_class, small_strain_tangent
 from .reader import TableReader
 from .types import VOLUMETRIC
 
@@ -36,7 +36,7 @@ def parse_tissue(r: TableReader, law: str) -> dict[str, Any]:
     r
         Reader over the ``[material]`` table.
     law
-        ``guccione`` or ``holzapfel-ogden``.
+        A registered law (:data:`springfem.materials.laws.LAWS`).
 
     Returns
     -------
@@ -47,11 +47,14 @@ def parse_tissue(r: TableReader, law: str) -> dict[str, Any]:
         mean Voigt shear modulus of the small-strain tangent, and ``kappa`` or
         ``1000 mu`` when incompressible).
     """
+    cls = law_class(law)
     params = {}
-    for k in TISSUE_LAWS[law]:
-        params[k] = r.get(k, "float", nonneg=k.startswith("a"), positive=not k.startswith("a"))
-    if law == "holzapfel-ogden" and params["a"] == 0:
-        raise r.fail("a", "must be positive (the isotropic term carries shear)")
+    for k in cls.keys():
+        zero = k in cls.nonnegative
+        params[k] = r.get(k, "float", nonneg=zero, positive=not zero)
+    bad = cls.check(params)
+    if bad is not None:
+        raise r.fail(*bad)
     incompressible = r.get("incompressible", "bool", default=False)
     if incompressible:
         if r.has("kappa"):
@@ -63,7 +66,7 @@ def parse_tissue(r: TableReader, law: str) -> dict[str, Any]:
     params["kappa"] = kappa
     if r.has("active_tension"):
         params["active_tension"] = r.get("active_tension", "float", nonneg=True)
-    mu = float(np.mean(np.diag(tissue_tangent(law, params))[3:]))
+    mu = float(np.mean(np.diag(small_strain_tangent(law, params))[3:]))
     k_eq = kappa if kappa > 0 else 1000.0 * mu
     return {
         "parameters": params,

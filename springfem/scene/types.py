@@ -20,14 +20,17 @@ from typing import Any, Literal
 
 import numpy as np
 
+from ..materials.laws import LawNames
 from ..mesh import TetMesh
 from ..regions import Region
 from .reader import TableReader
 
-Law = Literal["linear", "transverse-linear", "neo-hookean", "guccione", "holzapfel-ogden"]
-#: The material laws; the finite-strain tissue laws keep their constants in
-#: ``Material.parameters`` (keys in :data:`springfem.materials.tissue.TISSUE_LAWS`).
-LAWS = ("linear", "transverse-linear", "neo-hookean", "guccione", "holzapfel-ogden")
+#: A material law's name (one of :data:`LAWS`).
+Law = str
+#: The material laws: three small-strain or isotropic ones, then every law of the table
+#: :mod:`springfem.materials.laws`, which keep their constants in ``Material.parameters``
+#: (keys in :data:`springfem.materials.laws.TISSUE_LAWS`).
+LAWS = LawNames(("linear", "transverse-linear", "neo-hookean"))
 FORMULATIONS = ("coupled", "uncoupled")
 VOLUMETRIC = ("log", "quadratic", "simo-taylor")
 LOAD_TYPES = ("traction", "pressure", "gravity", "force")

@@ -15,8 +15,8 @@ from scipy.optimize import brentq, fsolve
 from scipy.spatial.transform import Rotation
 
 from reference_fem import solve
-from reference_fem.laws import Guccione, HolzapfelOgden
 from springfem.errors import SceneError
+from springfem.materials.laws import Guccione, HolzapfelOgden
 from springfem.mesh import box_mesh
 from springfem.scene import scene_from_dict
 

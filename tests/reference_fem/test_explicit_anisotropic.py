@@ -1,7 +1,7 @@
 """Anisotropic explicit FEM kernels (reference_fem.explicit_anisotropic) against references.
 
 - the kernel forces equal minus the numpy residual's internal force
-  (``FemProblem(scene, 1).internal_force``: the laws of reference_fem.laws and
+  (``FemProblem(scene, 1).internal_force``: the laws of springfem.materials.laws and
   reference_fem.materials, einsum assembly) for transverse-linear, Guccione and
   Holzapfel–Ogden, each volumetric penalty, on a jittered five-tet box (irregular tets, a
   padded last block) with a smoothly rotating, tilted frame per element, at a finite

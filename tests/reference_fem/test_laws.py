@@ -1,14 +1,14 @@
 """Tissue laws (Guccione, Holzapfel–Ogden): stress = d energy, tangent = d stress (central
 finite differences), frame indifference and material symmetry, and the small-strain tangent
-against the closed form of :mod:`springfem.materials.tissue`."""
+the law table derives (:func:`springfem.materials.laws.small_strain_tangent`) against the
+closed forms written out here."""
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from reference_fem.laws import Guccione, HolzapfelOgden
 from springfem.materials import rotate_to_global, tensor_to_voigt
-from springfem.materials.tissue import guccione_tangent, holzapfel_ogden_tangent
+from springfem.materials.laws import Guccione, HolzapfelOgden, small_strain_tangent
 
 HO = dict(a=1.0, b=2.0, a_f=2.0, b_f=3.0, a_s=1.5, b_s=2.5, a_fs=0.5, b_fs=1.5)
 GU = dict(C=2.0, b_f=8.0, b_t=2.0, b_fs=4.0)
@@ -23,6 +23,47 @@ RNG = np.random.default_rng(11)
 # Several deformations with fibres and sheets in tension and in compression.
 FS = np.eye(3) + 0.25 * RNG.standard_normal((6, 3, 3))
 FRAMES = Rotation.random(6, random_state=3).as_matrix()
+
+
+def guccione_tangent(C, b_f, b_t, b_fs, kappa=0.0):
+    """Closed form: ``W ~ C/2 Q`` at small strain, so ``D = diag(C b_f, C b_t, C b_t,
+    C b_t / 2, C b_fs / 2, C b_fs / 2)`` plus ``kappa`` on the normal block."""
+    D = np.diag([C * b_f, C * b_t, C * b_t, C * b_t / 2, C * b_fs / 2, C * b_fs / 2])
+    D[:3, :3] += kappa
+    return D
+
+
+def holzapfel_ogden_tangent(a, b, a_f, b_f, a_s, b_s, a_fs, b_fs, kappa=0.0, tension=True):
+    """Closed form: the isochoric term is a neo-Hookean deviator of shear modulus ``a``;
+    the fibre and sheet terms add ``4 a_f``, ``4 a_s`` (``I4 - 1 = 2 E``) in tension, the
+    fs term ``a_fs`` to the fs shear (``I8 = 2 E_fs``); ``U''(1) = kappa``."""
+    D = np.zeros((6, 6))
+    D[:3, :3] = 2.0 * a * (np.eye(3) - 1.0 / 3.0) + kappa
+    D[3:, 3:] = a * np.eye(3)
+    if tension:
+        D[0, 0] += 4.0 * a_f
+        D[1, 1] += 4.0 * a_s
+    D[5, 5] += a_fs
+    return D
+
+
+@pytest.mark.parametrize("kappa", [0.0, 40.0])
+@pytest.mark.parametrize("tension", [True, False])
+def test_the_table_small_strain_tangent_is_the_closed_form(kappa, tension):
+    D = small_strain_tangent("guccione", GU, kappa=kappa)
+    assert np.allclose(D, guccione_tangent(**GU, kappa=kappa), rtol=1e-14, atol=0)
+    D = small_strain_tangent("holzapfel-ogden", HO, kappa=kappa, tension=tension)
+    closed = holzapfel_ogden_tangent(**HO, kappa=kappa, tension=tension)
+    assert np.allclose(D, closed, rtol=1e-14, atol=1e-14 * abs(closed).max())
+
+
+def test_the_table_lists_each_law_with_its_constants():
+    from springfem.materials.laws import TISSUE_LAWS
+    from springfem.scene import LAWS
+
+    assert TISSUE_LAWS["guccione"] == tuple(GU)
+    assert TISSUE_LAWS["holzapfel-ogden"] == tuple(HO)
+    assert {"guccione", "holzapfel-ogden", "linear", "neo-hookean"} <= set(LAWS)
 
 
 def _fd(fun, F, h=1e-6):
@@ -104,10 +145,11 @@ def test_holzapfel_ogden_fibres_carry_no_compression():
 @pytest.mark.parametrize(
     "module",
     [
-        "reference_fem.laws",
-        "reference_fem.laws.guccione",
-        "reference_fem.laws.holzapfel_ogden",
-        "reference_fem.laws.kinematics",
+        "springfem.materials.laws",
+        "springfem.materials.laws.guccione",
+        "springfem.materials.laws.holzapfel_ogden",
+        "springfem.materials.laws.kinematics",
+        "springfem.materials.laws.base",
         "springfem.materials.tissue",
     ],
 )

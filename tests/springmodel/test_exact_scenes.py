@@ -111,7 +111,7 @@ def test_tissue_scene_small_load_equals_p1_of_the_law(law):
     # The Land beam made compressible (kappa = 50 C, the displacement formulation runs on
     # P1) with fibres along x: at 1e-4 of its load the spring model calibrated from the
     # law's closed-form small-strain tangent (springfem.materials.tissue_matrix) must match
-    # the FEM's P1 solve of the same law (reference_fem.laws, finite strain, an independent
+    # the FEM's P1 solve of the same law (springfem.materials.laws, finite strain, an independent
     # implementation of W) to the nonlinearity level: the difference is linear in the load
     # (measured 1.04e-3, 1.04e-4, 1.04e-5 at 1e-2, 1e-3, 1e-4: the exponential laws stiffen
     # at O(b strain)), so 1e-4 of the load leaves a tenth of the bound.

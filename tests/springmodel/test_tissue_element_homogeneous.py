@@ -18,8 +18,8 @@ import pytest
 from scipy.spatial import Delaunay
 
 from reference_fem import FemProblem
-from reference_fem.laws import tissue_law
 from springfem.errors import InputError, SceneError
+from springfem.materials.laws import tissue_law
 from springfem.scene import Material, scene_from_dict
 from springmodel.model import SpringModel
 from springmodel.options import SpringOptions

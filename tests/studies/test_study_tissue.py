@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 
 import studies.study_tissue as st
-from springfem.materials.tissue import guccione_tangent, holzapfel_ogden_tangent
+from springfem.materials.tissue import tissue_tangent
 from studies.cache import CaseCache
 from studies.registry import StudyContext
 from studies.study_tissue import GUCCIONE, HOLZAPFEL_OGDEN, VERSION, cube, stretch_case
@@ -18,12 +18,8 @@ pytestmark = pytest.mark.slow
 
 
 def small_strain_tangent(law):
-    if law == "guccione":
-        g = GUCCIONE
-        return guccione_tangent(g["C"], g["b_f"], g["b_t"], g["b_fs"], g["kappa"])
-    h = HOLZAPFEL_OGDEN
-    keys = ("a", "b", "a_f", "b_f", "a_s", "b_s", "a_fs", "b_fs")
-    return holzapfel_ogden_tangent(*(h[k] for k in keys), kappa=h["kappa"])  # in tension
+    p = GUCCIONE if law == "guccione" else HOLZAPFEL_OGDEN
+    return tissue_tangent(law, p, kappa=p["kappa"])  # in tension
 
 
 @pytest.mark.parametrize("law", ["guccione", "holzapfel-ogden"])

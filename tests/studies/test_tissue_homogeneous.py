@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from reference_fem import FemProblem
-from reference_fem.laws import tissue_law
+from springfem.materials.laws import tissue_law
 from studies import models
 from studies.study_tissue import homogeneous as h
 

@@ -4,12 +4,14 @@ A law implements :meth:`TissueLaw.local` (energy, first Piola stress and tangent
 deformation gradient expressed in the element frame, without the volumetric term); this
 class adds the penalty ``U(J)`` (``kappa > 0``), rotates to the global frame and marks
 inverted elements (``J <= 0``) with NaN, like :class:`~reference_fem.hyperelastic.NeoHookean`.
+The law's constants are its other dataclass fields (:meth:`TissueLaw.keys`, the
+``[material]`` keys), in the order :func:`springfem.materials.laws.register` lists them.
 ``frames`` is ``(..., 3, 3)`` broadcast against ``F`` (rows: fiber, sheet, normal);
 ``None`` means the global axes.
 
 The fibre invariants are those of the full ``C``, never split isochorically (Nolan et al.
 2014); incompressibility comes from ``U(J)`` or from the mixed formulation
-(``kappa = 0``, :mod:`reference_fem.mixed`).
+(``kappa = 0``, :mod:`reference_fem.mixed`). Adding a law: docs/laws.rst.
 
 An active fibre tension ``T_a`` (``active_tension``, docs/fem.rst#active-tension) adds
 ``T_a f0 (x) f0`` to the second Piola stress: in the element frame (``f0 = e_0``) the
@@ -43,12 +45,16 @@ An active tension ``T_a`` is a fibre stress ``S_ff = T_a`` at rest; half of it a
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from collections.abc import Mapping
+from dataclasses import dataclass, fields, replace
+from typing import ClassVar
 
 import numpy as np
 
-from ..hyperelastic import _det
-from .kinematics import stress_from_frame, tangent_from_frame, to_frame, volumetric_terms
+from .kinematics import det, stress_from_frame, tangent_from_frame, to_frame, volumetric_terms
+
+#: The fields every law has that are not its own constants.
+_COMMON = ("kappa", "volumetric", "active_tension")
 
 
 @dataclass(frozen=True)
@@ -73,6 +79,46 @@ class TissueLaw:
     #: Assembly passes each element's frame to laws with this flag.
     anisotropic = True
     label = "tissue"
+    #: Constants that may be zero (the others must be positive in a scene).
+    nonnegative: ClassVar[tuple[str, ...]] = ()
+    #: Constants of a small example material (the scene reference, docs/laws.rst).
+    example: ClassVar[dict[str, float]] = {}
+
+    @classmethod
+    def keys(cls) -> tuple[str, ...]:
+        """The law's constants: its dataclass fields but ``kappa``, ``volumetric``,
+        ``active_tension`` and those marked ``metadata={"parameter": False}``."""
+        return tuple(
+            f.name
+            for f in fields(cls)
+            if f.name not in _COMMON and f.metadata.get("parameter", True)
+        )
+
+    @classmethod
+    def check(cls, parameters: Mapping[str, float]) -> tuple[str, str] | None:
+        """``(key, reason)`` when the constants are not a valid material, else None.
+
+        Parameters
+        ----------
+        parameters
+            The constants (:meth:`keys`), each already finite and of the right sign.
+        """
+        return None
+
+    @classmethod
+    def stiffening_modulus(cls, parameters: Mapping[str, float]) -> float | None:
+        """The modulus ``C`` of the spring element's exponential stiffening
+        ``V C/2 (exp(2 W_q / (C V)) - 1)`` (:mod:`springmodel.stiffening`), or None: the
+        scene must give ``[spring] stiffening_modulus``."""
+        return None
+
+    def small_strain(self, tension: bool) -> TissueLaw:
+        """The law whose tangent at ``F = I`` is this one's small-strain tangent.
+
+        A law with terms that switch on in tension only returns itself with them always on
+        (``tension``) or always off; others return ``self``.
+        """
+        return self
 
     @property
     def name(self) -> str:
@@ -101,14 +147,14 @@ class TissueLaw:
 
     def _evaluate(self, F: np.ndarray, frames, tangent: bool):
         F = np.asarray(F, dtype=float)
-        bad = ~(_det(F) > 0)
+        bad = ~(det(F) > 0)
         Fl = to_frame(F, frames)
         with np.errstate(invalid="ignore", over="ignore"):
             W, P, A = self.local(Fl, tangent)
             if self.active_tension != 0.0:
                 W, P, A = _add_active(Fl, self.active_tension, W, P, A)
             if self.kappa > 0:
-                U, Pv, Av = volumetric_terms(Fl, self.kappa, self.volumetric)
+                U, Pv, Av = volumetric_terms(Fl, self.kappa, self.volumetric, tangent)
                 W, P = W + U, P + Pv
                 A = A + Av if tangent else None
         W = np.where(bad, np.nan, W)
@@ -133,7 +179,7 @@ class TissueLaw:
     def cauchy(self, F: np.ndarray, frames: np.ndarray | None = None) -> np.ndarray:
         """Cauchy stress ``sigma = P F^T / J`` (without the mixed pressure)."""
         P = self.stress(F, frames)
-        return np.einsum("...ij,...kj->...ik", P, F) / _det(F)[..., None, None]
+        return np.einsum("...ij,...kj->...ik", P, F) / det(F)[..., None, None]
 
 
 def _add_active(Fl: np.ndarray, T: float, W, P, A):

@@ -39,7 +39,7 @@ class Guccione(TissueLaw):
     b_f, b_t, b_fs
         Fibre, transverse and fibre–sheet/normal shear exponents.
     kappa, volumetric
-        See :class:`~reference_fem.laws.base.TissueLaw`.
+        See :class:`~springfem.materials.laws.base.TissueLaw`.
     """
 
     C: float = 1.0
@@ -47,6 +47,12 @@ class Guccione(TissueLaw):
     b_t: float = 1.0
     b_fs: float = 1.0
     label = "guccione"
+    example = {"C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0}
+
+    @classmethod
+    def stiffening_modulus(cls, parameters):
+        """``C``: with the exact calibration ``2 W_q / (C V)`` is Guccione's ``Q``."""
+        return float(parameters["C"])
 
     @property
     def B(self) -> np.ndarray:

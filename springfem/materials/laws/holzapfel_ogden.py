@@ -20,7 +20,7 @@ Examples
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -59,7 +59,10 @@ class HolzapfelOgden(TissueLaw):
     a_fs, b_fs
         Fibre–sheet shear coupling.
     kappa, volumetric
-        See :class:`~reference_fem.laws.base.TissueLaw`.
+        See :class:`~springfem.materials.laws.base.TissueLaw`.
+    tension_only
+        The fibre and sheet terms act in tension only (the law); False: always (their
+        small-strain tangent in tension, :meth:`small_strain`).
     """
 
     a: float = 1.0
@@ -70,7 +73,29 @@ class HolzapfelOgden(TissueLaw):
     b_s: float = 1.0
     a_fs: float = 0.0
     b_fs: float = 1.0
+    tension_only: bool = field(default=True, metadata={"parameter": False})
     label = "holzapfel-ogden"
+    nonnegative = ("a", "a_f", "a_s", "a_fs")
+    example = {"a": 1.0, "b": 1.0, "a_f": 1.0, "b_f": 1.0, "a_s": 1.0, "b_s": 1.0,
+               "a_fs": 1.0, "b_fs": 1.0}  # fmt: skip
+
+    @classmethod
+    def check(cls, parameters):
+        if parameters["a"] == 0:
+            return "a", "must be positive (the isotropic term carries shear)"
+        return None
+
+    @classmethod
+    def stiffening_modulus(cls, parameters):
+        """``a_f / b_f`` (when both are positive): the stiffening is then the fibre term
+        ``a_f/(2 b_f) (exp(b_f (I4f - 1)^2) - 1)`` under a stretch along the fibre
+        (``2 W_q / (C V) = b_f (I4f - 1)^2`` to leading order, ``W_q / V = 2 a_f E_ff^2``);
+        one exponent per element cannot also be the sheet's ``b_s`` or the isotropic ``b``."""
+        a_f, b_f = parameters.get("a_f", 0), parameters.get("b_f", 0)
+        return float(a_f) / float(b_f) if a_f > 0 and b_f > 0 else None
+
+    def small_strain(self, tension: bool) -> HolzapfelOgden:
+        return replace(self, tension_only=not tension)
 
     def local(self, F: np.ndarray, tangent: bool):
         I1b, D1, D2 = isochoric_i1(F)
@@ -85,10 +110,11 @@ class HolzapfelOgden(TissueLaw):
             (self.a_s, self.b_s, C[..., 1, 1] - 1.0, _DI4S, True),
             (self.a_fs, self.b_fs, C[..., 0, 1], _DI8, False),
         )
-        for a, b, x, dI, tension_only in terms:
+        for a, b, x, dI, switch in terms:
             if a == 0.0:
                 continue
-            psi, d1, d2 = _exp_term(a, b, x, (x > TENSION) if tension_only else None)
+            on = (x > TENSION) if switch and self.tension_only else None
+            psi, d1, d2 = _exp_term(a, b, x, on)
             W = W + psi
             S = S + d1[..., None, None] * dI
             if tangent:

@@ -1,4 +1,4 @@
-"""Tensor pieces shared by the tissue laws: frames, second to first Piola, U(J), I1bar.
+"""Tensor pieces shared by the laws: frames, second to first Piola, det, U(J), I1bar.
 
 Conventions: ``F`` is ``(..., 3, 3)``; a frame ``R`` has the element's axes as rows (fiber,
 sheet, normal), so ``F' = F R^T`` is the deformation gradient in the element frame
@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..hyperelastic import _det, _volumetric
+from ...volumetric import volumetric_energy
 
 _I = np.eye(3)
 #: ``II[i, j, k, l] = delta_ik delta_jl`` (d F / d F).
@@ -112,8 +112,29 @@ def piola_from_pk2(F: np.ndarray, S: np.ndarray, CC: np.ndarray | None):
     return P, A
 
 
-def volumetric_terms(F: np.ndarray, kappa: float, kind: str):
-    """``U(J)``, its first Piola stress and tangent (the neo-Hookean module's ``U``).
+def det(F: np.ndarray) -> np.ndarray:
+    """Determinant of ``(..., 3, 3)`` arrays (explicit formula, fast for many small ones).
+
+    Parameters
+    ----------
+    F
+        ``(..., 3, 3)`` matrices.
+
+    Returns
+    -------
+    ndarray
+        ``(...)``.
+    """
+    return (
+        F[..., 0, 0] * (F[..., 1, 1] * F[..., 2, 2] - F[..., 1, 2] * F[..., 2, 1])
+        - F[..., 0, 1] * (F[..., 1, 0] * F[..., 2, 2] - F[..., 1, 2] * F[..., 2, 0])
+        + F[..., 0, 2] * (F[..., 1, 0] * F[..., 2, 1] - F[..., 1, 1] * F[..., 2, 0])
+    )
+
+
+def volumetric_terms(F: np.ndarray, kappa: float, kind: str, tangent: bool = True):
+    """``U(J)`` (:func:`springfem.volumetric.volumetric_energy`), its first Piola stress and
+    tangent.
 
     ``P = J U' F^-T``, ``A = J (U' + J U'') F^-T (x) F^-T - J U' F^-T_iL F^-T_kJ``.
 
@@ -125,6 +146,8 @@ def volumetric_terms(F: np.ndarray, kappa: float, kind: str):
         Bulk modulus (Pa).
     kind
         ``log``, ``quadratic`` or ``simo-taylor``.
+    tangent
+        False: ``A`` is None.
 
     Returns
     -------
@@ -132,13 +155,15 @@ def volumetric_terms(F: np.ndarray, kappa: float, kind: str):
         Energy density ``(...)``, stress ``(..., 3, 3)``, tangent ``(..., 3, 3, 3, 3)``; NaN
         where ``J <= 0``.
     """
-    J = _det(F)
+    J = det(F)
     bad = ~(J > 0)
     with np.errstate(invalid="ignore", divide="ignore"):
         FiT = np.swapaxes(np.linalg.inv(np.where(bad[..., None, None], _I, F)), -1, -2)
         J = np.where(bad, np.nan, J)
-        U, dU, ddU = _volumetric(J, kappa, kind)
+        U, dU, ddU = volumetric_energy(J, kappa, kind)
     P = (J * dU)[..., None, None] * FiT
+    if not tangent:
+        return U, P, None
     A = (J * (dU + J * ddU))[..., None, None, None, None] * np.einsum(
         "...ij,...kl->...ijkl", FiT, FiT
     ) - (J * dU)[..., None, None, None, None] * np.einsum("...il,...kj->...ijkl", FiT, FiT)
@@ -160,7 +185,7 @@ def isochoric_i1(F: np.ndarray):
     I1bar, D1, D2
         ``(...)``, ``(..., 3, 3)`` and ``(..., 3, 3, 3, 3)``.
     """
-    J = _det(F)
+    J = det(F)
     bad = ~(J > 0)
     with np.errstate(invalid="ignore", divide="ignore"):
         FiT = np.swapaxes(np.linalg.inv(np.where(bad[..., None, None], _I, F)), -1, -2)
