@@ -1,8 +1,7 @@
 """springfem.volumetric (the U(J) the axis-volume spring uses; a core module).
 
-References: central differences of U and U', the small-strain limit ``U''(1) = kappa``, and
-the FEM's own copy of the same three energies (reference_fem.hyperelastic, written
-independently), which must agree to round-off.
+References: central differences of U and U', the small-strain limit ``U''(1) = kappa``. The
+FEM's laws (reference_fem.hyperelastic, springfem.materials.laws) use this same function.
 """
 
 from __future__ import annotations
@@ -27,14 +26,6 @@ def test_derivatives_by_finite_differences(kind):
     np.testing.assert_allclose(d2U, (dUp - dUm) / (2 * h), rtol=1e-8, atol=1e-10)
     U1, dU1, d2U1 = volumetric_energy(np.array([1.0]), 2.0, kind)
     assert (U1[0], dU1[0], d2U1[0]) == (0.0, 0.0, pytest.approx(2.0, rel=1e-15))
-
-
-@pytest.mark.parametrize("kind", VOLUMETRIC_ENERGIES)
-def test_same_energies_as_the_fem(kind):
-    from reference_fem.hyperelastic import _volumetric
-
-    for a, b in zip(volumetric_energy(J, 3.0, kind), _volumetric(J, 3.0, kind), strict=True):
-        np.testing.assert_allclose(a, b, rtol=1e-14)
 
 
 def test_unknown_energy_is_a_clear_error():
