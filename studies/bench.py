@@ -45,6 +45,7 @@ from .timing import (
     median,
     median_ratio,
     stream_bandwidth,
+    timed,
 )
 
 # Passive OpenMP waiting (spinning threads steal a shared machine's cores), set before the
@@ -288,6 +289,16 @@ def step_costs(systems: dict, steps: int, rounds: int) -> dict:
     return interleaved(cases, rounds=rounds, warmup=1)
 
 
+def step_and_force_cases(systems: dict, x, steps: int = STEP_COUNT) -> dict:
+    """``<name>: step`` (``steps`` explicit steps) and ``<name>: forces`` (as many bare force
+    passes at ``x``) of every system, to time in the same rounds."""
+    cases = {}
+    for name, s in systems.items():
+        cases[f"{name}: step"] = lambda s=s: explicit_steps(s, steps)
+        cases[f"{name}: forces"] = lambda s=s: [s.forces(x, None, 1.0) for _ in range(steps)]
+    return cases
+
+
 def bench_step(n_tets: int = 100_000, repeats: int = 5, steps: int = STEP_COUNT) -> dict:
     """A whole explicit step against its bare force pass, both timed in every round."""
     from reference_fem.explicit import ExplicitFem
@@ -302,13 +313,8 @@ def bench_step(n_tets: int = 100_000, repeats: int = 5, steps: int = STEP_COUNT)
         "explicit P1 FEM neo-Hookean, serial": ExplicitFem(scene, parallel=False),
         "explicit P1 FEM neo-Hookean, parallel": ExplicitFem(scene, parallel=True),
     }
-    x = deformed_state(scene.mesh.points)
-    cases = {}
-    for name, s in systems.items():
-        cases[f"{name}: step"] = lambda s=s: explicit_steps(s, steps)
-        cases[f"{name}: forces"] = lambda s=s: [s.forces(x, None, 1.0) for _ in range(steps)]
-    load_before = load_average()
-    samples = interleaved(cases, rounds=repeats)
+    cases = step_and_force_cases(systems, deformed_state(scene.mesh.points), steps)
+    samples, info = timed(cases, rounds=repeats)
     rows = []
     for name in systems:
         st, fo = f"{name}: step", f"{name}: forces"
@@ -327,7 +333,6 @@ def bench_step(n_tets: int = 100_000, repeats: int = 5, steps: int = STEP_COUNT)
         )
     sp = "spring model, {}: step"
     fe = "explicit P1 FEM neo-Hookean, {}: step"
-    info = machine(load_before)
     return {
         "benchmark": "step",
         "n_tets": m,

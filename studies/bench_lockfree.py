@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import tempfile
 
-from .bench import STEP_COUNT, explicit_steps
-from .timing import deformed_state, interleaved, load_average, machine, median, median_ratio
+from .bench import STEP_COUNT, step_and_force_cases
+from .timing import deformed_state, median, median_ratio, timed
 
 DEFAULT_TETS = 5000
 #: The models compared, the reference last.
@@ -76,10 +76,7 @@ def bench_lockfree(n_tets: int = DEFAULT_TETS, repeats: int = 7, solves: int = 0
     if hasattr(twin, "average"):
         twin.average = _parallel_copy(twin.average)
     x = deformed_state(scene.mesh.points)
-    cases = {}
-    for name, s in systems.items():
-        cases[f"{name}: step"] = lambda s=s: explicit_steps(s, steps)
-        cases[f"{name}: forces"] = lambda s=s: [s.forces(x, None, 1.0) for _ in range(steps)]
+    cases = step_and_force_cases(systems, x, steps)
     sm = systems["spring-stabilised, serial"]
     parts = {
         "element kernel": lambda: sm.kernel.forces(x),
@@ -94,8 +91,7 @@ def bench_lockfree(n_tets: int = DEFAULT_TETS, repeats: int = 7, solves: int = 0
     cases["fem-P1-nodal-strain: internal force"] = lambda: [
         problem.internal_force(u) for _ in range(steps)
     ]
-    load_before = load_average()
-    samples = interleaved(cases, rounds=repeats)
+    samples, info = timed(cases, rounds=repeats)
     ref = "P1-NH, serial: step"
     rows = [
         {
@@ -116,7 +112,7 @@ def bench_lockfree(n_tets: int = DEFAULT_TETS, repeats: int = 7, solves: int = 0
         "grouped_nodal_strain": bool(getattr(sm.nodal_strain, "grouped", False)),
         "virtual_elements": int(sm.nodal_strain.elements.n_elements),
         "rows": rows,
-        "machine": machine(load_before),
+        "machine": info,
     }
     if solves > 0:
         out["solves"] = static_solves(scene, solves)
@@ -173,8 +169,7 @@ def static_solves(scene, rounds: int) -> dict:
 
     cases = {name: (lambda name=name: solve(name)) for name in MODELS}
     warm_up(scene)
-    load_before = load_average()
-    samples = interleaved(cases, rounds=rounds, warmup=0)
+    samples, info = timed(cases, rounds=rounds, warmup=0)
     return {
         "rounds": rounds,
         "rows": [
@@ -186,34 +181,5 @@ def static_solves(scene, rounds: int) -> dict:
             }
             for name in MODELS
         ],
-        "machine": machine(load_before),
+        "machine": info,
     }
-
-
-def print_lockfree(res: dict) -> None:
-    """The table of :func:`bench_lockfree`."""
-    print(
-        f"bench lockfree: organ {res['n_tets']:,} tets, {res['n_nodes']:,} nodes; "
-        f"{res['rounds']} interleaved rounds of {res['steps_per_timing']} steps; nodal "
-        f"strain on {res['virtual_elements']:,} virtual elements"
-        f"{' (grouped)' if res['grouped_nodal_strain'] else ''}"
-    )
-    print(f"  {'case':44s} {'wall':>11s} {'/ P1-NH step':>13s} {'cpu':>11s} {'/ P1-NH':>8s}")
-    for r in res["rows"]:
-        print(f"  {r['case']:44s} {1e3 * r['seconds']:8.3f} ms {r['over_p1_nh_step']:12.2f}x "
-              f"{1e3 * r['cpu_seconds']:8.3f} ms {r['cpu_over_p1_nh']:7.2f}x")  # fmt: skip
-    print(
-        "  (cpu / P1-NH: against P1-NH's case of the same kind and threads; parts and FEM "
-        "against its serial force pass)"
-    )
-    m = res["machine"]
-    print(f"  machine: {m.get('cpus')} cpus, {m.get('numba_threads')} numba threads, load "
-          f"average {m.get('load_average_before', m.get('load_average'))} -> "
-          f"{m.get('load_average')}")  # fmt: skip
-    if "solves" in res:
-        s = res["solves"]
-        print(f"  static solves, {s['rounds']} interleaved round(s):")
-        for r in s["rows"]:
-            print(f"    {r['model']:24s} {r['seconds']:9.2f} s {r['over_p1_nh']:8.2f}x "
-                  f"{','.join(r['status'])}")  # fmt: skip
-        print(f"    load average {s['machine'].get('load_average')}")

@@ -28,7 +28,7 @@ import numpy as np
 
 from springmodel.options import GREEN_AXIAL_COEFFICIENTS, SpringOptions
 
-from .timing import deformed_state, interleaved, load_average, machine, median, median_ratio
+from .timing import deformed_state, median, median_ratio, timed
 
 #: Tets per timing (a force pass repeated until about this many): ~10 ms at 20 M tets/s.
 TETS_PER_TIMING = 200_000
@@ -120,8 +120,7 @@ def bench_threads(n_tets: int = 300_000, repeats: int = 7) -> dict:
             reps = max(1, round(TETS_PER_TIMING / m))
             cases[name] = lambda c=call, r=reps: [c() for _ in range(r)]
             meta[name] = (kernel, m, reps)
-    load_before = load_average()
-    samples = interleaved(cases, rounds=repeats)
+    samples, info = timed(cases, rounds=repeats)
     rows, speedups = [], {}
     for name, (kernel, m, reps) in meta.items():
         if not name.endswith(" 1"):
@@ -139,7 +138,6 @@ def bench_threads(n_tets: int = 300_000, repeats: int = 7) -> dict:
             }
         )
         speedups[m] = min(speedups.get(m, np.inf), speed)
-    info = machine(load_before)
     threads = numba.get_num_threads()
     return {
         "benchmark": "threads",

@@ -44,7 +44,7 @@ import numpy as np
 from springfem.errors import InputError
 from springfem.scene import Scene
 
-from .timing import interleaved, load_average, machine, median, median_ratio
+from .timing import median, median_ratio, timed
 
 #: Bundled scene of each scene key.
 SCENES = {"beam": "land-beam", "ventricle": "land-ventricle"}
@@ -223,8 +223,7 @@ def bench_tissue(
         runs[name] = _Case(s if form == "ngsolve" else form_scene(s, form), form)
     if warmup:
         warm_up([f for f in FORMS if any(n.endswith(f"-{f}") for n in names)])
-    load_before = load_average()
-    samples = interleaved(dict(runs.items()), rounds=repeats, warmup=0)
+    samples, info = timed(dict(runs.items()), rounds=repeats, warmup=0)
     rows = []
     for name, case in runs.items():
         key, form = name.split("-", 1)
@@ -279,63 +278,5 @@ def bench_tissue(
             "pressure_triangle_points": 6,
         },
         "notes": notes,
-        "machine": machine(load_before),
+        "machine": info,
     }
-
-
-def _f(v, fmt: str) -> str:
-    """``v`` formatted, or ``-`` right-aligned to the width of ``fmt``.
-
-    >>> _f(None, "6.2f"), _f(1.5, "6.2f")
-    ('     -', '  1.50')
-    """
-    if v is not None:
-        return format(v, fmt)
-    width = fmt.split(".")[0]
-    return format("-", f">{width}") if width.isdigit() else "-"
-
-
-def print_tissue(res: dict, file=None) -> None:
-    """Print a :func:`bench_tissue` result as tables on ``file`` (default stdout)."""
-    import sys
-
-    file = file or sys.stdout
-    mach = res["machine"]
-    print(
-        f"bench tissue: {res['rounds']} interleaved rounds; beam divisions "
-        f"{res['divisions']}, ventricle size {res['size_mm']:g} mm; {mach['cpus']} CPUs; load "
-        f"average {mach['load_average_before']} before, {mach['load_average_after']} after",
-        file=file,
-    )
-    cols = PHASES + ("newton",)
-    shown = [p for p in cols if any(p in r["phase_seconds"] for r in res["rows"])]
-    head = "".join(f" {p[:9]:>9}" for p in shown)
-    print(f"  {'case':<44} {'dofs':>6} {'its':>4} {'wall s':>7} {'cpu s':>7} {'/mixed':>6}{head}",
-          file=file)  # fmt: skip
-    for r in res["rows"]:
-        label = f"{r['scene']} {r['label']}"
-        ph = "".join(f" {_f(r['phase_seconds'].get(p), '9.2f')}" for p in shown)
-        print(
-            f"  {label:<44} {r['dofs']:>6} {r['iterations']:>4} {r['wall_seconds']:>7.2f} "
-            f"{r['cpu_seconds']:>7.2f} {_f(r['ratio_to_mixed'], '6.2f')}{ph}",
-            file=file,
-        )
-    print(
-        "  medians over rounds; /mixed: median per-round wall-time ratio to the scene's P2/P1 "
-        "mixed solve (> 1: slower); phases: medians of each solve's own phase table",
-        file=file,
-    )
-    q = res["quadrature"]
-    for key, agree in res["agreement"].items():
-        worst = ", ".join(f"{k} {v:.1e}" for k, v in agree.items())
-        ratio = res["ratios"][f"ngsolve_over_ours[{key}]"]
-        cpu = res["ratios"][f"ngsolve_over_ours_cpu[{key}]"]
-        print(
-            f"  NGSolve vs ours, {SCENES[key]}: probes agree to {worst} (relative); time "
-            f"NGSolve/ours {ratio:.2f} wall, {cpu:.2f} CPU (tets: degree {q['tet_degree']}, "
-            f"{q['tet_points']} points; pressure triangles: degree "
-            f"{q['pressure_triangle_degree']}, {q['pressure_triangle_points']} points)",
-            file=file,
-        )
-    for note in res["notes"]:
-        print(f"  note: {note}", file=file)

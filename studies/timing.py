@@ -79,6 +79,20 @@ def interleaved(
     return out
 
 
+def timed(cases: dict[str, Callable[[], object]], rounds: int = 7, warmup: int = 1):
+    """:func:`interleaved` timings of ``cases`` and the :func:`machine` they ran on (the load
+    average before and after): every benchmark's one timing path.
+
+    Returns
+    -------
+    tuple
+        The samples and the machine.
+    """
+    before = load_average()
+    samples = interleaved(cases, rounds=rounds, warmup=warmup)
+    return samples, machine(before)
+
+
 def median(samples: dict, name: str, kind: str = "wall") -> float:
     """Median over rounds of one case's ``wall`` or ``cpu`` time."""
     return float(np.median(samples[name][kind]))

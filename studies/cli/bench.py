@@ -1,4 +1,8 @@
-"""``springfem bench forces|fem|step|threads|tissue|scale|lockfree``: benchmarks (medians)."""
+"""``springfem bench forces|fem|step|threads|tissue|scale|lockfree``: benchmarks (medians).
+
+Each benchmark returns a JSON-able result (``--json`` prints it) that its printer of
+:mod:`studies.bench_print` shows as a table; ``scale`` writes its own folder.
+"""
 
 from __future__ import annotations
 
@@ -7,101 +11,82 @@ import json
 import sys
 import time
 
+from springfem.errors import InputError
+
+from .. import bench_print
 from ..bench import DEFAULT_TETS, bench_forces, bench_step, machine
-from ..bench_print import print_forces, print_step, print_threads
-from ..bench_threads import bench_threads
 
 
-def cmd_bench(args: argparse.Namespace) -> int:
-    """Entry point of ``springfem bench``."""
-    from springfem.errors import InputError
-
-    what = args.what
-    if what == "tissue":
-        return _bench_tissue(args)
-    if what == "scale":
-        return _bench_scale(args)
-    if what == "lockfree":
-        return _bench_lockfree(args)
-    n = args.tets if args.tets is not None else DEFAULT_TETS[what]
-    repeats = int(getattr(args, "repeats", None) or 7)
-    if n < 6:
-        raise InputError(f"--tets must be at least 6, got {n}")
+def _repeats(args: argparse.Namespace, default: int) -> int:
+    repeats = int(args.repeats if args.repeats is not None else default)
     if repeats < 1:
         raise InputError(f"--repeats must be at least 1, got {repeats}")
-    as_json = bool(getattr(args, "json", False))
-    if what == "forces":
-        res = bench_forces(n, repeats, variants=bool(getattr(args, "variants", False)))
-        if not as_json:
-            print_forces(res)
-    elif what == "step":
-        res = bench_step(n, repeats)
-        if not as_json:
-            print_step(res)
-    elif what == "threads":
-        res = bench_threads(n, repeats)
-        if not as_json:
-            print_threads(res)
-    elif what == "fem":
-        from reference_fem import bench
-        from reference_fem.bench import _print as print_fem
-
-        t0 = time.perf_counter()
-        res = bench(n, verbose=False)
-        res["machine"] = machine()
-        res["seconds"] = time.perf_counter() - t0
-        if not as_json:
-            print_fem(res, file=sys.stdout)  # its default stream is bound at import time
-            print(f"  machine load average {res['machine']['load_average']}")
-    else:  # argparse restricts the choices
-        raise InputError(f"unknown benchmark {what!r}; valid: forces, fem, step, threads, tissue")
-    if as_json:
-        _print_json(res)
-    return 0
+    return repeats
 
 
-def _print_json(res: dict) -> None:
-    from springfem.files import jsonable as _jsonable
-
-    print(json.dumps(_jsonable(res), indent=2, sort_keys=True))
-
-
-def _bench_lockfree(args: argparse.Namespace) -> int:
-    """``springfem bench lockfree`` (:mod:`studies.bench_lockfree`)."""
-    from springfem.errors import InputError
-
-    from ..bench_lockfree import DEFAULT_TETS, bench_lockfree, print_lockfree
-
-    n = DEFAULT_TETS if args.tets is None else int(args.tets)
-    repeats = int(args.repeats if args.repeats is not None else 7)
-    solves = int(getattr(args, "solves", None) or 0)
-    if n < 100 or repeats < 1 or solves < 0:
-        raise InputError("bench lockfree: --tets >= 100, --repeats >= 1, --solves >= 0")
-    res = bench_lockfree(n, repeats, solves)
-    if args.json:
-        _print_json(res)
-    else:
-        print_lockfree(res)
-    return 0
+def _tets(args: argparse.Namespace, default: int, least: int = 6) -> int:
+    n = int(args.tets if args.tets is not None else default)
+    if n < least:
+        raise InputError(f"--tets must be at least {least}, got {n}")
+    return n
 
 
-def _bench_tissue(args: argparse.Namespace) -> int:
-    """``springfem bench tissue`` (:mod:`studies.bench_tissue`)."""
-    from springfem.errors import InputError
-
-    from ..bench_tissue import (
-        DEFAULT_DIVISIONS,
-        DEFAULT_REPEATS,
-        DEFAULT_SIZE,
-        bench_tissue,
-        print_tissue,
-    )
-
+def _no_tets(args: argparse.Namespace, what: str, instead: str) -> None:
     if args.tets is not None:
-        raise InputError("bench tissue: --tets does not apply; use --size and --divisions")
-    repeats = int(args.repeats if args.repeats is not None else DEFAULT_REPEATS)
-    if repeats < 1:
-        raise InputError(f"--repeats must be at least 1, got {repeats}")
+        raise InputError(f"bench {what}: --tets does not apply; use {instead}")
+
+
+def _forces(args: argparse.Namespace) -> dict:
+    n, repeats = _tets(args, DEFAULT_TETS["forces"]), _repeats(args, 7)
+    return bench_forces(n, repeats, variants=bool(getattr(args, "variants", False)))
+
+
+def _step(args: argparse.Namespace) -> dict:
+    return bench_step(_tets(args, DEFAULT_TETS["step"]), _repeats(args, 7))
+
+
+def _threads(args: argparse.Namespace) -> dict:
+    from ..bench_threads import bench_threads
+
+    return bench_threads(_tets(args, DEFAULT_TETS["threads"]), _repeats(args, 7))
+
+
+def _fem(args: argparse.Namespace) -> dict:
+    from reference_fem import bench
+
+    n = _tets(args, DEFAULT_TETS["fem"])
+    _repeats(args, 7)
+    t0 = time.perf_counter()
+    res = bench(n, verbose=False)
+    res["machine"] = machine()
+    res["seconds"] = time.perf_counter() - t0
+    return res
+
+
+def _print_fem(res: dict) -> None:
+    from reference_fem.bench import _print
+
+    _print(res, file=sys.stdout)  # its default stream is bound at import time
+    print(f"  machine load average {res['machine']['load_average']}")
+
+
+def _lockfree(args: argparse.Namespace) -> dict:
+    """``springfem bench lockfree`` (:mod:`studies.bench_lockfree`)."""
+    from ..bench_lockfree import DEFAULT_TETS as LOCKFREE_TETS
+    from ..bench_lockfree import bench_lockfree
+
+    solves = int(getattr(args, "solves", None) or 0)
+    if solves < 0:
+        raise InputError(f"--solves must be at least 0, got {solves}")
+    return bench_lockfree(_tets(args, LOCKFREE_TETS, least=100), _repeats(args, 7), solves)
+
+
+def _tissue(args: argparse.Namespace) -> dict:
+    """``springfem bench tissue`` (:mod:`studies.bench_tissue`)."""
+    from ..bench_tissue import DEFAULT_DIVISIONS, DEFAULT_REPEATS, DEFAULT_SIZE, bench_tissue
+
+    _no_tets(args, "tissue", "--size and --divisions")
+    repeats = _repeats(args, DEFAULT_REPEATS)
     size = DEFAULT_SIZE if args.size is None else float(args.size)
     if not size > 0:
         raise InputError(f"--size must be positive, got {size:g}")
@@ -114,19 +99,40 @@ def _bench_tissue(args: argparse.Namespace) -> int:
         if len(divisions) != 3 or min(divisions) < 1:
             raise InputError(f"--divisions must be three positive integers NX,NY,NZ, "
                              f"got {args.divisions!r}")  # fmt: skip
-    res = bench_tissue(repeats, args.cases, size, divisions)
-    if args.json:
-        _print_json(res)
+    return bench_tissue(repeats, args.cases, size, divisions)
+
+
+#: ``what`` -> (run the benchmark from the options, print its result).
+BENCHES = {
+    "forces": (_forces, bench_print.print_forces),
+    "step": (_step, bench_print.print_step),
+    "threads": (_threads, bench_print.print_threads),
+    "fem": (_fem, _print_fem),
+    "lockfree": (_lockfree, bench_print.print_lockfree),
+    "tissue": (_tissue, bench_print.print_tissue),
+}
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    """Entry point of ``springfem bench``: run one benchmark, print its table or JSON."""
+    if args.what == "scale":
+        return _bench_scale(args)
+    if args.what not in BENCHES:  # argparse restricts the choices
+        raise InputError(f"unknown benchmark {args.what!r}; valid: {', '.join(BENCHES)}, scale")
+    run, show = BENCHES[args.what]
+    res = run(args)
+    if getattr(args, "json", False):
+        from springfem.files import jsonable
+
+        print(json.dumps(jsonable(res), indent=2, sort_keys=True))
     else:
-        print_tissue(res)
+        show(res)
     return 0
 
 
 def _bench_scale(args: argparse.Namespace) -> int:
     """``springfem bench scale`` (:mod:`studies.bench_scale`)."""
     from pathlib import Path
-
-    from springfem.errors import InputError
 
     from ..bench_scale import (
         DEFAULT_MAX_MEMORY,
@@ -139,8 +145,7 @@ def _bench_scale(args: argparse.Namespace) -> int:
         bench_scale,
     )
 
-    if args.tets is not None:
-        raise InputError("bench scale: --tets does not apply; use --sizes N,N,...")
+    _no_tets(args, "scale", "--sizes N,N,...")
     sizes: tuple[int, ...] = QUICK_SIZES if args.quick else DEFAULT_SIZES
     if args.sizes is not None:
         try:
