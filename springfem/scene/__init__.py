@@ -4,9 +4,10 @@ One idea per module: :mod:`~springfem.scene.types` (the dataclasses),
 :mod:`~springfem.scene.reader` (typed access to a table, one-line messages),
 :mod:`~springfem.scene.sections` (the section parsers), :mod:`~springfem.scene.build`
 (the pure :func:`scene_from_dict` and the model-section registry),
-:mod:`~springfem.scene.loader` (TOML files) and :mod:`~springfem.scene.limits` (mesh
-size limits). Scene files are data: they are parsed with :mod:`tomllib` and validated key
-by key; they never execute code. Every problem raises
+:mod:`~springfem.scene.loader` (TOML files), :mod:`~springfem.scene.load_time` (loads as
+functions of time), :mod:`~springfem.scene.dynamics` (the ``[dynamics]`` section) and
+:mod:`~springfem.scene.limits` (mesh size limits). Scene files are data: they are parsed
+with :mod:`tomllib` and validated key by key; they never execute code. Every problem raises
 :class:`~springfem.errors.SceneError` with one line naming the file and the key.
 
 Examples
@@ -23,6 +24,7 @@ Examples
 
 from ..errors import SceneError
 from .build import SECTIONS, model_sections, register_section, scene_from_dict
+from .dynamics import DynamicsOptions, RayleighDamping, parse_dynamics
 from .limits import BYTES_PER_TET, MAX_TETS, check_mesh_size, machine_memory
 from .loader import load_scene, parse_scene
 from .output import OutputOptions, parse_output
@@ -49,8 +51,12 @@ from .types import (
 
 register_section("output", parse_output)
 register_section("solver", parse_solver)
+register_section("dynamics", parse_dynamics)
 
 __all__ = [
+    "DynamicsOptions",
+    "RayleighDamping",
+    "parse_dynamics",
     "SolverOptions",
     "model_precision",
     "parse_solver",

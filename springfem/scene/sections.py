@@ -25,6 +25,7 @@ from ..mesh import Split, TetMesh, box_mesh, nearest_boundary_point, read_mesh
 from ..regions import Region, locate_points, resolve_region
 from .cook import parse_cook
 from .limits import check_mesh_size
+from .load_time import TIME_KEYS, parse_time_table
 from .reader import MAX_MAGNITUDE, TableReader, _show, is_number
 from .tissue import TISSUE_KEYS, parse_tissue
 from .types import (
@@ -66,7 +67,7 @@ SECTION_KEYS = {
         *dict.fromkeys((*RULE_BASED_KEYS, *LAND_KEYS)),
     ),
     "boundary": ("region", "fix", "displacement"),
-    "load": ("type", "value", "region"),
+    "load": ("type", "value", "region", "time"),
     "probe": ("name", "point"),
 }
 
@@ -382,7 +383,12 @@ def parse_load(r: TableReader, mesh: TetMesh) -> Load:
     Returns
     -------
     Load
+        With its time function (``time``, :mod:`springfem.scene.load_time`), if any.
     """
+    time = None
+    if r.has("time"):  # read first: the scene-key reference reaches its keys this way
+        r.used.add("time")
+        time = parse_time_table(TableReader(r.t["time"], r._key("time"), r.file, keys=TIME_KEYS))
     kind = r.get("type", "str", choices=LOAD_TYPES)
     if kind == "pressure":
         value = np.array([r.get("value", "float")])
@@ -398,7 +404,7 @@ def parse_load(r: TableReader, mesh: TetMesh) -> Load:
             if spec in mesh.cell_sets and spec not in mesh.facet_sets:
                 mesh.notes.append(_volume_region_note(r, mesh, region, kind))
     r.finish()
-    return Load(type=kind, value=value, region=region)
+    return Load(type=kind, value=value, region=region, time=time)
 
 
 def _volume_region_note(r: TableReader, mesh: TetMesh, region: Region, kind: str) -> str:

@@ -23,6 +23,7 @@ import numpy as np
 from ..materials.laws import LawNames
 from ..mesh import TetMesh
 from ..regions import Region
+from .load_time import TimeFunction
 from .reader import TableReader
 
 #: A material law's name (one of :data:`LAWS`).
@@ -164,11 +165,19 @@ class Load:
         ``(3,)`` vector, or ``(1,)`` for a pressure.
     region
         Where (``None`` for gravity).
+    time
+        The load factor as a function of time (:mod:`springfem.scene.load_time`), or
+        ``None`` (always 1). Dynamic runs read it; static solves apply the full load.
     """
 
     type: Literal["traction", "pressure", "gravity", "force"]
     value: np.ndarray
     region: Region | None = None
+    time: TimeFunction | None = None
+
+    def factor(self, t: float) -> float:
+        """The load factor at time ``t`` (1 without a time function)."""
+        return 1.0 if self.time is None else self.time(t)
 
 
 @dataclass(frozen=True)

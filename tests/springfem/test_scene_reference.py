@@ -64,7 +64,9 @@ def test_known_keys_of_each_section(keys):
         keys["material (guccione)"]
     )
     assert {"type", "fiber", "sheet", "range", "angles", "fiber_data"} <= set(keys["axes"])
-    assert set(keys["load"]) == {"type", "region", "value"}
+    assert set(keys["load"]) == {"type", "region", "value", "time"}
+    assert set(keys["load.time"]) == {"ramp", "hold", "release", "table"}
+    assert set(keys["dynamics.damping"]) == {"mass", "stiffness", "ratio", "frequencies"}
     assert keys["spring"]["torsion"]["choices"] == (
         "off", "angle", "cosine", "cubic", "energy", "shear", "green"
     )  # fmt: skip
