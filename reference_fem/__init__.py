@@ -25,8 +25,8 @@ Modules, one idea each:
 - ``solver``: :func:`solve` (scene in, Result out).
 - ``explicit``, ``explicit_kernels``, ``explicit_anisotropic``, ``dynamics``: explicit P1 FEM
   (isotropic and anisotropic compiled kernels) and time integration.
-- ``dynamics_implicit``: the dynamic reference (P2 and P2/P1 mixed, Newmark trapezoidal or
-  generalised-α, consistent mass, Rayleigh damping).
+- ``dynamics_implicit``, ``dynamics_terms``: the dynamic reference (P2 and P2/P1 mixed,
+  Newmark trapezoidal or generalised-α, consistent mass, Rayleigh damping).
 - ``scenes``: verification scenes built in code; ``bench``: the speed benchmark;
   ``bench_formulations``: one Newton iteration per formulation, interleaved.
 
