@@ -41,6 +41,7 @@ from springfem.scene import Scene
 
 from .mass_spring.network import MassSpring
 from .mass_spring.network import why_not as mass_spring_why_not
+from .rest_model import FRAME_SWEEP, PeerFrames
 from .vbd.model import VBDModel
 from .xpbd.solver import XPBD, XPBDSettings
 from .xpbd.solver import why_not as xpbd_why_not
@@ -111,6 +112,12 @@ class XPBDModel:
 
     def __repr__(self) -> str:
         return f"XPBDModel({self.name!r}, settings={dict(self.settings)!r})"
+
+    frame_sweep = FRAME_SWEEP
+
+    def frames(self, scene: Scene, frame_dt: float) -> PeerFrames:
+        """XPBD's own frames of ``frame_dt`` (:class:`peers.rest_model.PeerFrames`)."""
+        return PeerFrames.of(self, scene, frame_dt)
 
     def applies(self, scene: Scene) -> str | None:
         return xpbd_why_not(scene)

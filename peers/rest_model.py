@@ -16,7 +16,7 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from typing import Any, ClassVar
 
 import numpy as np
@@ -34,6 +34,82 @@ SWEEP: tuple[Mapping[str, Any], ...] = tuple(
     {"substeps": n, "iterations": k} for n, k in ((40, 2), (80, 2), (20, 2), (10, 2), (40, 1),
                                                  (40, 4))
 )  # fmt: skip
+
+
+#: Substeps x iterations a frame-rate search tries, cheapest frame first
+#: (:func:`springfem.frames.frames_settings`).
+FRAME_SWEEP: tuple[Mapping[str, Any], ...] = tuple(
+    {"substeps": n, "iterations": k}
+    for n, k in sorted(((n, k) for n in (1, 2, 5, 10, 20, 40, 80, 160) for k in (1, 2)),
+                       key=lambda nk: (nk[0] * nk[1], nk[1]))
+)  # fmt: skip
+
+
+class PeerFrames:
+    """A peer's own frames (:class:`springfem.frames.FrameStepper`): its solver's ``start``
+    and ``advance`` at ``dt = frame_dt``, damped at the scene's mass-proportional rate; the
+    loads are scaled by the load factor at the frame's end (each load by its own factor
+    when they differ, :class:`springfem.frames.LoadHistory`).
+
+    Parameters
+    ----------
+    solver
+        The peer's solver (``start()``, ``advance(*state, a_ext)``, ``accelerations(x)``,
+        ``masses``, ``x0``, ``settings``).
+    scene
+        The scene (the stored energy: the solver's ``strain_energy`` or, for a stable
+        neo-Hookean peer, :class:`peers.xpbd.StableNeoHookean`'s).
+    """
+
+    def __init__(self, solver: Any, scene: Scene):
+        self.solver = solver
+        self.frame_dt = float(solver.settings.dt)
+        self.masses = solver.masses
+        self.x0 = solver.x0
+        self.settings = {"substeps": solver.settings.substeps,
+                         "iterations": solver.settings.iterations}  # fmt: skip
+        energy = getattr(solver, "strain_energy", None)
+        if energy is None and getattr(solver, "law", "stable-neo-hookean") == "stable-neo-hookean":
+            from .xpbd import StableNeoHookean
+
+            energy = StableNeoHookean(scene).strain_energy
+        self._energy = energy
+        self._state: tuple[np.ndarray, ...] = ()
+        self._a: np.ndarray | None = None
+
+    @classmethod
+    def of(cls, model: Any, scene: Scene, frame_dt: float) -> PeerFrames:
+        """The frames of plug-in ``model`` (its ``_settings``, ``Solver``/``_solver``)."""
+        from springfem.frames import scene_damping
+
+        why = model.applies(scene)
+        if why is not None:
+            raise InputError(why)
+        s = replace(model._settings, dt=frame_dt, damping=scene_damping(scene))
+        from .xpbd.solver import XPBD
+
+        solver_type: Any = getattr(type(model), "Solver", XPBD)
+        return cls(solver_type(scene, s), scene)
+
+    def start(self) -> tuple[np.ndarray, np.ndarray]:
+        self._state = tuple(self.solver.start())
+        self._a = self.solver.accelerations(self._state[0])
+        return self._state[0], self._state[1]
+
+    def frame(self, x: np.ndarray, v: np.ndarray, t: float, scale: Any) -> None:
+        from springfem.frames import LoadHistory
+
+        solver, t1 = self.solver, t + self.frame_dt
+        state = (x, v, *self._state[2:])
+        if isinstance(scale, LoadHistory) and not scale.single:
+            solver.advance(*state, scale.external(x, t1) / self.masses[:, None])
+            return
+        if getattr(solver, "_follower", False) or self._a is None:
+            self._a = solver.accelerations(x)
+        solver.advance(*state, self._a * scale(t1))
+
+    def strain_energy(self, x: np.ndarray) -> float | None:
+        return None if self._energy is None else float(self._energy(x))
 
 
 class RestModel:
@@ -67,6 +143,7 @@ class RestModel:
         self.label = label or self.make_label()
         self.default = default
         self.sweep: tuple[Mapping[str, Any], ...] = SWEEP
+        self.frame_sweep = FRAME_SWEEP
 
     def make_label(self) -> str:
         """The label of the current settings."""
@@ -85,6 +162,10 @@ class RestModel:
     def system(self, scene: Scene) -> MechanicalSystem | None:
         """``None``: the peer moves positions by its own iterations, not by forces."""
         return None
+
+    def frames(self, scene: Scene, frame_dt: float) -> PeerFrames:
+        """The peer's own frames of ``frame_dt`` (:class:`PeerFrames`)."""
+        return PeerFrames.of(self, scene, frame_dt)
 
     def _solver(self, scene: Scene) -> Any:
         why = self.applies(scene)
@@ -149,4 +230,4 @@ class RestModel:
         return ModelSolution(result, np.asarray(x - solver.x0))
 
 
-__all__ = ["SWEEP", "RestModel"]
+__all__ = ["FRAME_SWEEP", "SWEEP", "PeerFrames", "RestModel"]

@@ -4,7 +4,7 @@ A real-time simulator shows a frame every ``1 / rate`` seconds and, within it, t
 many inner steps (substeps, iterations) as its budget allows. A :class:`FrameStepper` is
 that loop for one model at one choice of settings: ``start()`` gives the state at rest,
 ``frame(x, v, t, scale)`` advances it in place from ``t`` to ``t + frame_dt`` under the load
-factor ``scale(t)`` (the scene's time functions, docs/dynamics.rst).
+factor ``scale(t)`` (the scene's time functions, docs/scenes.rst).
 
 A model of the plug-in API (:mod:`springfem.model_api`) offers frames in one of two ways:
 
@@ -51,6 +51,60 @@ from .mechanics.timestep import stable_time_step
 SAFETIES = (0.9, 0.7, 0.5)
 
 ScaleFn = Callable[[float], float]
+
+
+class LoadHistory:
+    """The scene's loads as functions of time (each ``[[load]]``'s ``time``, docs/scenes.rst).
+
+    When every load follows the same time function (or none has one), the history is one
+    load factor ``g(t)`` (:meth:`__call__`), which any model's ``scale`` takes. Otherwise
+    (gravity always on, a tool's pull ramped and released) a model steps with its internal
+    forces at load factor 0 plus :meth:`external`, the sum of each load's force times its
+    own factor; :attr:`single` tells which.
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    """
+
+    def __init__(self, scene: Any):
+        from dataclasses import replace
+
+        from .loads import external_forces
+
+        self.scene = scene
+        loads = list(scene.loads)
+        fns = [getattr(load, "time", None) for load in loads]
+        self.single = all(repr(f) == repr(fns[0]) for f in fns)
+        self._fn = fns[0] if fns else None
+        self._parts: list[tuple[Any, Any, np.ndarray | None]] = []
+        if not self.single:
+            for load, fn in zip(loads, fns, strict=True):
+                sub = replace(scene, loads=[load])
+                fixed = None if load.type == "pressure" else external_forces(sub)
+                self._parts.append((fn, sub, fixed))
+
+    def __call__(self, t: float) -> float:
+        """The common load factor at ``t`` (1 when there is none)."""
+        return 1.0 if self._fn is None else float(self._fn(t))
+
+    def external(self, x: np.ndarray, t: float) -> np.ndarray:
+        """``sum_i g_i(t) f_i(x)``: every load at its own factor ``(n, 3)``."""
+        from .loads import external_forces
+
+        f = np.zeros_like(x)
+        for fn, sub, fixed in self._parts:
+            g = 1.0 if fn is None else float(fn(t))
+            if g:
+                f += g * (fixed if fixed is not None else external_forces(sub, x=x))
+        return f
+
+    def settles_at(self) -> float:
+        """The time after which no load changes (0 without time functions)."""
+        fns = [getattr(load, "time", None) for load in self.scene.loads]
+        points = [t for f in fns if f is not None for t in f.breakpoints()]
+        return max(points, default=0.0)
 
 
 @runtime_checkable
@@ -133,19 +187,26 @@ class ExplicitFrames:
         self._a = None
         return x, np.zeros_like(x)
 
-    def _acc(self, x: np.ndarray, v: np.ndarray, s: float) -> np.ndarray:
-        a = self.ctx.forces(x, v, s) / self.masses[:, None]
+    def _acc(self, x: np.ndarray, v: np.ndarray, s: float, t: float, scale: Any) -> np.ndarray:
+        if isinstance(scale, LoadHistory) and not scale.single:
+            f = self.ctx.forces(x, v, 0.0) + scale.external(x, t)
+        else:
+            f = self.ctx.forces(x, v, s)
+        a = f / self.masses[:, None]
         if self.ctx.fixed.size:
             a.reshape(-1)[self.ctx.fixed] = 0.0
         return a
 
     def frame(self, x: np.ndarray, v: np.ndarray, t: float, scale: ScaleFn) -> None:
-        """``substeps`` Verlet steps; fixed DOFs follow ``prescribed(scale(t))``."""
+        """``substeps`` Verlet steps; fixed DOFs follow ``prescribed(scale(t))`` (a
+        :class:`LoadHistory` of several time functions: each load its own factor, the
+        supports' displacements in full)."""
         h, fixed = self.h, self.ctx.fixed
-        a = self._a if self._a is not None else self._acc(x, v, scale(t))
+        split = isinstance(scale, LoadHistory) and not scale.single
+        a = self._a if self._a is not None else self._acc(x, v, scale(t), t, scale)
         xf, vf = x.reshape(-1), v.reshape(-1)
         for k in range(1, self.substeps + 1):
-            s = scale(t + k * h)
+            s = 1.0 if split else scale(t + k * h)
             if self.decay != 1.0:
                 v *= self.decay
             v += 0.5 * h * a
@@ -154,7 +215,7 @@ class ExplicitFrames:
                 p = self.system.prescribed(s)
                 vf[fixed] = (p - xf[fixed]) / h
                 xf[fixed] = p
-            a = self._acc(x, v, s)
+            a = self._acc(x, v, s, t + k * h, scale)
             v += 0.5 * h * a
             if self.decay != 1.0:
                 v *= self.decay

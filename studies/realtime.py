@@ -4,7 +4,7 @@ from the dynamic reference's.
 For one model on one scene at ``rate`` frames per second, :func:`fit_settings` tries the
 model's frame settings cheapest first (:func:`springfem.frames.frames_settings`), times a few
 frames of each, and keeps those whose cost per frame fits ``1 / rate``; :func:`frame_run`
-runs the scene's load history (its time functions, docs/dynamics.rst) frame by frame and
+runs the scene's load history (its time functions, docs/scenes.rst) frame by frame and
 records the probes, the vertex field and the energy; :func:`trajectory_error` compares a run
 with the reference's motion at the same times. :func:`weigh` does all three for a model:
 the most accurate setting that fits, or the cheapest one as the nearest miss.
@@ -276,11 +276,13 @@ def weigh(
     timing alone (``stable`` then says nothing; ``message`` says it missed)."""
     frame_dt = 1.0 / rate
     timed = []
-    for s in frames_settings(model):
+    for s in frames_settings(model):  # cheapest frame first: stop at the first miss
         spf, stepper, why = time_frames(model, scene, frame_dt, s, scale)
         if stepper is None:
             return FrameResult(model.name, s, float("nan"), False, message=why)
         timed.append((spf, s, stepper))
+        if spf > frame_dt:
+            break
     fit = sorted((t for t in timed if t[0] <= frame_dt), key=lambda t: -t[0])[:max_runs]
     if not fit:
         spf, s, stepper = min(timed, key=lambda t: t[0])
