@@ -266,65 +266,28 @@ def build_parser() -> argparse.ArgumentParser:
 def _scale_options(p: argparse.ArgumentParser) -> None:
     """The options of ``springfem bench scale`` (:mod:`studies.bench_scale`)."""
     g = p.add_argument_group("scale (organ meshes, one process per model and size)")
-    g.add_argument(
-        "--sizes",
-        default=None,
-        metavar="N,N,...",
-        help="organ sizes in tets (default 5000,30000,120000,500000)",
-    )
+    seconds = {"type": _positive_float, "default": None, "metavar": "S"}
+    # fmt: off
+    g.add_argument("--sizes", default=None, metavar="N,N,...",
+                   help="organ sizes in tets (default 5000,30000,120000,500000)")
     g.add_argument("--quick", action="store_true", help="scale: sizes 2000,8000")
-    g.add_argument(
-        "--models",
-        default=None,
-        metavar="M,M,...",
-        help="scale: models (default: the verdict's on the organ)",
-    )
-    g.add_argument(
-        "--max-time",
-        type=_positive_float,
-        default=None,
-        metavar="S",
-        help="scale: seconds per static solve (default 120)",
-    )
-    g.add_argument(
-        "--reference-time",
-        type=_positive_float,
-        default=None,
-        metavar="S",
-        help="scale: seconds per static solve of the reference, P2/P1 mixed (default 3x "
-        "--max-time)",
-    )
-    g.add_argument(
-        "--max-memory",
-        type=_positive_float,
-        default=None,
-        metavar="GB",
-        help="scale: GB of address space per case (default 14)",
-    )
-    g.add_argument(
-        "--budget",
-        type=_positive_float,
-        default=None,
-        metavar="S",
-        help="scale: seconds for the whole run (cases that would not fit are not started)",
-    )
+    g.add_argument("--models", default=None, metavar="M,M,...",
+                   help="scale: models (default: the verdict's on the organ)")
+    g.add_argument("--max-time", **seconds, help="scale: seconds per static solve (default 120)")
+    g.add_argument("--reference-time", **seconds, help="scale: seconds per static solve of the "
+                   "reference, P2/P1 mixed (default 3x --max-time)")
+    g.add_argument("--max-memory", **{**seconds, "metavar": "GB"},
+                   help="scale: GB of address space per case (default 14)")
+    g.add_argument("--budget", **seconds, help="scale: seconds for the whole run (cases that "
+                   "would not fit are not started)")
     g.add_argument("--out", default=None, help="scale: output folder (default reports/scale)")
-    g.add_argument(
-        "--resume",
-        action="store_true",
-        help="scale: keep the cases of an earlier run in the output folder",
-    )
-    g.add_argument(
-        "--meshes",
-        default=None,
-        help="scale: folder of the organ meshes (default out/organ-meshes)",
-    )
-    g.add_argument(
-        "--cost-laws",
-        default=None,
-        metavar="PATH",
-        help="scale: also write the fitted laws (the cost model's JSON) here",
-    )
+    g.add_argument("--resume", action="store_true",
+                   help="scale: keep the cases of an earlier run in the output folder")
+    g.add_argument("--meshes", default=None,
+                   help="scale: folder of the organ meshes (default out/organ-meshes)")
+    g.add_argument("--cost-laws", default=None, metavar="PATH",
+                   help="scale: also write the fitted laws (the cost model's JSON) here")
+    # fmt: on
 
 
 def main(argv: Sequence[str] | None = None) -> int:
