@@ -21,9 +21,10 @@ from peers.xpbd.constraints import (
 )
 from peers.xpbd.kernels import frame
 from springfem.errors import InputError
-from springfem.materials import isotropic_matrix
 from springfem.mechanics import static
+from springfem.model_api import SystemModel
 from springfem.scene import scene_from_dict
+from springfem.testing import check_model
 
 MATERIAL = {"law": "neo-hookean", "E": 1.0e4, "nu": 0.3, "density": 1000.0}
 
@@ -109,31 +110,13 @@ def test_only_the_coupled_solve_keeps_a_rigidly_moved_body_at_rest(scene, couple
     assert (moved < 1e-12) == still, moved
 
 
-def test_energy_forces_and_tangent_are_finite_differences(scene):
-    """-dE/dx and -d forces/dx of the stable neo-Hookean system by central differences."""
-    s = StableNeoHookean(scene)
-    x = _deformed(s.x0, 0.01, seed=1)
-    f = s.internal(x).ravel()
-    K = s.stiffness(x)
-    h = 1e-7 * np.ptp(s.x0, axis=0).max()
-    for i in np.random.default_rng(2).choice(f.size, 6, replace=False):
-        xp, xm = x.copy().ravel(), x.copy().ravel()
-        xp[i] += h
-        xm[i] -= h
-        dE = (s.strain_energy(xp.reshape(-1, 3)) - s.strain_energy(xm.reshape(-1, 3))) / (2 * h)
-        assert abs(dE + f[i]) <= 1e-6 * np.abs(f).max()
-        col = -(s.internal(xp.reshape(-1, 3)) - s.internal(xm.reshape(-1, 3))).ravel() / (2 * h)
-        np.testing.assert_allclose(K[:, i].toarray().ravel(), col, atol=1e-5 * np.abs(col).max())
-
-
-def test_small_strain_tangent_is_the_scenes_linear_elasticity(scene):
-    """At F = I the tangent moduli with (mu', lam') = (mu, lam + mu) are the isotropic linear
-    elasticity tensor of the scene's E and nu (springfem.materials)."""
-    s = StableNeoHookean(scene)
-    A = s.tangent_moduli(np.eye(3)[None])[0]
-    voigt = [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)]
-    D = np.array([[A[i, j, k, l] for k, l in voigt] for i, j in voigt])
-    np.testing.assert_allclose(D, isotropic_matrix(1.0e4, 0.3), atol=1e-9 * 1e4)
+def test_the_energy_xpbd_stands_for_conforms(scene):
+    """Its forces and tangent are finite differences of the stable neo-Hookean energy,
+    rigid motion gives no force, an explicit run conserves it, and its tangent at rest is
+    linear P1's: with (mu', lam') = (mu, lam + mu) the tangent moduli at F = I are the
+    scene's isotropic linear elasticity (springfem.testing.check_model)."""
+    model = SystemModel("xpbd-energy", "stable neo-Hookean", StableNeoHookean)
+    check_model(model, scene, small_strain="exact")
 
 
 def test_bad_settings_and_laws_give_one_line():
