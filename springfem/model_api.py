@@ -109,6 +109,12 @@ class ModelPlugin(Protocol):
       displacement after every step, ``energy_t``, ``energy`` ...), and
       ``step_timer(scene, safety) -> go(steps, tick)``: the dynamics study's run and cost;
       ``setting_step``: the step (s) of its own settings.
+
+    Any model may offer ``kernel_pass(scene) -> (go, bytes_per_tet)``: a function running
+    one pass of its kernel over every element (a force pass; one iteration of a
+    position-based peer) and the bytes that pass moves per element, for
+    ``springfem bench forces --models`` (without it the bench times ``system(scene)``'s
+    internal forces).
     """
 
     name: str

@@ -186,6 +186,30 @@ def _project_pair(
 
 
 @njit(**_FLAGS)
+def sweep(
+    p, w, tets, G, ad, ah, gamma, lam_d, lam_h, dp, jacobi, coupled, omega, gd, gh, F, D
+):  # pragma: no cover - compiled
+    """One iteration over every element in place on ``p``: Gauss–Seidel in the order the
+    elements are stored, or Jacobi (every correction from the same ``p``, summed into ``dp``,
+    times ``omega``); ``ad, ah`` are the compliances over ``h^2``; ``gd, gh`` ``(4, 3)`` and
+    ``F, D`` ``(3, 3)`` scratch. The time of one call is XPBD's projection pass."""
+    out, scale = (dp, omega) if jacobi else (p, 1.0)
+    if jacobi:
+        dp[:, :] = 0.0
+    for k in range(tets.shape[0]):
+        if coupled:
+            _project_pair(k, p, w, tets, G, ad[k], ah[k], gamma, lam_d, lam_h, out, scale,
+                          gd, gh)  # fmt: skip
+        else:
+            _project(k, 0, p, w, tets, G, ad[k], gamma, lam_d, out, scale, gd, F, D)
+            _project(k, 1, p, w, tets, G, ah[k], gamma, lam_h, out, scale, gd, F, D)
+    if jacobi:
+        for r in range(p.shape[0]):
+            for c in range(3):
+                p[r, c] += dp[r, c]
+
+
+@njit(**_FLAGS)
 def frame(
     x,
     v,
@@ -246,21 +270,8 @@ def frame(
             lam_d[k] = 0.0
             lam_h[k] = 0.0
         for _it in range(iterations):
-            # Jacobi: every correction from the same p, summed into dp, times omega
-            out, scale = (dp, omega) if jacobi else (p, 1.0)
-            if jacobi:
-                dp[:, :] = 0.0
-            for k in range(m):
-                if coupled:
-                    _project_pair(k, p, w, tets, G, ad[k], ah[k], gamma, lam_d, lam_h, out,
-                                  scale, gd, gh)  # fmt: skip
-                else:
-                    _project(k, 0, p, w, tets, G, ad[k], gamma, lam_d, out, scale, gd, F, D)
-                    _project(k, 1, p, w, tets, G, ah[k], gamma, lam_h, out, scale, gd, F, D)
-            if jacobi:
-                for r in range(n):
-                    for c in range(3):
-                        p[r, c] += dp[r, c]
+            sweep(p, w, tets, G, ad, ah, gamma, lam_d, lam_h, dp, jacobi, coupled, omega,
+                  gd, gh, F, D)  # fmt: skip
         ke = 0.0
         for r in range(n):
             for c in range(3):

@@ -269,18 +269,22 @@ def _scale_options(p: argparse.ArgumentParser) -> None:
     seconds = {"type": _positive_float, "default": None, "metavar": "S"}
     # fmt: off
     g.add_argument("--sizes", default=None, metavar="N,N,...",
-                   help="organ sizes in tets (default 5000,30000,120000,500000)")
+                   help="organ sizes in tets (default 5000,30000,120000,500000; forces "
+                   "--models: 1000,50000,500000)")
     g.add_argument("--quick", action="store_true", help="scale: sizes 2000,8000")
     g.add_argument("--models", default=None, metavar="M,M,...",
-                   help="scale: models (default: the verdict's on the organ)")
+                   help="scale: models (default: the verdict's on the organ); forces: each "
+                   "model's pass against the bandwidth floor (all: every fast one)")
     g.add_argument("--max-time", **seconds, help="scale: seconds per static solve (default 120)")
     g.add_argument("--reference-time", **seconds, help="scale: seconds per static solve of the "
                    "reference, P2/P1 mixed (default 3x --max-time)")
     g.add_argument("--max-memory", **{**seconds, "metavar": "GB"},
-                   help="scale: GB of address space per case (default 14)")
+                   help="scale: GB of address space per case (default 14); forces "
+                   "--models: resident GB a size may need (default 4)")
     g.add_argument("--budget", **seconds, help="scale: seconds for the whole run (cases that "
                    "would not fit are not started)")
-    g.add_argument("--out", default=None, help="scale: output folder (default reports/scale)")
+    g.add_argument("--out", default=None, help="scale: output folder (default reports/scale); "
+                   "forces --models: bench_forces.csv and .md go there")
     g.add_argument("--resume", action="store_true",
                    help="scale: keep the cases of an earlier run in the output folder")
     g.add_argument("--meshes", default=None,

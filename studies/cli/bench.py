@@ -117,6 +117,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     """Entry point of ``springfem bench``: run one benchmark, print its table or JSON."""
     if args.what == "scale":
         return _bench_scale(args)
+    if args.what == "forces" and (args.models or args.sizes):
+        return _bench_models(args)
     if args.what not in BENCHES:  # argparse restricts the choices
         raise InputError(f"unknown benchmark {args.what!r}; valid: {', '.join(BENCHES)}, scale")
     run, show = BENCHES[args.what]
@@ -174,4 +176,38 @@ def _bench_scale(args: argparse.Namespace) -> int:
     bench_scale(settings, log=lambda line: print(line, flush=True))
     print(f"wrote {settings.out}/laws.md, cases.md, scale.png, cost_laws.json"
           + (f" and {settings.cost_laws}" if settings.cost_laws else ""))  # fmt: skip
+    return 0
+
+
+def _bench_models(args: argparse.Namespace) -> int:
+    """``springfem bench forces --models M,...|all --sizes N,...`` (:mod:`studies.bench_forces`):
+    every fast model's pass at organ sizes against the bandwidth floor."""
+    from pathlib import Path
+
+    from .. import bench_forces as bf
+
+    _no_tets(args, "forces --models", "--sizes N,N,...")
+    sizes = bf.DEFAULT_SIZES
+    if args.sizes:
+        try:
+            sizes = tuple(int(float(s)) for s in str(args.sizes).split(",") if s.strip())
+        except ValueError:
+            sizes = ()
+        if not sizes or min(sizes) < 100:
+            raise InputError(f"--sizes must be tet counts of at least 100, got {args.sizes!r}")
+    names = None if args.models in (None, "all") else [m.strip() for m in args.models.split(",")]
+    memory = 4.0e9 if args.max_memory is None else float(args.max_memory) * 1e9
+    res = bf.bench_forces(sizes, names, _repeats(args, 7), memory,
+                          log=lambda s: print(s, file=sys.stderr, flush=True))  # fmt: skip
+    if args.json:
+        from springfem.files import jsonable
+
+        print(json.dumps(jsonable(res), indent=2, sort_keys=True))
+    else:
+        print(bf.markdown(res))
+    if args.out:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "bench_forces.csv").write_text(bf.csv(res) + "\n", encoding="utf-8")
+        (out / "bench_forces.md").write_text(bf.markdown(res) + "\n", encoding="utf-8")
     return 0
