@@ -45,10 +45,11 @@ Examples
 0.0
 """
 
+from springfem.materials.laws.neo_hookean import NeoHookean
+
 from . import options as _options  # noqa: F401  (registers the [fem] scene section)
 from .assembly import element_stiffness_p1
 from .bench import bench
-from .hyperelastic import NeoHookean
 from .materials import material_matrix
 from .problem import FemProblem
 from .solver import FemSolution, solve

@@ -15,7 +15,7 @@ or, for the anisotropic laws (``transverse-linear``, ``guccione``, ``holzapfel-o
 the scene's material and element frames), the law's stress in the element frame
 (:mod:`reference_fem.explicit_anisotropic`), and scatters ``f_a = -V P grad N_a``
 (``f_0 = -(f_1 + f_2 + f_3)``, so each element's net force is zero by construction). The
-energies are those of :mod:`reference_fem.hyperelastic` (``psi = mu/2 (I1 - 3) - mu ln J +
+energies are those of :mod:`springfem.materials.laws.neo_hookean` (``psi = mu/2 (I1 - 3) - mu ln J +
 lam/2 ln^2 J``), of small-strain elasticity and of :mod:`springfem.materials.laws`; per element
 the kernel reads 4 int32 node ids and 10 constants (three shape gradients, rotated into the
 element frame for the tissue laws, and the rest volume; ``transverse-linear`` adds the
@@ -54,7 +54,7 @@ import scipy.sparse as sp
 from springfem.blocks import chunks
 from springfem.errors import InputError, SolverError
 from springfem.loads import external_forces, has_follower_loads, lumped_masses
-from springfem.materials.laws import TISSUE_LAWS, LawNames, TissueLaw, tissue_law
+from springfem.materials.laws import TISSUE_LAWS, LawNames, NeoHookean, TissueLaw, tissue_law
 from springfem.materials.laws.kinematics import det
 from springfem.mesh import tet_volumes
 from springfem.scene import Scene, model_precision
@@ -105,10 +105,8 @@ def strain_energy_density(F: np.ndarray, mu: float, lam: float, law: int) -> np.
         Energy density ``(m,)`` (J/m^3).
     """
     if law == _NEO:
-        J = np.linalg.det(F)
-        lnJ = np.log(np.where(J > 0, J, 1.0))
-        psi = 0.5 * mu * (np.einsum("kij,kij->k", F, F) - 3.0) - mu * lnJ + 0.5 * lam * lnJ**2
-        return np.where(J > 0, psi, np.inf)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(det(F) > 0, NeoHookean(mu, lam).energy(F), np.inf)
     eps = 0.5 * (F + F.transpose(0, 2, 1)) - np.eye(3)
     tr = np.trace(eps, axis1=1, axis2=2)
     return mu * np.einsum("kij,kij->k", eps, eps) + 0.5 * lam * tr**2
@@ -191,7 +189,7 @@ class ExplicitFem:
         Mesh, material (``mu``, ``lam`` of the isotropic laws; an anisotropic law's own
         constants and the element frames), boundaries and loads.
     law
-        ``neo-hookean`` (the coupled energy of :mod:`reference_fem.hyperelastic`, whatever
+        ``neo-hookean`` (the coupled energy of :mod:`springfem.materials.laws.neo_hookean`, whatever
         the scene's isotropic law), ``linear`` (small-strain isotropic elasticity), or the scene's
         anisotropic law: ``transverse-linear``, ``guccione`` or ``holzapfel-ogden`` (with the
         material's ``kappa`` and ``volumetric`` penalty; an active tension ramps with the
@@ -450,7 +448,7 @@ class ExplicitFem:
         """Tangent ``K = -d forces / dx`` (``None`` with follower loads).
 
         Assembled with :mod:`reference_fem.assembly` from the law's tangent
-        (:class:`~reference_fem.hyperelastic.NeoHookean`, the tissue law of
+        (:class:`~springfem.materials.laws.neo_hookean.NeoHookean`, the tissue law of
         :mod:`springfem.materials.laws` in the element frames), constant for the linear laws.
         """
         if self._follower:
@@ -458,7 +456,6 @@ class ExplicitFem:
         from springfem.materials import isotropic_matrix
 
         from .assembly import BlockPattern, hyperelastic_element_arrays, stiffness_matrix
-        from .hyperelastic import NeoHookean
         from .space import Space
 
         if self._assembly is None:

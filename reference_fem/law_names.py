@@ -26,9 +26,8 @@ from __future__ import annotations
 
 from springfem.errors import InputError
 from springfem.materials.laws import TISSUE_LAWS, TissueLaw, tissue_law
+from springfem.materials.laws.neo_hookean import NeoHookean
 from springfem.scene import FORMULATIONS, VOLUMETRIC, Scene
-
-from .hyperelastic import NeoHookean
 
 #: Every law name the FEM reference accepts.
 LAW_NAMES = (
@@ -57,7 +56,7 @@ def parse_law(scene: Scene, law: str | None) -> tuple[str, NeoHookean | TissueLa
     kind, law
         ``kind`` is ``linear``, ``transverse-linear``, ``neo-hookean`` or the tissue law's
         name; ``law`` is None for the linear kinds, else the
-        :class:`~reference_fem.hyperelastic.NeoHookean` or
+        :class:`~springfem.materials.laws.neo_hookean.NeoHookean` or
         :class:`~springfem.materials.laws.TissueLaw` object.
 
     Raises

@@ -50,10 +50,10 @@ import skfem
 
 from springfem.errors import InputError
 from springfem.materials.laws import TissueLaw
+from springfem.materials.laws.kinematics import det as _det
 from springfem.scene import Scene
 
 from .assembly import CHUNK, _gradient_products, displacement_gradient
-from .hyperelastic import _det
 from .options import FemOptions
 from .problem import FemProblem
 from .volumetric_split import volumetric_split

@@ -53,10 +53,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from springfem.errors import InputError
+from springfem.materials.laws.kinematics import det as _det
 from springfem.mesh.nodal_average import NodalAverage
 from springfem.scene import Scene
 
-from .hyperelastic import _det
 from .newton import InvertedElements
 from .nodal_pressure_solve import with_nodal_parts
 from .nodal_volume import NodalVolumeProblem

@@ -50,10 +50,10 @@ import scipy.sparse as sp
 
 from springfem.errors import InputError
 from springfem.materials import lame_matrix
+from springfem.materials.laws.kinematics import det as _det
 from springfem.scene import Scene
 
 from .assembly import _gradient_products, linear_element_blocks
-from .hyperelastic import _det
 from .newton import InvertedElements
 from .nodal_pressure_solve import NodalPressureSolver, with_nodal_parts
 from .options import FemOptions

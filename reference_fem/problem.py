@@ -30,6 +30,7 @@ import scipy.sparse as sp
 
 from springfem.errors import InputError
 from springfem.materials import voigt_to_tensor
+from springfem.materials.laws.kinematics import det as _det
 from springfem.mechanics import LinearSolver, rigid_body_modes
 from springfem.scene import Scene
 
@@ -40,7 +41,6 @@ from .assembly import (
     linear_element_blocks,
 )
 from .constraints import dirichlet
-from .hyperelastic import _det
 from .law_names import parse_law
 from .loads import ExternalLoads
 from .materials import material_groups

@@ -17,7 +17,7 @@ Every split adds up to the law: ``W(F) = W_base(F) + U(J)``.
 Examples
 --------
 >>> import numpy as np
->>> from reference_fem.hyperelastic import NeoHookean
+>>> from springfem.materials.laws.neo_hookean import NeoHookean
 >>> law = NeoHookean(mu=1.0, lam=2.0, formulation="uncoupled", volumetric="quadratic")
 >>> part = volumetric_split(law)
 >>> round(part.kappa, 12), part.kind
@@ -38,8 +38,8 @@ import numpy as np
 
 from springfem.errors import InputError
 from springfem.materials.laws import TissueLaw
-
-from .hyperelastic import NeoHookean, _volumetric
+from springfem.materials.laws.neo_hookean import NeoHookean
+from springfem.volumetric import volumetric_energy as _volumetric
 
 
 @dataclass(frozen=True)
@@ -74,7 +74,7 @@ def volumetric_split(law, material=None) -> VolumetricSplit:
     Parameters
     ----------
     law
-        A :class:`~reference_fem.hyperelastic.NeoHookean` or
+        A :class:`~springfem.materials.laws.neo_hookean.NeoHookean` or
         :class:`~springfem.materials.laws.TissueLaw`.
     material
         The scene material; its ``kappa`` is the penalty of a tissue law without one

@@ -11,7 +11,8 @@ nothing else is edited. Checked against independent references:
   same small-strain constants to O(strain) (here strains ~1e-4: 1e-3 relative allowed);
 - the explicit FEM (the numpy fallback of a law without a compiled kernel) gives the forces
   of the FEM residual, and the fallback run on Guccione gives the compiled Guccione
-  kernel's forces (1e-12 relative: round-off of reordered sums); an explicit run conserves
+  kernel's forces, on Holzapfel–Ogden the compiled Holzapfel–Ogden kernel's (1e-12
+  relative: round-off of reordered sums); an explicit run conserves
   the energy within the Verlet bound of tests/reference_fem/test_explicit_anisotropic.py;
 - ``springfem verdict`` weighs FEM and spring models on a scene of the law.
 """
@@ -28,11 +29,15 @@ import pytest
 
 from reference_fem import solve
 from reference_fem.explicit import ExplicitFem
-from reference_fem.explicit_anisotropic import anisotropic_kernel, anisotropic_layout
+from reference_fem.explicit_anisotropic import (
+    anisotropic_kernel,
+    anisotropic_layout,
+    law_parameters,
+)
 from reference_fem.explicit_generic import generic_kernel
 from reference_fem.problem import FemProblem
 from springfem.materials import lame_matrix
-from springfem.materials.laws import LAWS, TISSUE_LAWS, Guccione, small_strain_tangent
+from springfem.materials.laws import LAWS, TISSUE_LAWS, small_strain_tangent, tissue_law
 from springfem.mechanics import explicit, stable_time_step
 from springfem.scene import LAWS as SCENE_LAWS
 from springfem.scene import scene_from_dict
@@ -130,24 +135,32 @@ def test_explicit_forces_are_the_fem_residual(toy):
     assert np.abs(f - oracle).max() < 1e-12 * np.abs(oracle).max()
 
 
-def test_the_fallback_kernel_is_the_compiled_one_on_guccione():
+@pytest.mark.parametrize(
+    ("law", "volumetric"), [("guccione", "log"), ("holzapfel-ogden", "simo-taylor")]
+)
+def test_the_fallback_kernel_is_the_compiled_one(law, volumetric):
+    """The compiled kernels, written out per law, against the law modules through the
+    fallback: the same forces at a finite strain with an active tension."""
+    constants = {"guccione": {"C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0},
+                 "holzapfel-ogden": {"a": 1.0, "b": 5.0, "a_f": 2.0, "b_f": 5.0, "a_s": 1.0,
+                                     "b_s": 5.0, "a_fs": 0.5, "b_fs": 5.0}}[law]  # fmt: skip
     scene = scene_from_dict({
         "mesh": {"generator": "box", "size": [1.0, 0.8, 0.6], "divisions": [3, 2, 2]},
-        "material": {"law": "guccione", "C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0,
-                     "kappa": 100.0, "active_tension": 3.0},
+        "material": {"law": law, **constants, "kappa": 100.0, "active_tension": 3.0,
+                     "volumetric": volumetric},
         "axes": {"fiber": [1.0, 0.3, 0.1], "sheet": [-0.3, 1.0, 0.0]},
     })  # fmt: skip
     mesh, frames = scene.mesh, scene.frames
-    law = Guccione(C=2.0, b_f=8.0, b_t=2.0, b_fs=4.0, kappa=100.0, active_tension=3.0)
-    prm = np.zeros(10)
-    prm[:6] = [2.0, 8.0, 2.0, 4.0, 100.0, 3.0]
+    tissue = tissue_law(scene.material)
+    prm = law_parameters(law, scene.material, tissue)
     rng = np.random.default_rng(5)
     x = mesh.points * [1.15, 0.95, 1.02] + 0.02 * rng.standard_normal(mesh.points.shape)
-    T, K = anisotropic_layout(mesh.tets, mesh.points, frames, "guccione", "float64")
-    compiled, out_c = anisotropic_kernel("guccione", "log", "float64")[0], np.empty_like(x)
+    T, K = anisotropic_layout(mesh.tets, mesh.points, frames, law, "float64")
+    compiled, out_c = anisotropic_kernel(law, volumetric, "float64")[0], np.empty_like(x)
     compiled(x, T, K, mesh.n_tets, prm, out_c)
-    fallback, out_g = generic_kernel(law, mesh.tets, mesh.points, frames)[0], np.empty_like(x)
+    fallback, out_g = generic_kernel(tissue, mesh.tets, mesh.points, frames)[0], np.empty_like(x)
     fallback(x, None, None, mesh.n_tets, prm, out_g)
+    # round-off of reordered sums and FMA (the kernels' own bound against the FEM residual)
     assert np.abs(out_g - out_c).max() < 1e-12 * np.abs(out_c).max()
 
 

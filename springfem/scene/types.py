@@ -21,6 +21,8 @@ from typing import Any, Literal
 import numpy as np
 
 from ..materials.laws import LawNames
+from ..materials.laws.neo_hookean import FORMULATIONS as FORMULATIONS
+from ..materials.laws.neo_hookean import VOLUMETRIC as VOLUMETRIC
 from ..mesh import TetMesh
 from ..regions import Region
 from .load_time import TimeFunction
@@ -32,8 +34,6 @@ Law = str
 #: :mod:`springfem.materials.laws`, which keep their constants in ``Material.parameters``
 #: (keys in :data:`springfem.materials.laws.TISSUE_LAWS`).
 LAWS = LawNames(("linear", "transverse-linear", "neo-hookean"))
-FORMULATIONS = ("coupled", "uncoupled")
-VOLUMETRIC = ("log", "quadratic", "simo-taylor")
 LOAD_TYPES = ("traction", "pressure", "gravity", "force")
 AXES_TYPES = ("uniform", "helix", "cells")
 COMPONENTS = ("x", "y", "z")

@@ -1,7 +1,7 @@
 """Explicit P1 FEM kernel (reference_fem.explicit) against independent references.
 
 - forces are minus the gradient of the (separately coded) energy, by central differences;
-- the energy equals reference_fem.hyperelastic's NeoHookean energy summed with V;
+- the energy equals springfem.materials.laws.neo_hookean's NeoHookean energy summed with V;
 - forces equal the reference assembly's internal force vector (numpy einsum route);
 - at small displacement they equal -K u of the linear P1 stiffness (element_stiffness_p1)
   up to a remainder quadratic in u; the linear law equals -K u exactly;
@@ -23,10 +23,10 @@ from scipy.spatial.transform import Rotation
 from reference_fem import element_stiffness_p1, solve
 from reference_fem.assembly import assemble_vector, hyperelastic_element_arrays
 from reference_fem.explicit import ExplicitFem
-from reference_fem.hyperelastic import NeoHookean
 from reference_fem.space import Space, p1_gradients
 from springfem.errors import InputError, SolverError
 from springfem.materials import isotropic_matrix
+from springfem.materials.laws.neo_hookean import NeoHookean
 from springfem.mechanics import explicit, explicit_static, stable_time_step
 from springfem.mechanics.fd_jacobian import fd_jacobian
 from springfem.mechanics.system import MechanicalSystem

@@ -13,9 +13,9 @@ import pytest
 from scipy.optimize import brentq
 
 from reference_fem import solve
-from reference_fem.hyperelastic import NeoHookean
 from reference_fem.options import FemOptions
 from reference_fem.scenes import thick_cylinder_scene
+from springfem.materials.laws.neo_hookean import NeoHookean
 from springfem.mesh import box_mesh
 from springfem.scene import Material, scene_from_dict
 

@@ -8,7 +8,6 @@ indifference, and the isotropic linear tensor (tangent at F = I).
 import numpy as np
 import pytest
 
-from reference_fem.hyperelastic import NeoHookean
 from reference_fem.materials import material_matrix
 from springfem.axes import rotation_matrix, uniform_frames
 from springfem.materials import (
@@ -18,6 +17,7 @@ from springfem.materials import (
     transverse_compliance,
     voigt_to_tensor,
 )
+from springfem.materials.laws.neo_hookean import NeoHookean
 from springfem.scene import Material
 
 TRANSVERSE = dict(E_fiber=3.0e4, E_cross=1.0e4, nu_fiber_cross=0.3, nu_cross=0.4, G_fiber=5.0e3)

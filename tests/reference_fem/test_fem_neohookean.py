@@ -9,9 +9,9 @@ import pytest
 from scipy.optimize import fsolve
 
 from reference_fem import solve
-from reference_fem.hyperelastic import NeoHookean
 from reference_fem.options import FemOptions
 from springfem.errors import SolverError
+from springfem.materials.laws.neo_hookean import NeoHookean
 from springfem.mesh import box_mesh
 from springfem.scene import Material, load_scene, scene_from_dict
 

@@ -1,7 +1,7 @@
 """springfem.volumetric (the U(J) the axis-volume spring uses; a core module).
 
 References: central differences of U and U', the small-strain limit ``U''(1) = kappa``. The
-FEM's laws (reference_fem.hyperelastic, springfem.materials.laws) use this same function.
+FEM's laws (springfem.materials.laws.neo_hookean, springfem.materials.laws) use this same function.
 """
 
 from __future__ import annotations

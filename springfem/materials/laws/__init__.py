@@ -11,6 +11,9 @@ verdict's list. Adding a law: docs/laws.rst.
   (``law = "holzapfel-ogden"``);
 - :func:`tissue_law` builds one from a scene material.
 
+The isotropic :class:`NeoHookean` (``law = "neo-hookean"``, coupled or uncoupled) lives here
+too; the small-strain laws are their matrices (:mod:`springfem.materials.elastic`).
+
 Examples
 --------
 >>> import numpy as np
@@ -36,6 +39,7 @@ from ..voigt import VOIGT_PAIRS
 from .base import TissueLaw
 from .guccione import Guccione
 from .holzapfel_ogden import HolzapfelOgden
+from .neo_hookean import NeoHookean
 
 #: The registered laws by name (:func:`register`).
 LAWS: dict[str, type[TissueLaw]] = {}
@@ -194,6 +198,7 @@ __all__ = [
     "Guccione",
     "HolzapfelOgden",
     "LawNames",
+    "NeoHookean",
     "TissueLaw",
     "law_class",
     "register",

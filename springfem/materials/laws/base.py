@@ -3,7 +3,7 @@
 A law implements :meth:`TissueLaw.local` (energy, first Piola stress and tangent of the
 deformation gradient expressed in the element frame, without the volumetric term); this
 class adds the penalty ``U(J)`` (``kappa > 0``), rotates to the global frame and marks
-inverted elements (``J <= 0``) with NaN, like :class:`~reference_fem.hyperelastic.NeoHookean`.
+inverted elements (``J <= 0``) with NaN, like :class:`~.neo_hookean.NeoHookean`.
 The law's constants are its other dataclass fields (:meth:`TissueLaw.keys`, the
 ``[material]`` keys), in the order :func:`springfem.materials.laws.register` lists them.
 ``frames`` is ``(..., 3, 3)`` broadcast against ``F`` (rows: fiber, sheet, normal);

@@ -22,17 +22,19 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal, cast
+from typing import Any, Literal, cast
 
 import numpy as np
 
-from springfem.errors import InputError
-from springfem.materials.laws.kinematics import det as _det
-from springfem.scene import FORMULATIONS, VOLUMETRIC, Material
-from springfem.volumetric import volumetric_energy as _volumetric
+from ...errors import InputError
+from ...volumetric import volumetric_energy as _volumetric
+from .kinematics import det as _det
 
 Formulation = Literal["coupled", "uncoupled"]
 Volumetric = Literal["log", "quadratic", "simo-taylor"]
+#: The energies (``[material] formulation``) and the uncoupled one's ``U(J)``.
+FORMULATIONS = ("coupled", "uncoupled")
+VOLUMETRIC = ("log", "quadratic", "simo-taylor")
 
 _I = np.eye(3)
 
@@ -58,8 +60,10 @@ class NeoHookean:
 
     @classmethod
     def from_material(
-        cls, material: Material, formulation: str | None = None, volumetric: str | None = None
+        cls, material: Any, formulation: str | None = None, volumetric: str | None = None
     ) -> NeoHookean:
+        """The law of a scene's :class:`~springfem.scene.Material` (``mu``, ``lam``), with
+        its ``formulation`` and ``volumetric`` unless overridden."""
         form = formulation or material.formulation
         vol = volumetric or material.volumetric
         if form not in FORMULATIONS:
