@@ -17,9 +17,9 @@ import scipy.sparse as sp
 import skfem
 
 from springfem.errors import InputError
+from springfem.materials.laws.kinematics import det as _det
 
 from .assembly import displacement_gradient
-from .hyperelastic import _det
 from .loads import ExternalLoads
 from .problem import FemProblem
 
