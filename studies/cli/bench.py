@@ -31,6 +31,25 @@ def _tets(args: argparse.Namespace, default: int, least: int = 6) -> int:
     return n
 
 
+def _sizes(args: argparse.Namespace, default: tuple[int, ...]) -> tuple[int, ...]:
+    """``--sizes N,N,...``: tet counts of at least 100 (``default`` when not given)."""
+    if args.sizes is None:
+        return default
+    try:
+        sizes = tuple(int(float(s)) for s in str(args.sizes).split(",") if s.strip())
+    except ValueError:
+        sizes = ()
+    if not sizes or min(sizes) < 100:
+        raise InputError(f"--sizes must be tet counts of at least 100, got {args.sizes!r}")
+    return sizes
+
+
+def _print_json(res: dict) -> None:
+    from springfem.files import jsonable
+
+    print(json.dumps(jsonable(res), indent=2, sort_keys=True))
+
+
 def _no_tets(args: argparse.Namespace, what: str, instead: str) -> None:
     if args.tets is not None:
         raise InputError(f"bench {what}: --tets does not apply; use {instead}")
@@ -124,9 +143,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     run, show = BENCHES[args.what]
     res = run(args)
     if getattr(args, "json", False):
-        from springfem.files import jsonable
-
-        print(json.dumps(jsonable(res), indent=2, sort_keys=True))
+        _print_json(res)
     else:
         show(res)
     return 0
@@ -148,14 +165,7 @@ def _bench_scale(args: argparse.Namespace) -> int:
     )
 
     _no_tets(args, "scale", "--sizes N,N,...")
-    sizes: tuple[int, ...] = QUICK_SIZES if args.quick else DEFAULT_SIZES
-    if args.sizes is not None:
-        try:
-            sizes = tuple(int(float(s)) for s in str(args.sizes).split(",") if s.strip())
-        except ValueError:
-            sizes = ()
-        if not sizes or min(sizes) < 100:
-            raise InputError(f"--sizes must be tet counts of at least 100, got {args.sizes!r}")
+    sizes = _sizes(args, QUICK_SIZES if args.quick else DEFAULT_SIZES)
     models = None
     if args.models:
         from .. import models as registry
@@ -187,22 +197,13 @@ def _bench_models(args: argparse.Namespace) -> int:
     from .. import bench_forces as bf
 
     _no_tets(args, "forces --models", "--sizes N,N,...")
-    sizes = bf.DEFAULT_SIZES
-    if args.sizes:
-        try:
-            sizes = tuple(int(float(s)) for s in str(args.sizes).split(",") if s.strip())
-        except ValueError:
-            sizes = ()
-        if not sizes or min(sizes) < 100:
-            raise InputError(f"--sizes must be tet counts of at least 100, got {args.sizes!r}")
+    sizes = _sizes(args, bf.DEFAULT_SIZES)
     names = None if args.models in (None, "all") else [m.strip() for m in args.models.split(",")]
     memory = 4.0e9 if args.max_memory is None else float(args.max_memory) * 1e9
     res = bf.bench_forces(sizes, names, _repeats(args, 7), memory,
                           log=lambda s: print(s, file=sys.stderr, flush=True))  # fmt: skip
     if args.json:
-        from springfem.files import jsonable
-
-        print(json.dumps(jsonable(res), indent=2, sort_keys=True))
+        _print_json(res)
     else:
         print(bf.markdown(res))
     if args.out:
