@@ -11,9 +11,9 @@ from peers.xpbd.step_search import measure_step, survives
 from springfem.errors import SolverError
 from studies import models
 from studies.scenes import case_scene
+from studies.study_stability import survival
 from studies.study_stability.cases import VERSION, bar, critical_step_case, grids
 from studies.study_stability.cases import Settings as StabilitySettings
-from studies.study_stability.tables import survival
 
 #: The plug-in's own settings and its Jacobi variant's (what the study's step search runs).
 _JACOBI = XPBDModel().with_settings(**XPBDModel.VARIANTS["xpbd-jacobi"])
