@@ -71,6 +71,9 @@ from .solver import make_problem, solve
 
 #: How many times a Newton increment that inverts an element is halved before giving up.
 MAX_HALVINGS = 10
+#: A nonlinear step reuses the last step's factorised matrix when that step converged in at
+#: most this many iterations, else it starts with a fresh tangent.
+REUSE_ITERATIONS = 4
 
 
 @dataclass
@@ -405,11 +408,15 @@ class _Run:
                         float(np.linalg.norm(inertia)), 1e-300)  # fmt: skip
             return R, scale, (a1, v1, fi[: self.nu], fe), (K, Kf)
 
-        # predictor: the last state (an extrapolation by v and a overshoots the stiff
+        # predictor: constant velocity (an extrapolation by a as well overshoots the stiff
         # modes when omega h >> 1, where an implicit step is meant to be used)
         x1 = x.copy()
+        x1[: self.nu] += h * v * self.free_u
+        x = x.copy()  # identity marks the fallback start below
         same_h = self._fac_h is not None and abs(self._fac_h - h) <= 1e-9 * h
-        fac = self._fac if same_h else None
+        # a nonlinear step starts from the last matrix only while it served (few iterations)
+        served = not self.problem.nonlinear or self._last_iterations <= REUSE_ITERATIONS
+        fac = self._fac if same_h and served else None
         fresh = False  # fac is the tangent at an iterate of this step
         dx, prev, halvings, norm, scale = None, math.inf, 0, math.nan, math.nan
         for it in range(max_iter + 1):
@@ -418,13 +425,18 @@ class _Run:
                 R, scale, out, (K, Kf) = evaluate(x1, need_K)
                 norm = float(np.linalg.norm(R))
             except InvertedElements:
-                if dx is None:
+                if dx is not None:
+                    norm = math.inf
+                elif x1 is not x:
+                    x1 = x  # the predictor inverts an element: start from the last state
+                    continue
+                else:
                     raise
-                norm = math.inf
             umax = float(np.abs(x1[: self.nu]).max()) + float(np.abs(u_n).max())
             floor = self.round_off * (self.stress_noise + umax * (self.k_max + ca * self.m_max)
                                       + h * float(np.abs(v).max()) * ca * self.m_max)  # fmt: skip
             if norm <= max(tol * scale, floor):
+                self._last_iterations = it
                 return x1, out[1], out[0], out[2], out[3], it
             while dx is not None and not norm < prev and halvings < MAX_HALVINGS:
                 dx *= 0.5  # the increment made things worse: go half as far
@@ -455,6 +467,7 @@ class _Run:
 
     _fac = None
     _fac_h: float | None = None
+    _last_iterations = 0
 
     def _factorize(self, K, Kf, ca, cv, t1):
         """The step's tangent ``K + ca M + cv C`` (minus the follower stiffness), factorised."""

@@ -77,7 +77,9 @@ def test_first_bending_frequency_matches_a_modal_analysis():
 SMOOTH = [[0.5 * s, s**3 * (10 - 15 * s + 6 * s * s)] for s in np.linspace(0, 1, 21)]
 
 
-@pytest.mark.parametrize("integrator", ["trapezoidal", "generalized-alpha"])
+@pytest.mark.parametrize(
+    "integrator", ["trapezoidal", pytest.param("generalized-alpha", marks=pytest.mark.slow)]
+)
 def test_probe_trajectory_converges_at_second_order_in_time(integrator):
     # neo-Hookean, tip traction raised smoothly from rest (a smooth load excites no mode
     # the steps leave unresolved; the table's kinks fall on every grid)
