@@ -5,8 +5,9 @@ the element's (fiber, sheet, normal) frame (docs/laws.rst#add-a-law). The law gi
 energy, its second Piola stress ``S = dW/dE`` and ``dS/dE``; the base class turns them into
 the first Piola stress and its tangent, adds the scene's volumetric penalty ``U(J)`` and the
 active tension, and rotates to the global frame. The registration line makes ``law =
-"fibre-svk"`` a scene law: the FEM reference, explicit dynamics, the spring model
-(calibrated on the small-strain tangent the table derives) and ``springfem verdict`` take it.
+"fibre-svk"`` a scene law: the FEM reference, explicit dynamics, the spring model (its
+tissue element takes the law's energy, its exact element the small-strain tangent the table
+derives) and ``springfem verdict`` take it.
 
 Run it: ``python examples/toy_law.py`` solves a small bar and prints its tip displacement.
 """

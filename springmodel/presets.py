@@ -67,9 +67,9 @@ ELEMENT_KEYS = (
 #: Laws with an anisotropic small-strain tangent: every named element but the seed's adds
 #: the Poisson-coupling springs on them (the exact calibration needs them there).
 ANISOTROPIC_LAWS = LawNames(("transverse-linear",))
-#: The tissue laws whose terms the ``tissue`` element carries (:mod:`springmodel.tissue_element`,
-#: ``stiffening = "law"``); another tissue law gets the ``exact`` element, calibrated on its
-#: small-strain tangent.
+#: The tissue laws whose terms the ``tissue`` element carries in its compiled pass
+#: (:mod:`springmodel.tissue_kernel`, ``stiffening = "law"``); another tissue law's element
+#: takes the law's own energy in numpy (:func:`springmodel.tissue_element.law_derivatives`).
 LAW_TERMS = ("guccione", "holzapfel-ogden")
 
 
@@ -84,14 +84,14 @@ def element_for_law(law: str) -> str:
     Returns
     -------
     str
-        ``tissue`` for a tissue law of :data:`LAW_TERMS`, else ``exact``.
+        ``tissue`` for a tissue law, else ``exact``.
 
     Examples
     --------
     >>> element_for_law("linear")
     'exact'
     """
-    return "tissue" if law in LAW_TERMS else "exact"
+    return "tissue" if law in TISSUE_LAWS else "exact"
 
 
 def element_options(name: str, law: str) -> dict[str, Any]:
@@ -131,9 +131,9 @@ def named_element(r: TableReader) -> tuple[str, dict[str, Any]]:
         name = "seed"  # parts picked one by one build on the specification's element
     if name == DEFAULT_ELEMENT:
         name = element_for_law(law)
-    if name == "tissue" and law not in LAW_TERMS:
+    if name == "tissue" and law not in TISSUE_LAWS:
         raise r.fail(
-            "element", f'"tissue" needs a tissue law ({", ".join(LAW_TERMS)}), not {law!r}'
+            "element", f'"tissue" needs a tissue law ({", ".join(TISSUE_LAWS)}), not {law!r}'
         )
     if name == "stiffened" and law not in TISSUE_LAWS and "stiffening_modulus" not in r.t:
         raise r.fail(

@@ -26,7 +26,10 @@ axis-volume spring of the fused kernel) is, by ``[spring] stiffening``:
   (``a_s, b_s``) in tension only, the fibre–sheet torsion ``a_fs/(2 b_fs)
   (e^{b_fs m_fs^2} - 1)``, and the isotropic rest ``a/(2 b) (e^{b (I1bar - 3)} - 1)`` on the
   three axial springs and the axis volume, ``I1bar = J^{-2/3} sum_l m_l`` with
-  ``J^2 = det C'(m)``. The axis-volume spring carries the law's ``kappa``.
+  ``J^2 = det C'(m)``. Another registered law: its own energy as a function of
+  ``C'(m)`` (:func:`law_derivatives`, numpy; the two above are written out for the compiled
+  pass and equal their laws to round-off). The axis-volume spring carries the law's
+  ``kappa``.
 
 The forces and tangent follow by the chain rule through the measures, which are quadratic in
 the positions (their second derivatives are constant): ``dW/dZ_l = 2 W_l Z_l +
@@ -55,12 +58,13 @@ import numpy as np
 
 from springfem.errors import InputError
 from springfem.materials.elastic import tissue_matrix
-from springfem.materials.laws import TISSUE_LAWS, small_strain_tangent
+from springfem.materials.laws import TISSUE_LAWS, TissueLaw, small_strain_tangent, tissue_law
 
 from .hessian_numpy import polynomial_coefficients
 from .options import SpringOptions
 from .presets import LAW_TERMS
 from .rest_geometry import TORSION_PAIRS
+from .tissue_generic import law_derivatives
 
 __all__ = [
     "MODES",
@@ -81,7 +85,9 @@ MAX_EXPONENT = 60.0
 #: ``I4 - 1`` above which a Holzapfel–Ogden fibre or sheet counts as in tension (the FEM's).
 TENSION = 1e-12
 #: The element's energy by code: quadratic springs, exponential stiffening, Guccione, HO.
-MODES = {"springs": 0, "exponential": 1, **{law: 2 + i for i, law in enumerate(LAW_TERMS)}}
+MODES = {
+    "springs": 0, "exponential": 1, **{law: 2 + i for i, law in enumerate(LAW_TERMS)}, "law": -1,
+}  # fmt: skip
 #: ``(l, m)`` of measure ``3 + p`` (the torsion pairs (0,1), (0,2), (1,2)).
 _PAIRS = np.array(TORSION_PAIRS, dtype=np.int64)
 
@@ -101,6 +107,10 @@ class TissueLawParameters:
         ``(a, b, a_f, b_f, a_s, b_s, a_fs, b_fs)``; zeros otherwise.
     b2, b3
         The axial springs' polynomial coefficients (eq. 2.36).
+    tissue
+        Mode ``law``: a tissue law without terms of its own here (not in
+        :data:`~springmodel.presets.LAW_TERMS`), passive and without its penalty; the
+        element's energy is the law's, in numpy (:func:`law_derivatives`).
     """
 
     mode: str
@@ -108,6 +118,7 @@ class TissueLawParameters:
     law: tuple[float, ...] = (0.0,) * 8
     b2: float = 0.0
     b3: float = 0.0
+    tissue: TissueLaw | None = None
 
     @property
     def code(self) -> int:
@@ -141,10 +152,14 @@ def law_parameters(options: SpringOptions, material, modulus: float | None) -> T
     if options.stiffening == "exponential":
         return TissueLawParameters("exponential", float(modulus or 1.0), b2=b2, b3=b3)
     law = getattr(material, "law", None)
-    if law not in LAW_TERMS:
+    if law not in TISSUE_LAWS:
         raise InputError(
-            f'[spring] stiffening = "law" needs a tissue law ({", ".join(LAW_TERMS)}), got {law!r}'
+            f'[spring] stiffening = "law" needs a tissue law ({", ".join(TISSUE_LAWS)}), '
+            f"got {law!r}"
         )
+    if law not in LAW_TERMS:
+        passive = replace(tissue_law(material, kappa=0.0), active_tension=0.0)
+        return TissueLawParameters("law", b2=b2, b3=b3, tissue=passive)
     p = material.parameters
     values = tuple(float(p[k]) for k in TISSUE_LAWS[law])
     return TissueLawParameters(law, law=values + (0.0,) * (8 - len(values)), b2=b2, b3=b3)
@@ -334,6 +349,11 @@ def measure_derivatives(m: np.ndarray, elements, params: TissueLawParameters, he
                 dW[:, :, None] * dW[:, None, :]
             )
         return We, e[:, None] * dW, ddW, e
+    if params.mode == "law":
+        assert params.tissue is not None
+        W, dW, ddW = law_derivatives(m, params.tissue, hessian)
+        Vc = V[:, None]
+        return V * W, Vc * dW, (None if ddW is None else Vc[:, :, None] * ddW), np.ones(k)
     if params.mode == "guccione":
         C, b_f, b_t, b_fs = params.law[:4]
         bl = np.array([b_f, b_t, b_t])
@@ -466,6 +486,14 @@ class TissuePart:
         from .tissue_kernel import tissue_pass
 
         x = np.ascontiguousarray(x, dtype=float).reshape(-1, 3)
+        if self.params.mode == "law":  # a law without compiled terms: numpy
+            W, grad, s = tissue_energy(x, self.elements, self.params)
+            f = np.zeros((x.shape[0] if forces else 1, 3))
+            if forces:
+                tets = self.elements.tets.ravel()
+                for c in range(3):
+                    f[:, c] = -np.bincount(tets, grad[..., c].ravel(), minlength=x.shape[0])
+            return W, s, f
         m = self.elements.n_elements
         W, s = np.empty(m), np.empty(m)
         f = np.zeros((x.shape[0] if forces else 1, 3))

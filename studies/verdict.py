@@ -67,7 +67,6 @@ from springfem.mechanics.limits import solve_limits
 from springfem.mechanics.memory import MemoryLimitExceeded, memory_limit
 from springfem.mesh.thickness import thin_wall_note
 from springfem.scene import Scene
-from springmodel.presets import LAW_TERMS
 
 from . import fem_laws, model_set, models
 from .compare import LARGE_STRAIN, max_principal_strain
@@ -126,7 +125,7 @@ def _spring_builds(m: models.Model, scene: Scene) -> bool:
         return False
     law = scene.material.law
     if opts.stiffening == "law":
-        return law in LAW_TERMS
+        return law in LAWS
     if opts.stiffening != "off" and opts.stiffening_modulus is None:
         return law in LAWS and LAWS[law].stiffening_modulus(scene.material.parameters) is not None
     return True
