@@ -1,28 +1,15 @@
 """Cases of the speed-accuracy study: settings, the methods, the points of a scene, one
 timed solve.
 
-A method is a model of :mod:`studies.models` and a solution method, named
-``"<model> <solution>"`` (``spring-exact static``, ``P1-NH explicit``):
-
-- ``static``: FEM models' own solve; spring models by static Newton (relative residual
-  :data:`STATIC_TOL`);
-- ``implicit``: backward-Euler pseudo-time stepping to rest, ``dt`` a multiple of the
-  critical step (spring models);
-- ``explicit``: dynamic relaxation to rest (:func:`springfem.mechanics.explicit_static`,
-  kinetic damping) of the model's mechanical system (a spring model, or the explicit P1
-  FEM of ``P1-NH``).
-
-The plug-in models (:func:`studies.models.plugins`, e.g. ``corotational``) that apply to
-the scene get their own ``static`` points and, with an explicit form, ``explicit`` points
-at the last explicit setting. A plug-in with a ``sweep`` of its own settings
-(:class:`springfem.model_api.ModelPlugin`; XPBD's substeps x iterations) gets one
-``static`` point per sweep entry (the settings' ``sweep`` first entries; past the first
-only up to level ``sweep_levels``), solved by the model ``with_settings`` those settings;
-its method name shows them (``xpbd 20x2 static``, :func:`method_name`).
-
-Every case is a :meth:`~studies.scenes.StudyScene.case` of the scene with ``model``,
-``solution``, ``factor`` (the refinement level, :mod:`studies.study_convergence.levels`)
-and ``setting`` (the solver's settings; a sweep point's model settings under ``"model"``).
+A method is a model of :mod:`studies.models` and a solution method, ``"<model>
+<solution>"``: ``static`` (FEM models' own solve; spring models by Newton to
+:data:`STATIC_TOL`), ``implicit`` (backward-Euler pseudo-time stepping to rest, ``dt`` a
+multiple of the critical step) or ``explicit`` (dynamic relaxation to rest,
+:func:`springfem.mechanics.explicit_static`). The plug-in models that apply get ``static``
+points and, with an explicit form, ``explicit`` ones; a plug-in with a ``sweep`` of its own
+settings (XPBD's substeps x iterations) a ``static`` point per entry (:func:`method_name`).
+A case is the scene's :meth:`~studies.scenes.StudyScene.case` with ``model``, ``solution``,
+``factor`` (the level) and ``setting`` (a sweep point's model settings under ``"model"``).
 """
 
 from __future__ import annotations
@@ -56,6 +43,10 @@ SPRING, EXACT = "spring-energy", "spring-exact"
 FEM_STATIC = ("P1", "P1-NH", "P2", "P2-NH")
 #: The FEM model of the explicit runs (the explicit P1 FEM).
 EXPLICIT_FEM = "P1-NH"
+L2 = "L2 err (level-1 vertices)"
+#: The column of the error against P1-NH static on the same level (a P1 model's error
+#: against the Newton answer of its own mesh, e.g. XPBD's substep error).
+SAME = "L2 vs P1-NH same mesh"
 
 
 @dataclass(frozen=True)
@@ -320,3 +311,25 @@ def step_cost_work(case: dict) -> dict:
     out["ratio_wall"] = median_ratio(samples, SPRING, EXPLICIT_FEM)
     out["ratio_cpu"] = median_ratio(samples, SPRING, EXPLICIT_FEM, "cpu")
     return out
+
+
+def pareto_front(seconds: np.ndarray, error: np.ndarray) -> np.ndarray:
+    """Mask of the non-dominated points: no other point is at least as fast and as accurate
+    and strictly better in one of the two.
+
+    Examples
+    --------
+    >>> pareto_front(np.array([1.0, 2.0, 3.0, 2.5]), np.array([0.5, 0.1, 0.2, 0.1])).tolist()
+    [True, True, False, False]
+    """
+    t, e = np.asarray(seconds, float), np.asarray(error, float)
+    keep = np.ones(t.size, dtype=bool)
+    for i in range(t.size):
+        better = (t <= t[i]) & (e <= e[i]) & ((t < t[i]) | (e < e[i]))
+        keep[i] = not better.any()
+    return keep
+
+
+def model_of(method: str) -> str:
+    """The model of a method name (``xpbd 20x2 static`` -> ``xpbd``)."""
+    return method.split()[0]

@@ -10,8 +10,7 @@ import pandas as pd
 
 from ..registry import Figure, StudyContext
 from ..tables import plain_log_ticks, pyplot
-from .sweeps import model_of
-from .tables import SAME, pareto_front
+from .cases import SAME, model_of, pareto_front
 
 #: Marker per model, colour per solution method (by model for the static FEM).
 MARKERS = {"spring-energy": "o", "spring-exact": "*", "P1": "s", "P1-NH": "s", "P2": "D",

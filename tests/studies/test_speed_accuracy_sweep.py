@@ -14,9 +14,8 @@ from springfem.errors import InputError
 from studies import models
 from studies.cache import case_key
 from studies.scenes import StudyScene
+from studies.study_speed_accuracy import SAME, measure, points_frame, report_findings
 from studies.study_speed_accuracy import cases as sa
-from studies.study_speed_accuracy.findings import report_findings
-from studies.study_speed_accuracy.tables import SAME, measure, points_frame
 
 #: A stocky neo-Hookean block sagging under gravity: XPBD comes to rest in tens of frames.
 BLOCK = StudyScene(
