@@ -28,7 +28,47 @@ from springfem.scene import Scene
 
 from .. import models
 from ..scenes import case_scene
-from .cases import own_integrator, resampled
+
+
+def own_integrator(name: str) -> Any:
+    """The plug-in of model ``name`` when it brings its own time integration (a
+    ``release_run``, :class:`~springfem.model_api.ModelPlugin`), else ``None``."""
+    model = models.get(name)
+    plugin = getattr(model, "plugin", None) or model
+    return plugin if hasattr(plugin, "release_run") else None
+
+
+def resampled(U: np.ndarray, step: float, t_end: float, samples: int) -> tuple[list, list]:
+    """A probe trajectory on ``samples + 1`` even times up to ``t_end``: its rows ``U[k]``
+    are at ``k * step`` (NaN after a blow-up: NaN there too).
+
+    Parameters
+    ----------
+    U
+        ``(steps + 1, 3)`` probe displacements.
+    step
+        Time between rows.
+    t_end, samples
+        The sampled span and its intervals.
+
+    Returns
+    -------
+    t, u
+        Lists of the sample times and ``[x, y, z]`` per time.
+
+    Examples
+    --------
+    >>> U = np.array([[0.0, 0, 0], [1, 2, 3], [np.nan, np.nan, np.nan]])
+    >>> t, u = resampled(U, 1.0, 2.0, 2)
+    >>> t, u[1], bool(np.isnan(u[2][0]))
+    ([0.0, 1.0, 2.0], [1.0, 2.0, 3.0], True)
+    """
+    t = np.linspace(0.0, t_end, int(samples) + 1)
+    tk = step * np.arange(U.shape[0])
+    ok = np.isfinite(U[:, 0])
+    u = np.column_stack([np.interp(t, tk[ok], U[ok, i], right=np.nan) for i in range(3)])
+    return t.tolist(), u.tolist()
+
 
 #: Static Newton of the preload: relative tolerance, iterations per load step.
 NEWTON_TOL, NEWTON_ITER = 1e-10, 40

@@ -202,8 +202,8 @@ def test_the_studies_weigh_the_default_plugins_where_they_apply():
     """Speed-accuracy gets static and explicit co-rotational points on a linear scene; the
     dynamics study releases it on a linear scene, not on its bundled Guccione beam (no tissue
     law in co-rotational P1); the verdict's candidates include it."""
+    import studies.study_dynamics as dynamics
     from studies.scenes import StudyScene
-    from studies.study_dynamics import cases as dynamics
     from studies.study_speed_accuracy import cases as speed
 
     sc = StudyScene.bundled("cantilever", {"mesh.divisions": [4, 1, 1]})

@@ -13,8 +13,14 @@ import studies.study_dynamics as dynamics
 from springfem.errors import InputError
 from studies.runner import run_study
 from studies.scenes import StudyScene
-from studies.study_dynamics.cases import Settings, beam_table, period_case, release_cases
-from studies.study_dynamics.tables import energy_drift, probe_errors
+from studies.study_dynamics import (
+    Settings,
+    beam_table,
+    energy_drift,
+    period_case,
+    probe_errors,
+    release_cases,
+)
 from studies.study_dynamics.work import WORK, release_case
 
 #: A 6x1x1 beam (36 tets) under 4x Land's load, half a period, few timed steps.

@@ -10,8 +10,14 @@ import pytest
 from peers.xpbd import XPBD, XPBDSettings
 from peers.xpbd.release import raised_solver
 from springfem.scene import scene_from_dict
-from studies.study_dynamics.cases import Settings, beam_table, isotropic_beam, release_cases
-from studies.study_dynamics.tables import energy_change, probe_errors
+from studies.study_dynamics import (
+    Settings,
+    beam_table,
+    energy_change,
+    isotropic_beam,
+    probe_errors,
+    release_cases,
+)
 from studies.study_dynamics.work import WORK, release_case
 
 G = 9.81
@@ -62,7 +68,7 @@ def nh_runs():
     s = Settings(beam=(6, 1, 1), load=4.0, periods=0.5, samples=60, rounds=1, steps=10,
                  models=("spring-exact",))  # fmt: skip
     sc = isotropic_beam(s.beam, s.load)
-    from studies.study_dynamics.cases import period_case
+    from studies.study_dynamics import period_case
 
     period = WORK["period"][0](period_case(sc))["period"]
     cases = [c for c in release_cases(sc, s, s.periods * period)
