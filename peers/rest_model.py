@@ -49,7 +49,8 @@ class PeerFrames:
     """A peer's own frames (:class:`springfem.frames.FrameStepper`): its solver's ``start``
     and ``advance`` at ``dt = frame_dt``, damped at the scene's mass-proportional rate; the
     loads are scaled by the load factor at the frame's end (each load by its own factor
-    when they differ, :class:`springfem.frames.LoadHistory`).
+    when they differ, :class:`springfem.frames.LoadHistory`) at the frame's middle: one
+    load a frame, so a release on a frame's boundary lands there.
 
     Parameters
     ----------
@@ -99,7 +100,7 @@ class PeerFrames:
     def frame(self, x: np.ndarray, v: np.ndarray, t: float, scale: Any) -> None:
         from springfem.frames import LoadHistory
 
-        solver, t1 = self.solver, t + self.frame_dt
+        solver, t1 = self.solver, t + 0.5 * self.frame_dt
         state = (x, v, *self._state[2:])
         if isinstance(scale, LoadHistory) and not scale.single:
             solver.advance(*state, scale.external(x, t1) / self.masses[:, None])

@@ -79,6 +79,7 @@ class LoadHistory:
         self.single = all(repr(f) == repr(fns[0]) for f in fns)
         self._fn = fns[0] if fns else None
         self._parts: list[tuple[Any, Any, np.ndarray | None]] = []
+        self._rest_force: np.ndarray | None = None
         if not self.single:
             for load, fn in zip(loads, fns, strict=True):
                 sub = replace(scene, loads=[load])
@@ -89,16 +90,42 @@ class LoadHistory:
         """The common load factor at ``t`` (1 when there is none)."""
         return 1.0 if self._fn is None else float(self._fn(t))
 
-    def external(self, x: np.ndarray, t: float) -> np.ndarray:
-        """``sum_i g_i(t) f_i(x)``: every load at its own factor ``(n, 3)``."""
+    def left(self, t: float) -> float:
+        """The common load factor just before ``t`` (differs from ``self(t)`` at a jump)."""
+        return 1.0 if self._fn is None else float(self._fn.left(t))
+
+    def jumps(self) -> set[float]:
+        """The times where some load jumps (a release)."""
+        fns = [getattr(load, "time", None) for load in self.scene.loads]
+        return {float(t) for f in fns if f is not None for t in f.jumps()}
+
+    def external(self, x: np.ndarray, t: float, left: bool = False) -> np.ndarray:
+        """``sum_i g_i(t) f_i(x)``: every load at its own factor ``(n, 3)`` (``left``: the
+        factors just before ``t``)."""
         from .loads import external_forces
 
         f = np.zeros_like(x)
         for fn, sub, fixed in self._parts:
-            g = 1.0 if fn is None else float(fn(t))
+            g = 1.0 if fn is None else float(fn.left(t) if left else fn(t))
             if g:
                 f += g * (fixed if fixed is not None else external_forces(sub, x=x))
         return f
+
+    def force(self, x: np.ndarray, t: float) -> np.ndarray:
+        """The external force at ``x`` and time ``t`` ``(n, 3)``: every load at its factor."""
+        if not self.single:
+            return self.external(x, t)
+        from .loads import external_forces, has_follower_loads
+
+        g = self(t)
+        if not g:
+            return np.zeros_like(x)
+        if self._rest_force is None or has_follower_loads(self.scene):
+            f = external_forces(self.scene, x=x)
+            if not has_follower_loads(self.scene):
+                self._rest_force = f
+            return g * f
+        return g * self._rest_force
 
     def settles_at(self) -> float:
         """The time after which no load changes (0 without time functions)."""
@@ -155,6 +182,10 @@ class ExplicitFrames:
         the fewest substeps that keep it at or below ``safety * 2 / omega_max``.
     mass_damping
         Mass-proportional damping rate ``alpha`` (1/s), applied exactly per substep.
+    stiffness_damping
+        Stiffness-proportional Rayleigh coefficient ``a_K`` (s): a force ``-a_K K_0 v``
+        with the tangent at rest ``K_0`` (it lowers the stable step: the substep keeps
+        ``h <= safety (sqrt(1 + (a_K w)^2) - a_K w) 2 / w``).
     dt_crit
         The critical step, when already known (else computed: one eigenvalue solve).
     """
@@ -166,11 +197,19 @@ class ExplicitFrames:
         safety: float = 0.5,
         mass_damping: float = 0.0,
         dt_crit: float | None = None,
+        stiffness_damping: float = 0.0,
     ):
         self.system = system
         self.ctx = SolveContext(system)
         self.frame_dt = float(frame_dt)
         self.dt_crit = float(dt_crit) if dt_crit else stable_time_step(system)[0]
+        self.K0 = None
+        if stiffness_damping:
+            w = 2.0 / self.dt_crit
+            z = stiffness_damping * w / 2.0  # the damping ratio of the highest mode
+            self.dt_crit *= math.sqrt(1.0 + z * z) - z
+            K = self.ctx.stiffness(self.ctx.x0, 0.0)  # analytic, else coloured differences
+            self.K0 = stiffness_damping * K.tocsr()
         self.substeps = max(1, math.ceil(self.frame_dt / (safety * self.dt_crit) - 1e-9))
         self.h = self.frame_dt / self.substeps
         self.masses = self.ctx.m
@@ -187,11 +226,15 @@ class ExplicitFrames:
         self._a = None
         return x, np.zeros_like(x)
 
-    def _acc(self, x: np.ndarray, v: np.ndarray, s: float, t: float, scale: Any) -> np.ndarray:
+    def _acc(
+        self, x: np.ndarray, v: np.ndarray, s: float, t: float, scale: Any, left: bool = False
+    ) -> np.ndarray:
         if isinstance(scale, LoadHistory) and not scale.single:
-            f = self.ctx.forces(x, v, 0.0) + scale.external(x, t)
+            f = self.ctx.forces(x, v, 0.0) + scale.external(x, t, left)
         else:
             f = self.ctx.forces(x, v, s)
+        if self.K0 is not None:
+            f = f - (self.K0 @ v.reshape(-1)).reshape(-1, 3)
         a = f / self.masses[:, None]
         if self.ctx.fixed.size:
             a.reshape(-1)[self.ctx.fixed] = 0.0
@@ -202,11 +245,16 @@ class ExplicitFrames:
         :class:`LoadHistory` of several time functions: each load its own factor, the
         supports' displacements in full)."""
         h, fixed = self.h, self.ctx.fixed
-        split = isinstance(scale, LoadHistory) and not scale.single
+        history = scale if isinstance(scale, LoadHistory) else None
+        split = history is not None and not history.single
+        jumps = history.jumps() if history is not None else set()
         a = self._a if self._a is not None else self._acc(x, v, scale(t), t, scale)
         xf, vf = x.reshape(-1), v.reshape(-1)
         for k in range(1, self.substeps + 1):
-            s = 1.0 if split else scale(t + k * h)
+            tk = t + k * h
+            jump = any(abs(tk - j) <= 1e-9 * max(h, abs(tk)) for j in jumps)
+            # at a jump of a load the closing half kick takes the load just before it
+            s = 1.0 if split else (history.left(tk) if history and jump else scale(tk))
             if self.decay != 1.0:
                 v *= self.decay
             v += 0.5 * h * a
@@ -215,10 +263,12 @@ class ExplicitFrames:
                 p = self.system.prescribed(s)
                 vf[fixed] = (p - xf[fixed]) / h
                 xf[fixed] = p
-            a = self._acc(x, v, s, t + k * h, scale)
+            a = self._acc(x, v, s, tk, scale, left=jump)
             v += 0.5 * h * a
             if self.decay != 1.0:
                 v *= self.decay
+            if jump:  # and the next opening half kick the load just after it
+                a = self._acc(x, v, 1.0 if split else scale(tk), tk, scale)
             self.system.post_step(x, h)
         self._a = a
 
@@ -251,8 +301,8 @@ def frame_stepper(model: Any, scene: Any, frame_dt: float, **settings: Any) -> F
     system = model.system(scene)
     if system is None:
         return None
-    damping = scene_damping(scene)
-    return ExplicitFrames(system, frame_dt, mass_damping=damping, **settings)
+    a_m, a_k = rayleigh(scene)
+    return ExplicitFrames(system, frame_dt, mass_damping=a_m, stiffness_damping=a_k, **settings)
 
 
 def frames_settings(model: Any) -> list[dict[str, Any]]:
@@ -268,8 +318,14 @@ def frames_settings(model: Any) -> list[dict[str, Any]]:
 
 
 def scene_damping(scene: Any) -> float:
-    """The scene's mass-proportional damping rate (1/s), 0 when it sets none."""
-    d = getattr(scene, "damping", None)
-    if d is None:
-        return 0.0
-    return float(getattr(d, "mass", 0.0) or 0.0)
+    """The mass-proportional rate ``a_M`` (1/s) of the scene's Rayleigh damping
+    (``[dynamics] damping``), 0 when it sets none."""
+    return rayleigh(scene)[0]
+
+
+def rayleigh(scene: Any) -> tuple[float, float]:
+    """``(a_M, a_K)`` of the scene's ``[dynamics] damping`` (``C = a_M M + a_K K_0``)."""
+    from .scene.dynamics import DynamicsOptions
+
+    d = DynamicsOptions.of(scene).damping
+    return float(d.mass), float(d.stiffness)

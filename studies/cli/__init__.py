@@ -192,6 +192,9 @@ def build_parser() -> argparse.ArgumentParser:
     _models(p, "the models to weigh (default: every one that applies)")
     _out(p, "output folder (default: out/verdict-<scene>)")
     p.add_argument("--json", action="store_true", help="print the verdict as JSON")
+    p.add_argument("--frame-rate", type=_positive_float, default=None, metavar="HZ",
+                   help="weigh the fast models at this frame rate against the dynamic "
+                   "reference (60: a picture, 1000: haptics); budget default 600 s")  # fmt: skip
     add_set_option(p)
     p.set_defaults(func=_subcommand("studies.cli.verdict", "cmd_verdict"))
 

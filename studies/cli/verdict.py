@@ -27,6 +27,8 @@ def cmd_verdict(args: argparse.Namespace) -> int:
         The exit code (0; 3 when no reference could be solved).
     """
     scene = scene_of(args)
+    if getattr(args, "frame_rate", None):
+        return _frame_verdict(args, scene)
     quiet = bool(args.json)
     log = progress_log(quiet)
     warning = size_warning(scene)
@@ -67,3 +69,23 @@ def cmd_verdict(args: argparse.Namespace) -> int:
             print(v.ranking)
         print(f"wrote {md.with_suffix('.csv')} and {md}")
     return 0 if v.reference else 3
+
+
+def _frame_verdict(args: argparse.Namespace, scene) -> int:
+    """``--frame-rate``: :func:`studies.verdict_frames.frame_verdict`, its table and files."""
+    from ..verdict_frames import frame_verdict, write_frame_verdict
+
+    quiet = bool(args.json)
+    log = progress_log(quiet)
+    budget = args.budget if args.budget is not None else 600.0
+    v = frame_verdict(scene, args.frame_rate, names=args.models, log=log,
+                      budget=max(1.0, budget - command_seconds()))  # fmt: skip
+    md = write_frame_verdict(v, out_folder(args, "verdict", scene.name))
+    if quiet:
+        print(v.to_json())
+    else:
+        print()
+        print(printable(v.table.rename_axis("model").reset_index()))
+        print(f"verdict: {v.sentence}")
+        print(f"wrote {md} and {md.with_suffix('.json')}")
+    return 0
