@@ -74,7 +74,7 @@ VOLUMETRIC = ("log", "quadratic", "simo-taylor")
 #: Length of the parameter vector every kernel takes (unused entries are zero).
 NPARAM = 10
 #: Constants per element: rotated gradients and volume; the linear law adds its frame.
-NCOL = {"transverse-linear": 19, "guccione": 10, "holzapfel-ogden": 10}
+NCOL = {law: 19 if law == "transverse-linear" else 10 for law in KERNEL_LAWS}
 
 
 def right_handed(frames: np.ndarray) -> np.ndarray:

@@ -34,6 +34,7 @@ import os
 
 import numpy as np
 
+from reference_fem.explicit_anisotropic import NCOL
 from springmodel.options import SpringOptions
 
 from .bench_stiffening import stiffening_parts
@@ -58,7 +59,7 @@ PRECISIONS = ("float64", "mixed", "float32")
 STEP_COUNT = 10
 _FEM_BYTES = {"float64": 10 * 8 + 16, "mixed": 10 * 4 + 16, "float32": 10 * 4 + 16}
 #: The anisotropic FEM kernels (reference_fem.explicit_anisotropic): constants per element.
-_ANISOTROPIC_FEM = {"transverse-linear": 19, "guccione": 10, "holzapfel-ogden": 10}
+_ANISOTROPIC_FEM = NCOL  # the compiled anisotropic kernels and their constants per element
 
 
 def anisotropic_fem_scene(scene, law: str):

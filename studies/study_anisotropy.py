@@ -39,6 +39,7 @@ import pandas as pd
 from springfem.errors import InputError, SolverError
 from springfem.mesh import displacement_gradients
 from springfem.scene import Scene
+from springmodel.presets import ANISOTROPIC_LAWS
 
 from . import models
 from .analytic import fibre_angle, off_axis_modulus, off_axis_strain, reference
@@ -61,7 +62,7 @@ MODELS = ("spring-analytic", "spring-nnls", "spring-exact", "P1", "P2")
 REFERENCES = ("P2", "P1")
 MARKERS = dict(zip(MODELS, "os*x+"))
 #: Laws with a fibre: what the study needs.
-ANISOTROPIC = ("transverse-linear", "guccione", "holzapfel-ogden")
+ANISOTROPIC = ANISOTROPIC_LAWS  # transverse-linear and every tissue law of the table
 #: Error-split columns by key of :func:`split_errors`.
 SPLIT_COLUMNS = {"fibre": "fibre err (displ.)", "cross": "cross err (displ.)",
                  "total": "L2 err", "strain_fibre": "fibre strain err",
