@@ -114,44 +114,32 @@ class Settings:
     Parameters
     ----------
     nus
-        The Poisson ratios.
+        The Poisson ratios (:data:`NUS` has two more).
     cook, beam
         The level-1 divisions of Cook's membrane and Land's beam (``None``: left out).
-    factors
-        Refinement factors of the three levels (the Cook mesh is not a box grid: powers of
-        two; :func:`~studies.study_convergence.levels.refined_scene`).
-    beam_factors
-        The beam's factors (a box grid takes any integer: 1, 2, 3 reach Land's 30x3x3).
+    factors, beam_factors
+        Refinement factors of the three levels (Cook's mesh is not a box grid: powers of
+        two; the beam's box grid takes any integer: 1, 2, 3 reach Land's 30x3x3).
     methods
         Names of :data:`METHODS` to run.
     max_time
-        Cap of one solve (s): a method that needs longer is recorded as stopped, and a
-        finer level whose predicted time (:func:`estimate`) is over the cap is not run (the
-        reference, :data:`REFERENCE`, is capped only by the user's ``--max-time``).
+        Cap of one solve (s; the reference is capped only by the user's ``--max-time``).
     timed
         Time fairly (an untimed warm-up solve per method, the median of three under
-        :data:`REPEAT_BELOW` s); ``False``: one solve each (tests).
+        :data:`REPEAT_BELOW` s); ``False``: one solve each.
     prune
-        Do not run a method's finer levels at a Poisson ratio once a coarser level is
-        within :data:`TOLERANCE` (they cannot be cheaper, and the method is not locked),
-        nor a level whose predicted time is over 1.5 × ``max_time``. The quick preset does
-        not prune: its headline numbers are a regression check of every headline method's
-        finest level, which must not depend on the machine's speed.
+        Skip a method's finer levels at a ν once a coarser one is within
+        :data:`TOLERANCE`, and a level predicted over 1.5 × ``max_time``. The quick preset
+        does not prune: its headline is every headline method's finest level, which must
+        not depend on the machine's speed.
     skip_costlier
-        Do not run a finer level of a method at a Poisson ratio where, on a coarser level, a
-        method on the same kind of tets (linear: :data:`LINEAR_TETS`; quadratic) was within
-        :data:`TOLERANCE` in less than the case's predicted time (the case cannot be the
-        cheapest of its kind: the study's two answers), or was at least twice as accurate
-        and no slower (the method is not expected to become the cheapest of its kind);
-        never a headline method at the highest ν (:data:`~.findings.HEADLINE_METHODS`).
-        Above all it leaves out displacement P2 near incompressibility: P2/P1 on the same
-        mesh is several times more accurate and faster there, and displacement P2 needs
-        hundreds of Newton iterations (274 on the quick beam's 486 tets at ν = 0.4999: its
-        penalty's Newton basin shrinks as ν → 1/2). The findings list every case it left
-        out, with the method's error rising with ν on the levels it ran.
+        Skip a finer level that cannot be the cheapest of its kind of tets (linear:
+        :data:`LINEAR_TETS`, or quadratic): above all displacement P2 near
+        incompressibility, which needs hundreds of Newton iterations there (274 on the
+        quick beam's 486 tets at ν = 0.4999) where P2/P1 is more accurate and faster.
     finest_nus
-        The Poisson ratios at which the methods run on the finest level (``None``: every
-        one; the reference runs there at every ratio).
+        The ratios at which the methods run on the finest level (``None``: every one; the
+        reference runs there at every ratio).
     """
 
     nus: tuple[float, ...] = (0.3, 0.49, 0.4999)
@@ -168,21 +156,17 @@ class Settings:
 
     @classmethod
     def full(cls) -> Settings:
-        """Cook 4x4x1 refined x2, x4 (96 to 6,144 tets); the beam 10x1x1 to Land's 30x3x3;
-        ν = 0.3, 0.49, 0.4999 (:data:`NUS` has two more); a 120 s cap of each solve (the
-        slowest answer of the report, nodal-strain P1 on the finest beam at ν = 0.4999,
-        took 41 s alone and over 60 s beside a second worker on the loaded machine)."""
+        """Cook 4x4x1 refined x2, x4 (96 to 6,144 tets), the beam 10x1x1 to Land's 30x3x3; a
+        120 s cap (nodal-strain P1 on the finest beam at ν = 0.4999 took 41 s alone, over
+        60 s beside a second worker)."""
         return cls()
 
     @classmethod
     def quick(cls) -> Settings:
-        """Three Poisson ratios; Cook 2x2x1 refined x2, x4 (24 to 1,536 tets); the beam
-        3x1x1 to 9x3x3; a 90 s cap (nodal-strain P1 of the finest beam at ν = 0.4999, on
-        the nodal-pressure fallback, stopped at 30 s beside a quick report at load 15 on
-        the 2-core machine: the quick headline must not depend on the machine's speed).
-        The methods run on the finest level at ν = 0.4999 only (the headline's; on these
-        coarse meshes no method on linear tets is within 5 % on any level, and the
-        cheapest method is P2/P1 on a coarser one at every ν)."""
+        """Cook 2x2x1 refined x2, x4 (24 to 1,536 tets), the beam 3x1x1 to 9x3x3; a 90 s
+        cap (so that the headline does not depend on the machine's speed); the methods run
+        on the finest level at ν = 0.4999 only (on these meshes the cheapest method is
+        P2/P1 on a coarser level at every ν)."""
         return cls(cook=(2, 2, 1), beam=(3, 1, 1), max_time=90.0, prune=False,
                    finest_nus=(0.4999,))  # fmt: skip
 
@@ -226,29 +210,11 @@ def shear_modulus(sc: StudyScene) -> float:
 def with_nu(sc: StudyScene, nu: float) -> StudyScene:
     """The scene at Poisson ratio ``nu`` with its shear modulus ``mu`` held.
 
-    An isotropic law (``linear``, ``neo-hookean``) gets ``E = 2 mu (1 + nu)`` and ``nu``. A
-    tissue law (Guccione, Holzapfel–Ogden) has its own shear response and a volumetric
-    penalty ``kappa``: ``nu`` sets the penalty ``kappa = 2 mu (1 + nu) / (3 (1 - 2 nu))`` of
-    the isotropic equivalent (``mu`` the mean shear modulus of the law's small-strain
-    tangent, as :func:`studies.fem_laws.p1_penalty` measures it), and an incompressible
-    material becomes this nearly incompressible one, which every method solves.
-
-    Parameters
-    ----------
-    sc
-        The scene.
-    nu
-        The Poisson ratio, in ``(-1, 0.5)``.
-
-    Returns
-    -------
-    StudyScene
-        A copy whose table has the material at ``nu``.
-
-    Raises
-    ------
-    InputError
-        For an anisotropic linear law, which has no single Poisson ratio.
+    An isotropic law gets ``E = 2 mu (1 + nu)`` and ``nu``; a tissue law the volumetric
+    penalty ``kappa = 2 mu (1 + nu) / (3 (1 - 2 nu))`` of the isotropic equivalent (``mu``
+    the mean shear modulus of its small-strain tangent, :func:`studies.fem_laws.p1_penalty`),
+    an incompressible one becoming nearly incompressible. An anisotropic linear law has no
+    single Poisson ratio: :class:`~springfem.errors.InputError`.
     """
     from dataclasses import replace
 

@@ -11,8 +11,8 @@ from support.meshes import gmsh_box
 import studies.study_locking as locking
 from studies.runner import run_study
 from studies.scenes import StudyScene
+from studies.study_locking import answer_frame, cheapest, with_errors
 from studies.study_locking.cases import Settings, bundled_scenes, cases, locking_case, with_nu
-from studies.study_locking.tables import answer_frame, cheapest, with_errors
 
 TINY = Settings(nus=(0.4999,), cook=(2, 2, 1), beam=None, factors=(1,),
                 methods=("P1", "P2-mixed"), max_time=60.0, timed=False)  # fmt: skip
