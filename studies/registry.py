@@ -222,33 +222,6 @@ def study(
     return decorate
 
 
-def study_run(
-    name: str,
-    settings: type,
-    scenes: Callable[[Any], list[StudyScene]],
-    *,
-    user_scenes: str | None = None,
-    serial: bool = False,
-    **_docs: str,
-) -> Callable:
-    """Deprecated alias of :func:`study` (its documentation keywords are ignored).
-
-    Parameters
-    ----------
-    name, settings, scenes, user_scenes, serial
-        As for :func:`study`.
-    **_docs
-        Ignored (``settings_doc``, ``returns``, ``scenes_doc``): write ``run``'s
-        docstring by hand.
-
-    Returns
-    -------
-    callable
-        The decorator of :func:`study`.
-    """
-    return study(name, settings, scenes, user_scenes=user_scenes, serial=serial)
-
-
 def get_study(name: str) -> Study:
     """The registered study ``name`` (dashes or underscores).
 
