@@ -46,20 +46,11 @@ LENGTH_UNIT = {"SI": "m", "mm-kPa": "mm", "mm-MPa": "mm"}
 
 @dataclass(frozen=True)
 class Settings:
-    """Meshes of the accuracy study.
-
-    Parameters
-    ----------
-    divisions
-        Bundled scene name -> box divisions (``None``: the bundled scene's own mesh).
-    figure_scenes
-        Bundled scenes that get an error-field figure (a user's scene always gets one).
-    extra
-        The cantilever on other meshes: ``cantilever-unstructured`` (jittered Delaunay tets
-        of a grid of these divisions), ``cantilever-elongated`` (these box divisions).
-    exact
-        Also solve the exact spring element (and the finite-strain P1 it is exact against).
-    """
+    """Meshes of the accuracy study: bundled scene -> box ``divisions`` (``None``: its own
+    mesh), the ``figure_scenes`` with an error-field figure (a user's scene always has one),
+    the cantilever's ``extra`` meshes (``cantilever-unstructured``: jittered Delaunay tets of
+    a grid of these divisions; ``cantilever-elongated``), and whether to solve the ``exact``
+    spring element too (and the finite-strain P1 it is exact against)."""
 
     divisions: dict[str, tuple[int, int, int] | None] = field(
         default_factory=lambda: dict.fromkeys(SCENES)

@@ -77,27 +77,12 @@ BEAM_TRACTION = 0.004
 
 @dataclass(frozen=True)
 class Settings:
-    """Mesh, load, run length and timing of the dynamics study.
-
-    Parameters
-    ----------
-    beam
-        Divisions of the bundled beam.
-    load
-        Factor on Land's 0.004 kPa.
-    periods
-        Run length after the release, in Rayleigh periods of the reference's static
-        deflection (:func:`studies.study_dynamics.work.rayleigh_period`).
-    samples
-        Points of the common time grid the probe is compared on.
-    safety
-        Time step of every model: this × its own critical step (the smaller at rest and at
-        the loaded state).
-    models
-        The spring models compared with explicit P1.
-    rounds, steps
-        Cost per step: ``rounds`` interleaved rounds of ``steps`` steps per model.
-    """
+    """Mesh, load, run length and timing of the dynamics study: the bundled ``beam``'s
+    divisions, the ``load`` factor on Land's 0.004 kPa, the run length in Rayleigh
+    ``periods`` of the reference's static deflection, the ``samples`` of the common time
+    grid, every model's step as ``safety`` × its own critical step (the smaller at rest and
+    loaded), the spring ``models``, and ``rounds`` interleaved rounds of ``steps`` steps per
+    model for the cost per step."""
 
     beam: tuple[int, int, int] = (30, 3, 3)
     load: float = 1.0
@@ -299,18 +284,9 @@ def dominant(u: list[float]) -> int:
 def result_frame(
     runs: list[tuple[dict, dict]], costs: dict[str, dict[str, float]], refs: dict[str, str]
 ) -> pd.DataFrame:
-    """One row per (scene, model): status, static probe error, errors over time, energy
-    drift, critical and used steps, cost per step and per simulated second.
-
-    Parameters
-    ----------
-    runs
-        ``(case, result)`` of every release run.
-    costs
-        Scene label -> model -> median seconds per step.
-    refs
-        Scene label -> its reference model.
-    """
+    """One row per (scene, model) of ``runs`` (``(case, result)`` of every release run):
+    status, static probe error, errors over time, energy drift, critical and used steps,
+    cost per step (``costs``: scene -> model -> median seconds) and per simulated second."""
     by = {(c["scene"], c["model"]): r for c, r in runs}
     rows = []
     for c, r in runs:

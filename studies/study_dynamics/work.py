@@ -39,22 +39,8 @@ def own_integrator(name: str) -> Any:
 
 
 def resampled(U: np.ndarray, step: float, t_end: float, samples: int) -> tuple[list, list]:
-    """A probe trajectory on ``samples + 1`` even times up to ``t_end``: its rows ``U[k]``
-    are at ``k * step`` (NaN after a blow-up: NaN there too).
-
-    Parameters
-    ----------
-    U
-        ``(steps + 1, 3)`` probe displacements.
-    step
-        Time between rows.
-    t_end, samples
-        The sampled span and its intervals.
-
-    Returns
-    -------
-    t, u
-        Lists of the sample times and ``[x, y, z]`` per time.
+    """A probe trajectory ``U`` (rows at ``k * step``, NaN after a blow-up) on ``samples + 1``
+    even times up to ``t_end``: lists of the times and of ``[x, y, z]`` per time.
 
     Examples
     --------
@@ -75,20 +61,9 @@ NEWTON_TOL, NEWTON_ITER = 1e-10, 40
 
 
 def rayleigh_period(masses: np.ndarray, u: np.ndarray, f: np.ndarray) -> float:
-    """``2 pi sqrt(u^T M u / u^T f)``: the period of the static deflection ``u`` under the
-    load ``f`` as a Rayleigh quotient (the first mode's period when ``u`` is close to it).
-
-    Parameters
-    ----------
-    masses
-        Lumped nodal masses ``(n,)``.
-    u, f
-        Static displacement and the load ``(n, 3)``.
-
-    Returns
-    -------
-    float
-    """
+    """``2 pi sqrt(u^T M u / u^T f)``: the period of the static deflection ``u`` (n, 3) under
+    the load ``f`` with lumped masses ``masses`` as a Rayleigh quotient (the first mode's
+    period when ``u`` is close to it)."""
     mu = float(np.sum(masses[:, None] * u * u))
     return float(2.0 * np.pi * np.sqrt(mu / float(np.sum(f * u))))
 

@@ -188,16 +188,11 @@ def points_frame(
     rows = []
     for c, r in zip(cases, results, strict=True):
         ok = r["status"] == "ok"
-        row = {
-            "method": method_name(c["model"], c["solution"], c["setting"]),
-            "factor": c["factor"],
-            "mesh": level_label(s.table, c["factor"]),
-            "tets": r["tets"],
-            "setting": setting_label(c["solution"], c["setting"]),
-            "status": r["status"],
-            "seconds": r["cpu_seconds"],
-            "wall_seconds": r["seconds"],
-        }
+        row = {"method": method_name(c["model"], c["solution"], c["setting"]),
+               "factor": c["factor"], "mesh": level_label(s.table, c["factor"]),
+               "tets": r["tets"], "setting": setting_label(c["solution"], c["setting"]),
+               "status": r["status"], "seconds": r["cpu_seconds"],
+               "wall_seconds": r["seconds"]}  # fmt: skip
         probe = r["probes"][how.probe] if ok and how.probe else None
         if how.probe is not None:
             row[how.column] = _relative(probe, ref["probes"][how.probe]) if ok else np.nan
@@ -226,33 +221,19 @@ def step_frame(s: StudyScene, factors: list[int], steps: list[dict]) -> pd.DataF
     (``steps``: the levels' :func:`~.cases.step_cost_work` results).
     """
     a, b = method_name(SPRING, "explicit"), method_name(EXPLICIT_FEM, "explicit")
-    return pd.DataFrame(
-        [
-            {
-                "mesh": level_label(s.table, k),
-                "tets": r["tets"],
-                f"{a} ms/step": 1e3 * r[f"{SPRING}_wall"],
-                f"{b} ms/step": 1e3 * r[f"{EXPLICIT_FEM}_wall"],
-                "ratio (wall)": r["ratio_wall"],
-                f"{a} CPU ms/step": 1e3 * r[f"{SPRING}_cpu"],
-                f"{b} CPU ms/step": 1e3 * r[f"{EXPLICIT_FEM}_cpu"],
-                "ratio (CPU)": r["ratio_cpu"],
-            }
-            for k, r in zip(factors, steps, strict=True)
-        ]
-    )
+    return pd.DataFrame([
+        {"mesh": level_label(s.table, k), "tets": r["tets"],
+         f"{a} ms/step": 1e3 * r[f"{SPRING}_wall"], f"{b} ms/step": 1e3 * r[f"{EXPLICIT_FEM}_wall"],
+         "ratio (wall)": r["ratio_wall"], f"{a} CPU ms/step": 1e3 * r[f"{SPRING}_cpu"],
+         f"{b} CPU ms/step": 1e3 * r[f"{EXPLICIT_FEM}_cpu"], "ratio (CPU)": r["ratio_cpu"]}
+        for k, r in zip(factors, steps, strict=True)
+    ])  # fmt: skip
 
 
 def write_tables(
-    ctx: StudyContext,
-    s: StudyScene,
-    df: pd.DataFrame,
-    sdf: pd.DataFrame | None,
-    ref: dict,
-    ref_text: str,
-    how: Measure,
-    suffix: str = "",
-) -> list[Table]:
+    ctx: StudyContext, s: StudyScene, df: pd.DataFrame, sdf: pd.DataFrame | None, ref: dict,
+    ref_text: str, how: Measure, suffix: str = "",
+) -> list[Table]:  # fmt: skip
     """Write the points and step-cost tables (``sdf`` ``None``: no step costs) and the
     failures, if any; ``ref_text`` names the reference (method and level).
     """
@@ -266,34 +247,24 @@ def write_tables(
         ratio = ref["probes"][how.probe][component] / value
         context = f"; its {how.probe} is {ratio:.4f} × {source}"
     tables = [
-        ctx.table(
-            show,
-            f"points{suffix}",
+        ctx.table(show, f"points{suffix}",
             f"{s.label}: every (method, level, setting) point: CPU time (`seconds`) and wall "
             "time from the scene to the answer (model build and time-step estimate included; "
             "the solves are serial, so CPU time is the wall time of an idle machine, while a "
             "shared machine's wall times vary), relative error of the "
             f"{against} against {ref_text} ({ref['tets']} tets{context}), status, "
-            "explicit/implicit steps, and whether the point is on the Pareto front.",
-        )
-    ]
+            "explicit/implicit steps, and whether the point is on the Pareto front.")
+    ]  # fmt: skip
     if sdf is not None:
-        tables.append(
-            ctx.table(
-                sdf,
-                f"step_cost{suffix}",
-                "Cost of one explicit step (forces + update through the same solver loop), "
-                "spring model vs explicit P1 neo-Hookean FEM on the same mesh: medians of "
-                f"{STEP_REPEATS} alternating repeats of {STEP_COUNT}-500 steps; wall and CPU "
-                "(process) time.",
-            )
-        )
+        tables.append(ctx.table(sdf, f"step_cost{suffix}",
+            "Cost of one explicit step (forces + update through the same solver loop), "
+            "spring model vs explicit P1 neo-Hookean FEM on the same mesh: medians of "
+            f"{STEP_REPEATS} alternating repeats of {STEP_COUNT}-500 steps; wall and CPU "
+            "(process) time."))  # fmt: skip
     failed = df[df["status"] != "ok"]
     if len(failed):
-        write_table(
-            failed[["method", "mesh", "setting", "status", "message"]],
-            ctx.path(f"failures{suffix}"),
-        )
+        write_table(failed[["method", "mesh", "setting", "status", "message"]],
+                    ctx.path(f"failures{suffix}"))  # fmt: skip
     return tables
 
 

@@ -51,31 +51,14 @@ SAME = "L2 vs P1-NH same mesh"
 
 @dataclass(frozen=True)
 class Settings:
-    """Levels and solver settings of the speed-accuracy study.
-
-    Parameters
-    ----------
-    levels
-        Refinement factors of the scene's mesh, one point per method each.
-    reference
-        The level of the reference (a scene that cannot take it: its finest level).
-    explicit
-        ``(tol, dt_safety)`` settings of the explicit runs.
-    implicit
-        Time-step factor of the implicit runs -> the largest level it runs on.
-    max_tets
-        Levels with more tets are left out (the two coarsest always run).
-    max_error
-        The tolerance: the findings name the cheapest point (CPU time) whose error is at
-        most this, overall, among the spring model's (``study speed-accuracy
-        --tolerance``) and per fast model.
-    sweep
-        Plug-in sweeps: their first this many entries (``None``: all).
-    sweep_levels
-        The sweeps' entries after the first run on the levels up to this one (``None``:
-        all): XPBD's static answer takes hundreds of frames on a slender bar, minutes at
-        80 substeps on level 4.
-    """
+    """Levels and solver settings of the speed-accuracy study: the refinement ``levels`` (a
+    point per method each), the ``reference`` level (a scene that cannot take it: its
+    finest), the ``explicit`` runs' ``(tol, dt_safety)``, the ``implicit`` runs' time-step
+    factor -> the largest level it runs on, ``max_tets`` (larger levels are left out, the two
+    coarsest always run), ``max_error`` (the tolerance of the cheapest points the findings
+    name, ``--tolerance``), the first ``sweep`` entries of a plug-in's sweep (``None``: all)
+    and ``sweep_levels``, the largest level its later entries run on (XPBD's static answer
+    takes minutes at 80 substeps on level 4)."""
 
     levels: tuple[int, ...] = (1, 2, 4)
     reference: int = 6
@@ -197,20 +180,11 @@ def point_case(s: StudyScene, model: str, solution: str, factor: int, setting: d
 
 def _trajectory(scene: Scene, m: models.Model, u: np.ndarray, facts: dict) -> Solution:
     """A :class:`Solution` of a run to rest: its probes and solver facts."""
-    res = Result(
-        scene=scene.name,
-        model=m.kind,
-        element=m.name,
-        law=scene.material.law,
-        counts={"nodes": scene.mesh.n_points, "tets": scene.mesh.n_tets},
-        probes=scene.probe_displacements(u),
-        volume={},
-        reactions={},
-        wall_time=float("nan"),
-        converged=True,
-        iterations=int(facts.get("iterations", 0)),
-        info=facts,
-    )
+    res = Result(scene=scene.name, model=m.kind, element=m.name, law=scene.material.law,
+                 counts={"nodes": scene.mesh.n_points, "tets": scene.mesh.n_tets},
+                 probes=scene.probe_displacements(u), volume={}, reactions={},
+                 wall_time=float("nan"), converged=True,
+                 iterations=int(facts.get("iterations", 0)), info=facts)  # fmt: skip
     return Solution(res, u)
 
 
@@ -274,14 +248,9 @@ def point_work(case: dict) -> dict:
         return {**out, "status": status, "message": msg[:240]}
     r = got.solution.result
     facts = {k: r.info[k] for k in ("steps", "dt") if k in r.info and case["solution"] != "static"}
-    return {
-        **out,
-        "status": "ok",
-        "probes": r.probes,
-        "u": np.asarray(got.u)[coarse_index(case, scene.mesh)],
-        "iterations": r.iterations,
-        **facts,
-    }
+    return {**out, "status": "ok", "probes": r.probes,
+            "u": np.asarray(got.u)[coarse_index(case, scene.mesh)], "iterations": r.iterations,
+            **facts}  # fmt: skip
 
 
 def step_count(n_tets: int) -> int:

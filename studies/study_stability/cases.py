@@ -47,20 +47,10 @@ EXPLICIT_LAWS = ("linear", "neo-hookean")
 
 @dataclass(frozen=True)
 class Settings:
-    """Grids of the stability study.
-
-    Parameters
-    ----------
-    dt_meshes, dt_steps, dt_bisections
-        Bundled bar meshes (``nx``, ``ny``: ``nx × ny × ny`` hexahedra), run length and
-        bisection count of the critical-time-step search.
-    load_factors, load_mesh
-        Load multiples and the bundled bar's mesh of the largest-load series.
-    nus, lock_mesh
-        Poisson ratios and bar mesh of the locking series.
-    map_loads, map_dt_factors, map_steps, map_mesh
-        Load multiples, time-step factors, run length and bar mesh of the failure map.
-    """
+    """Grids of the stability study: the bundled bar meshes (``(nx, ny)``: ``nx × ny × ny``
+    hexahedra), run length and bisections of the critical-step series; the load factors and
+    mesh of the largest-load series; the Poisson ratios and mesh of the locking series; the
+    loads, time-step factors, run length and mesh of the failure map."""
 
     dt_meshes: tuple[tuple[int, int], ...] = ((10, 1), (20, 2))
     dt_steps: int = 2000

@@ -72,23 +72,10 @@ SMALL_STRAIN = ("linear", "transverse-linear")
 
 @dataclass(frozen=True)
 class Settings:
-    """Meshes, run lengths and loads of the volume-drift study.
-
-    Parameters
-    ----------
-    n
-        Divisions per side of the bundled cube.
-    sag
-        Divisions of the bundled sag scene (``None``: no sag).
-    periods
-        Length of the sudden-load runs in periods of the scene's time scale.
-    ramp_periods
-        Ramp length of the slow-ramp runs, in periods (then one more at full load).
-    records
-        Samples recorded per run.
-    loads
-        Load factors of the static FEM series (the springs solve at full load).
-    """
+    """Meshes, run lengths and loads of the volume-drift study: the cube's divisions per side
+    ``n``, the sag scene's divisions (``None``: no sag), the sudden-load runs' length and the
+    slow ramps' length (then one more at full load) in ``periods`` of the scene's time
+    scale, the ``records`` (samples) per run, and the static FEM series' load factors."""
 
     n: int = 4
     sag: tuple[int, int, int] | None = (12, 6, 3)
