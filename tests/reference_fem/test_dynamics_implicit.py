@@ -24,13 +24,13 @@ E, NU, RHO = 1.0e4, 0.3, 1000.0
 SIZE, TIP = [0.1, 0.02, 0.01], [0.1, 0.01, 0.005]
 
 
-def beam(divisions, law="linear", traction=-0.01, time=None, **extra):
+def beam(divisions, law="linear", traction=-0.01, time=None, nu=NU, **extra):
     load = {"type": "traction", "region": "x_max", "value": [0.0, 0.0, traction]}
     if time is not None:
         load["time"] = time
     return scene_from_dict({
         "mesh": {"generator": "box", "size": SIZE, "divisions": divisions},
-        "material": {"law": law, "E": E, "nu": NU, "density": RHO},
+        "material": {"law": law, "E": E, "nu": nu, "density": RHO},
         "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
         "load": [load],
         "probe": [{"name": "tip", "point": TIP}],
@@ -133,3 +133,48 @@ def test_generalized_alpha_at_rho_one_is_the_trapezoidal_rule_and_below_damps():
     damped = run(scene, t_end=1.0, dt=0.02, integrator="generalized-alpha", rho_inf=0.5)
     total = damped.energies["kinetic"] + damped.energies["strain"]
     assert total[-1] < total[0] and damped.energies["balance"][-1] < 0.0
+
+
+def mixed_beam(nu):
+    return beam([6, 2, 1], law="neo-hookean", time={"release": 0.0}, nu=nu, dynamics={
+        "initial": "static"}, fem={"order": 2, "formulation": "mixed"})  # fmt: skip
+
+
+def condensed_frequency(scene):
+    """The first angular frequency of the P2/P1 mesh: the reference's tangent at rest with
+    the pressure condensed out, ``S = K_uu - K_up K_pp^-1 K_pu``, and its mass matrix
+    (dense ``eigh``; independent of the time integration)."""
+    from scipy.linalg import eigh
+
+    from reference_fem.dynamics_terms import mass_matrix
+    from reference_fem.solver import make_problem
+
+    p = make_problem(scene, 2)
+    K = p.internal_force(np.zeros(p.n_dofs), tangent=True)[1].toarray()
+    fu = p.free[: p.nu]
+    Kuu, Kup, Kpp = K[: p.nu, : p.nu][fu][:, fu], K[: p.nu, p.nu :][fu], K[p.nu :, p.nu :]
+    S = Kuu - Kup @ np.linalg.solve(Kpp, Kup.T)
+    M = mass_matrix(p).toarray()[fu][:, fu]
+    return float(np.sqrt(eigh(S, M, eigvals_only=True, subset_by_index=[0, 0])[0]))
+
+
+@pytest.mark.slow
+def test_mixed_first_frequency_matches_its_condensed_modal_analysis():
+    scene = mixed_beam(0.45)
+    period = 2 * np.pi / condensed_frequency(scene)
+    r = run(scene, t_end=3.2 * period, dt=period / 200)
+    c = upward_crossings(r.times, r.probes["tip"][:, 2])
+    assert r.info["formulation"] == "mixed" and len(c) == 3
+    # measured 0.035 % (0.19 % at 100 steps a period: the (omega h)^2 of the rule)
+    assert (c[-1] - c[0]) / (len(c) - 1) / period - 1 == pytest.approx(0.0, abs=5e-3)
+
+
+def test_mixed_energy_balance_closes_at_the_rules_order():
+    scene = mixed_beam(0.45)
+    balance = []
+    for n in (25, 50):
+        r = run(scene, t_end=0.5, dt=0.5 / n)
+        balance.append(np.abs(r.energies["balance"]).max() / r.energies["strain"][0])
+    # the pressure carries no energy the balance misses: what is left is the trapezoid's
+    # error on a nonlinear law, second order (measured 1e-6 at 100 steps a period)
+    assert balance[0] < 1e-4 and 3.0 < balance[0] / balance[1] < 5.0
