@@ -36,6 +36,8 @@ solve(scene, order=None, law=None, verbose=False) -> FemSolution
 bench(n_tets=100_000) -> dict
 material_matrix(material, frames) -> (m, 6, 6) Voigt stiffness
 element_stiffness_p1(points, tets, Cmat) -> (m, 12, 12)
+dynamics_implicit.run(scene, t_end, dt, order=2, formulation=None, probes=None) -> DynamicResult
+dynamics_error.estimate_error(scene, t_end, dt) -> ErrorEstimate
 
 Examples
 --------

@@ -178,3 +178,19 @@ def test_mixed_energy_balance_closes_at_the_rules_order():
     # the pressure carries no energy the balance misses: what is left is the trapezoid's
     # error on a nonlinear law, second order (measured 1e-6 at 100 steps a period)
     assert balance[0] < 1e-4 and 3.0 < balance[0] / balance[1] < 5.0
+
+
+def test_probes_between_steps_and_frames_at_chosen_times():
+    # the tip of a linear beam swinging in its first mode: Hermite interpolation of a
+    # dt = 0.02 run at other times against a run with those times on its grid
+    scene = beam([6, 2, 1], time={"release": 0.0}, dynamics={"initial": "static"})
+    coarse = run(scene, t_end=0.4, dt=0.02, frames=[0.1, 0.25])
+    fine = run(scene, t_end=0.4, dt=0.005)
+    t = fine.times[1::4]  # between coarse steps: 0.005, 0.025, ...
+    between = coarse.probes_at(t)["tip"]
+    on_step = run(scene, t_end=0.4, dt=0.02).probes["tip"]
+    # interpolation adds little to the rule's own error (the dt = 0.02 run's error at its
+    # steps, against the dt = 0.005 run)
+    rule = np.abs(on_step - fine.probes["tip"][::4]).max()
+    assert np.abs(between - fine.probes["tip"][1::4]).max() < 2.0 * rule
+    assert coarse.frame_times == pytest.approx([0.1, 0.26])  # the first step at or after
