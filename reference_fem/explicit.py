@@ -112,38 +112,6 @@ def strain_energy_density(F: np.ndarray, mu: float, lam: float, law: int) -> np.
     return mu * np.einsum("kij,kij->k", eps, eps) + 0.5 * lam * tr**2
 
 
-def tissue_energy_density(law: TissueLaw, F: np.ndarray, frames: np.ndarray | None) -> np.ndarray:
-    """``W(F)`` of a tissue law per element, ``inf`` where ``J <= 0`` (``law.energy`` is NaN).
-
-    ``law.energy(F, frames)`` (:class:`~springfem.materials.laws.TissueLaw`: the law's own
-    term, the active tension, the penalty ``U(J)``; no tangent is built).
-
-    Parameters
-    ----------
-    law
-        The tissue law (at its activation).
-    F
-        Deformation gradients ``(m, 3, 3)``.
-    frames
-        Element frames ``(m, 3, 3)`` (rows: fibre, sheet, normal), or None.
-
-    Returns
-    -------
-    ndarray
-        Energy density ``(m,)``.
-
-    Examples
-    --------
-    >>> from springfem.materials.laws import Guccione
-    >>> law = Guccione(C=2.0, b_f=8.0, kappa=10.0, active_tension=1.0)
-    >>> F = np.diag([1.1, 0.95, 1.0])[None]
-    >>> bool(np.isclose(tissue_energy_density(law, F, None)[0], law.energy(F)[0], rtol=1e-14))
-    True
-    """
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        return np.where(det(F) > 0, law.energy(F, frames), np.inf)
-
-
 # --------------------------------------------------------------------------- the system
 
 
@@ -422,7 +390,8 @@ class ExplicitFem:
         if self._law != _ANISOTROPIC:
             psi = strain_energy_density(F, self.mu, self.lam, self._law)
         elif self.tissue is not None:
-            psi = tissue_energy_density(self._law_now(), F, self.frames)
+            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                psi = np.where(det(F) > 0, self._law_now().energy(F, self.frames), np.inf)
         else:
             from springfem.materials import VOIGT
 

@@ -29,8 +29,8 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
-from typing import overload
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -84,27 +84,14 @@ class LawNames(Sequence[str]):
     def __init__(self, fixed: tuple[str, ...]):
         self.fixed = fixed
 
-    def _all(self) -> tuple[str, ...]:
-        return self.fixed + tuple(LAWS)
-
-    @overload
-    def __getitem__(self, i: int) -> str: ...
-    @overload
-    def __getitem__(self, i: slice) -> Sequence[str]: ...
-    def __getitem__(self, i):
-        return self._all()[i]
+    def __getitem__(self, i: Any) -> Any:
+        return (*self.fixed, *LAWS)[i]
 
     def __len__(self) -> int:
-        return len(self._all())
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._all())
-
-    def __contains__(self, name: object) -> bool:
-        return name in self.fixed or name in LAWS
+        return len(self.fixed) + len(LAWS)
 
     def __repr__(self) -> str:
-        return repr(self._all())
+        return repr(tuple(self))
 
 
 def law_class(name: str) -> type[TissueLaw]:
