@@ -84,6 +84,12 @@ def test_one_registration_line_makes_a_scene_law(toy):
     assert "fibre-svk" in SCENE_LAWS
     assert TISSUE_LAWS["fibre-svk"] == ("lame_mu", "lame_lambda", "k_fibre")
     assert bar().material.law == "fibre-svk"
+    # the manual's scene-key reference (read off the parsers) lists the new law's keys
+    from springfem.scene.reference import accepted_keys
+
+    assert {"lame_mu", "lame_lambda", "k_fibre", "kappa"} <= set(
+        accepted_keys()["material (fibre-svk)"]
+    )
 
 
 def test_the_small_strain_tangent_is_the_closed_form(toy):

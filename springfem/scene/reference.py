@@ -45,7 +45,15 @@ _MATERIALS = {
                           "nu_cross": 0.3, "G_fiber": 500.0},
     "neo-hookean": {"E": 1e3, "nu": 0.3},
 }  # fmt: skip
-_MATERIALS.update({name: {**law.example, "kappa": 100.0} for name, law in TABLE.items()})
+
+
+def _constants(law: str) -> dict:
+    """A law's constants in the corpus: the fixed laws' above, a tissue law's example."""
+    if law in TABLE:
+        return {**TABLE[law].example, "kappa": 100.0}
+    return _MATERIALS.get(law, {})
+
+
 _FIX = [{"region": "x_min", "fix": ["x", "y", "z"]}]
 
 
@@ -54,9 +62,9 @@ def _corpus() -> Iterator[dict]:
     the keys a parser asks for before it refuses a table count too)."""
     base = {"mesh": _BOX, "material": {"law": "linear", **_MATERIALS["linear"]}}
     for law in LAWS:
-        yield {**base, "material": {"law": law, **_MATERIALS.get(law, {})}}
+        yield {**base, "material": {"law": law, **_constants(law)}}
     yield {**base, "material": {"law": "neo-hookean", "mu": 1.0, "kappa": 10.0}}
-    yield {**base, "material": {"law": "guccione", **_MATERIALS["guccione"],
+    yield {**base, "material": {"law": "guccione", **_constants("guccione"),
                                 "incompressible": True}}  # fmt: skip
     yield {**base, "mesh": {**_BOX, "split": "delaunay"}}
     yield {**base, "mesh": {"file": "missing.vtu"}}
@@ -106,7 +114,7 @@ def _with_bogus(section: str, key: str, value: Any = "?") -> dict:
     if name == "(top level)":
         return {**base, key: value}
     if name == "material":
-        consts = _MATERIALS.get(variant, {})
+        consts = _constants(variant)
         if key in ("mu", "kappa"):  # the other pair of constants
             consts = {k: v for k, v in consts.items() if k not in ("E", "nu")}
         return {**base, "material": {"law": variant, **consts, key: value}}
