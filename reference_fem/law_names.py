@@ -25,15 +25,14 @@ springfem.errors.InputError: formulation 'elastic' is not one of ...
 from __future__ import annotations
 
 from springfem.errors import InputError
-from springfem.materials.laws import TISSUE_LAWS, TissueLaw, tissue_law
+from springfem.materials.laws import TISSUE_LAWS, LawNames, TissueLaw, tissue_law
 from springfem.materials.laws.neo_hookean import NeoHookean
 from springfem.scene import FORMULATIONS, VOLUMETRIC, Scene
 
-#: Every law name the FEM reference accepts.
-LAW_NAMES = (
+#: Every law name the FEM reference accepts (every registered tissue law last).
+LAW_NAMES = LawNames(
     ("linear", "transverse-linear", "neo-hookean", "neo-hookean/coupled")
     + tuple(f"neo-hookean/uncoupled/{v}" for v in VOLUMETRIC)
-    + tuple(TISSUE_LAWS)
 )
 
 
