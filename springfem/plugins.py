@@ -13,6 +13,9 @@ A package registers through entry points in its distribution's metadata
     ``name = "package:folder"``: a folder of named scene files inside a package, that
     :func:`springfem.scene.load_scene` finds by name (``load_scene("cantilever")``);
     found without importing the package;
+``springfem.laws``
+    ``name = "module:Class"``: a material law (a :class:`~springfem.materials.laws.base.
+    TissueLaw` subclass) added to the law table (:mod:`springfem.materials.laws`);
 ``springfem.models``
     ``name = "module:attribute"``: a model plug-in (or a list of them, or a function
     returning either) that the comparisons and studies weigh (:mod:`springfem.model_api`,

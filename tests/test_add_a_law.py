@@ -92,6 +92,21 @@ def test_one_registration_line_makes_a_scene_law(toy):
     )
 
 
+def test_an_installed_package_registers_a_law_by_entry_point(toy, monkeypatch):
+    """``[project.entry-points."springfem.laws"]`` (docs/laws.rst#add-a-law-plug-in): the
+    table loads the class the entry point names."""
+    import springfem.plugins
+
+    LAWS.pop("fibre-svk")
+    monkeypatch.setattr(
+        springfem.plugins, "entry_points", lambda group: {"fibre-svk": "toy_law:FibreSVK"}
+    )
+    from springfem.materials.laws import register_plugins
+
+    register_plugins()
+    assert LAWS["fibre-svk"] is toy.FibreSVK
+
+
 def test_the_small_strain_tangent_is_the_closed_form(toy):
     params = {"lame_mu": MU, "lame_lambda": LAM, "k_fibre": K_F}
     D = small_strain_tangent("fibre-svk", params, kappa=KAPPA)

@@ -176,8 +176,18 @@ def small_strain_tangent(
     return A[idx[:, 0, None], idx[:, 1, None], idx[None, :, 0], idx[None, :, 1]]
 
 
+def register_plugins() -> None:
+    """Register the laws installed packages declare: entry points ``springfem.laws``,
+    ``name = "module:Class"`` (:mod:`springfem.plugins`; docs/laws.rst#add-a-law-plug-in)."""
+    from ...plugins import entry_points, load
+
+    for value in entry_points("springfem.laws").values():
+        register(load(value))
+
+
 register(Guccione)
 register(HolzapfelOgden)
+register_plugins()
 
 __all__ = [
     "LAWS",
@@ -189,6 +199,7 @@ __all__ = [
     "TissueLaw",
     "law_class",
     "register",
+    "register_plugins",
     "small_strain_tangent",
     "tissue_law",
 ]
