@@ -14,16 +14,17 @@ from scipy.spatial.transform import Rotation
 from support.meshes import gmsh_box
 
 from corotational.kernel import forces_numpy
+from corotational.plugin import models
 from corotational.polar import rotations
 from corotational.system import Corotational
 from reference_fem import element_stiffness_p1
-from reference_fem.explicit import ExplicitFem
 from springfem.errors import InputError
 from springfem.materials import isotropic_matrix, material_matrix
-from springfem.mechanics import explicit, stable_time_step
 from springfem.mesh import TetMesh
 from springfem.scene import load_scene, scene_from_dict
-from studies import metrics, models
+from springfem.testing import check_model
+from studies import metrics
+from studies import models as registry
 
 ISOTROPIC = {"law": "linear", "E": 1.0e4, "nu": 0.3, "density": 1000.0}
 TRANSVERSE = {
@@ -98,18 +99,33 @@ def test_rotation_of_degenerate_gradients():
 # -- forces ----------------------------------------------------------------------------------
 
 
-def test_rigid_motion_gives_no_force_and_forces_rotate_with_the_body(gmsh_scene):
-    """A rigid rotation + translation of the rest state: zero force (to round-off of the
-    forces of a 1 % strain); a deformed state rotated rigidly: the forces rotate with it."""
-    s = Corotational(gmsh_scene)
-    Q = Rotation.from_rotvec([0.7, -2.1, 1.3]).as_matrix()
-    x = s.x0 @ Q.T + [0.3, -0.2, 0.1]
-    scale = np.abs(s.internal(_deformed(s, 0.01))).max()
-    assert np.abs(s.internal(x)).max() < 1e-12 * scale
-    y = _deformed(s, 0.02)
-    np.testing.assert_allclose(
-        s.internal(y @ Q.T), s.internal(y) @ Q.T, atol=1e-11 * np.abs(s.internal(y)).max()
-    )
+@pytest.mark.parametrize("tangent", ["consistent", "warped"])
+def test_conformance(gmsh_scene, tangent):
+    """Rigid motion gives no force and f(Qy) = Q f(y); forces and consistent tangent are
+    finite differences of the energy and the forces; both tangents at rest are the core's
+    linear P1; velocity Verlet conserves the energy (springfem.testing.check_model). The
+    warped stiffness misses the rotation terms by O(strain)."""
+    model = next(m for m in models() if m.settings["tangent"] == tangent)
+    claim = "exact" if tangent == "consistent" else "approximate"
+    report = check_model(model, gmsh_scene, small_strain="exact", tangent=claim)
+    assert report.status("finite rotation") == "passed"
+    if tangent == "warped":
+        assert report.checks[4].value > 1e-3
+
+
+@pytest.mark.parametrize("law", ["linear", "transverse-linear"])
+def test_tangents_are_symmetric_for_the_isotropic_law(law):
+    """The consistent tangent is symmetric for the isotropic law (the forces of an
+    energy), the warped stiffness ``R K R^T`` for both laws."""
+    mat = ISOTROPIC if law == "linear" else TRANSVERSE
+    s = Corotational(_scene({"generator": "box", "size": [0.1, 0.02, 0.01],
+                             "divisions": [3, 2, 1]}, mat))  # fmt: skip
+    x = _deformed(s, 0.03, seed=2)
+    if law == "linear":
+        K = s.stiffness(x).toarray()
+        np.testing.assert_allclose(K, K.T, atol=1e-10 * np.abs(K).max())
+    Kw = Corotational(s.scene, tangent="warped").stiffness(x).toarray()
+    np.testing.assert_allclose(Kw, Kw.T, atol=1e-10 * np.abs(Kw).max())
 
 
 def test_forces_are_r_k_rt_of_the_linear_element(gmsh_scene):
@@ -137,66 +153,6 @@ def test_forces_are_r_k_rt_of_the_linear_element(gmsh_scene):
     )
 
 
-def test_small_strain_tangent_is_linear_p1(gmsh_scene):
-    """At rest both tangents are the linear P1 stiffness (scikit-fem's assembly, through
-    the explicit FEM's linear laws); a displacement of size h gives forces -K u + O(h^2)."""
-    s = Corotational(gmsh_scene)
-    law = "linear" if gmsh_scene.material.law == "linear" else "transverse-linear"
-    K = ExplicitFem(gmsh_scene, law=law).stiffness(s.x0).toarray()
-    for tangent in ("consistent", "warped"):
-        Kc = s.stiffness(s.x0) if tangent == s.tangent else Corotational(
-            gmsh_scene, tangent=tangent).stiffness(s.x0)  # fmt: skip
-        np.testing.assert_allclose(Kc.toarray(), K, atol=1e-10 * np.abs(K).max())
-    rng = np.random.default_rng(1)
-    d = rng.standard_normal(s.x0.shape) * np.ptp(s.x0, axis=0).max()
-    rel = []
-    for h in (1e-3, 1e-4):
-        f = s.internal(s.x0 + h * d)
-        lin = -(K @ (h * d).ravel()).reshape(-1, 3)
-        rel.append(np.linalg.norm(f - lin) / np.linalg.norm(lin))
-    assert rel[1] < 1e-3 and rel[1] < 0.2 * rel[0]  # O(h): the rotation is second order
-
-
-def test_isotropic_forces_are_the_energy_gradient(gmsh_file):
-    """Central differences of sum V/2 eps:C:eps (at a 5 % random strain, some elements
-    inverted or not) equal the kernel's forces."""
-    s = Corotational(_scene({"file": str(gmsh_file)}))
-    x = _deformed(s, 0.02, seed=5)
-    f = s.internal(x)
-    rng = np.random.default_rng(7)
-    h = 1e-7 * np.ptp(s.x0, axis=0).max()
-    for i in rng.choice(x.size, 40, replace=False):
-        xp, xm = x.copy().ravel(), x.copy().ravel()
-        xp[i] += h
-        xm[i] -= h
-        g = -(s.strain_energy(xp) - s.strain_energy(xm)) / (2 * h)
-        assert abs(g - f.ravel()[i]) < 1e-6 * np.abs(f).max()
-
-
-@pytest.mark.parametrize("law", ["linear", "transverse-linear"])
-def test_consistent_tangent_is_the_force_derivative(law):
-    """Central differences of the forces equal the consistent tangent (symmetric for the
-    isotropic law); the warped stiffness misses the rotation terms by O(strain)."""
-    mat = ISOTROPIC if law == "linear" else TRANSVERSE
-    s = Corotational(_scene({"generator": "box", "size": [0.1, 0.02, 0.01],
-                             "divisions": [3, 2, 1]}, mat))  # fmt: skip
-    x = _deformed(s, 0.03, seed=2)
-    K = s.stiffness(x).toarray()
-    h = 1e-7 * np.ptp(s.x0, axis=0).max()
-    J = np.empty_like(K)
-    for i in range(x.size):
-        xp, xm = x.copy().ravel(), x.copy().ravel()
-        xp[i] += h
-        xm[i] -= h
-        J[:, i] = -(s.internal(xp).ravel() - s.internal(xm).ravel()) / (2 * h)
-    np.testing.assert_allclose(K, J, atol=1e-6 * np.abs(J).max())
-    if law == "linear":
-        np.testing.assert_allclose(K, K.T, atol=1e-10 * np.abs(K).max())
-    Kw = Corotational(s.scene, tangent="warped").stiffness(x).toarray()
-    assert np.abs(Kw - J).max() > 1e-3 * np.abs(J).max()
-    np.testing.assert_allclose(Kw, Kw.T, atol=1e-10 * np.abs(K).max())
-
-
 def test_an_inverted_element_is_pushed_back():
     """One tet with its apex pushed through the opposite face: the apex's force points back
     through the face (Irving's sign fix), and the element energy is larger than at rest."""
@@ -221,7 +177,7 @@ def test_large_rotation_cantilever_follows_neo_hookean_p1():
     co-rotational P1 is within 1 % (relative L2) of P1 neo-Hookean on the same mesh, linear
     P1 is more than 20 % off it."""
     scene = load_scene("cantilever-large-rotation")
-    got = {n: models.run(scene, n) for n in ("corotational", "P1-NH", "P1")}
+    got = {n: registry.run(scene, n) for n in ("corotational", "P1-NH", "P1")}
     assert all(o.ok for o in got.values()), {n: o.message for n, o in got.items()}
     assert abs(got["P1-NH"].u[:, 2]).max() > 0.3 * 0.1  # a large deflection
     e_corot = metrics.relative_l2_error(got["corotational"].u, got["P1-NH"].u)
@@ -234,35 +190,16 @@ def test_small_load_static_solve_is_linear_p1(gmsh_file):
     scene = _scene({"file": str(gmsh_file)}, load=True)
     scene = scene_from_dict({**scene.raw, "load": [{"type": "traction", "region": "x_max",
                                                     "value": [0.0, 0.0, -1e-3]}]})  # fmt: skip
-    a, b = models.run(scene, "corotational"), models.run(scene, "P1")
+    a, b = registry.run(scene, "corotational"), registry.run(scene, "P1")
     assert a.ok and b.ok
     assert metrics.relative_l2_error(a.u, b.u) < 1e-4
     assert a.solution.result.model == "corotational" and a.solution.result.converged
 
 
-def test_explicit_run_conserves_energy():
-    """Velocity Verlet on the co-rotational system, released from a large bend without
-    loads over the same simulated time: the total energy's excursion is small and falls as
-    dt^2 (a symplectic integrator of an energy's gradient: no drift)."""
-    scene = _scene({"generator": "box", "size": [0.1, 0.01, 0.01], "divisions": [8, 1, 1]})
-    s = Corotational(scene)
-    dt, _ = stable_time_step(s)
-    x0 = s.x0.copy()
-    x0[:, 2] -= 0.2 * (s.x0[:, 0] / 0.1) ** 2 * 0.1  # a large bend
-    excursion = []
-    for factor in (0.2, 0.1):
-        steps = int(round(400 * 0.2 / factor))
-        traj = explicit(s, dt=factor * dt, steps=steps, integrator="verlet", x_init=x0, scale=0.0)
-        total = traj.kinetic + traj.potential
-        excursion.append(np.abs(total - total[0]).max() / total[0])
-    assert excursion[0] < 0.01
-    assert 3.0 < excursion[0] / excursion[1] < 5.0
-
-
 def test_refusals_are_one_line():
     tissue = {"law": "guccione", "C": 2.0, "b_f": 8.0, "b_t": 2.0, "b_fs": 4.0, "kappa": 50.0}
     scene = _scene({"generator": "box", "size": [1, 1, 1], "divisions": [1, 1, 1]}, tissue)
-    assert "guccione" in models.get("corotational").applies(scene)
+    assert "guccione" in registry.get("corotational").applies(scene)
     with pytest.raises(InputError, match="guccione"):
         Corotational(scene)
     with pytest.raises(InputError, match="tangent"):
