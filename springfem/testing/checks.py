@@ -17,6 +17,7 @@ import scipy.sparse as sp
 
 from ..mechanics import explicit, linear_static
 from ..mechanics.system import MechanicalSystem, free_dofs
+from ..mesh.nodal_average import shape_gradients
 from ..scene import Scene
 from .reference import LinearP1, rotation, scaled_scene
 from .report import Check
@@ -25,8 +26,8 @@ Rotation = Literal["finite", "infinitesimal"]
 SmallStrain = Literal["exact", "limit"]
 Tangent = Literal["exact", "approximate"]
 
-#: The deformed states' largest edge strain (|u_i - u_j| / |X_i - X_j| over the elements'
-#: edges): large enough for the nonlinear terms to show, small enough for every law.
+#: The deformed states' largest displacement gradient (its spectral norm over the elements):
+#: large enough for the nonlinear terms to show, small enough for every law.
 STRAIN = 1e-2
 #: A rigid motion's internal force, relative to that of a deformation of :data:`STRAIN`:
 #: positions of size ``|x|`` carry a rounding of ``1e-16 |x|``, a strain of
@@ -36,17 +37,19 @@ RIGID_TOL = 1e-8
 #: The angle (rad) of the infinitesimal rotation ``x0 + a w x (x0 - c)``: it strains a
 #: nonlinear model by ``a^2 / 2`` and a linear one not at all.
 ANGLE = 1e-6
-#: Its force relative to a deformation of edge strain ``ANGLE``: ``O(ANGLE)`` for a
+#: Its force relative to a deformation of gradient ``ANGLE``: ``O(ANGLE)`` for a
 #: finite-strain model, rounding (``1e-16 |x| / (l ANGLE)``) for a linear one; a model that
 #: is not invariant under rotation gives ``O(1)``.
 ANGLE_TOL = 1e-4
 #: Forces whose ``f(x0 + 2u) - 2 f(x0 + u)`` stays below this fraction of ``f(x0 + u)``
 #: are linear in the positions: such a model is held to infinitesimal rotations only.
 LINEAR_TOL = 1e-6
-#: The finite-difference step, relative to the mean edge length ``l``. Central differences
-#: err by ``(h / l)^2 f''' l^2 / 6``, ``1e-10`` of the derivative for laws whose stiffness
-#: changes over a unit strain, ``1e-7`` for ones that stiffen a thousandfold; rounding adds
-#: ``1e-16 |f| / (h K)``, about ``1e-16 STRAIN / 1e-5 = 1e-13``.
+#: The finite-difference step, relative to the smallest element height ``l`` (a sliver's
+#: forces change over its height, not over the mean edge: on a Delaunay block with slivers,
+#: ``1e-5`` of the mean edge erred by 9e-6). Central differences err by
+#: ``(h / l)^2 f''' l^2 / 6``, ``1e-10`` of the derivative for laws whose stiffness changes
+#: over a unit strain, ``1e-7`` for ones that stiffen a thousandfold; rounding adds
+#: ``1e-16 |f| / (h K)``, about ``1e-16 STRAIN (L / l) / 1e-5``, ``1e-11`` for ``L / l = 100``.
 FD_STEP = 1e-5
 #: The largest central-difference error allowed, relative to the compared vector's norm.
 FD_TOL = 1e-6
@@ -65,9 +68,11 @@ STEPS = 200
 DT_FRACTION = 0.25
 #: The total energy's largest excursion relative to the initial strain energy ``W0``.
 #: Velocity Verlet's energy oscillates, without drift, by up to ``(omega dt)^2 / 4`` of a
-#: mode's share: 6 % for the stiffest mode at ``omega dt = 0.5``; measured 0.3 % (linear P1)
-#: to 1.5 % (the nodal-averaged spring elements) from the smooth start.
-ENERGY_TOL = 5e-2
+#: mode's share in a linear system: 6.7 % for the stiffest mode at ``omega dt = 0.5``;
+#: measured 0.3 % (linear P1) to 3.6 % (nodal-averaged springs, incompressible Guccione,
+#: slivers) from the smooth start. The margin is for nonlinear systems; what tells a drift
+#: from Verlet's oscillation is the scaling with the step (:data:`ENERGY_SCALING`).
+ENERGY_TOL = 0.1
 #: Halving the step divides Verlet's excursion by 4 (measured 3.98-4.00); a drift, or an
 #: energy that is not the forces' potential, does not fall with ``dt^2``. Below
 #: :data:`ENERGY_FLOOR` there is nothing to scale (rounding).
@@ -89,8 +94,9 @@ class Body:
         pairs = [(a, b) for a in range(nodes.shape[1]) for b in range(a)]
         edges = np.unique(np.sort(np.concatenate([nodes[:, p] for p in pairs]), axis=1), axis=0)
         self.edges = edges
-        self.length = np.linalg.norm(self.x0[edges[:, 0]] - self.x0[edges[:, 1]], axis=1)
-        self.h = float(self.length.mean())
+        self.nodes = nodes
+        self.grads = shape_gradients(self.x0, nodes)  # (m, 4, 3)
+        self.h = 1.0 / float(np.abs(self.grads).max())  # about the smallest height
         self.size = float(np.ptp(self.x0, axis=0).max())
         self.centre = self.x0.mean(axis=0)
         self.free = free_dofs(system)
@@ -100,17 +106,26 @@ class Body:
         return np.asarray(self.system.forces(x, None, 0.0), dtype=float).reshape(-1, 3)
 
     def strained(self, u: np.ndarray, strain: float) -> np.ndarray:
-        """``u`` scaled to the largest edge strain ``strain``."""
-        du = u[self.edges[:, 0]] - u[self.edges[:, 1]]
-        return u * (strain / float((np.linalg.norm(du, axis=1) / self.length).max()))
+        """``u`` scaled to the largest displacement gradient ``strain`` (a sliver's too)."""
+        G = np.einsum("kai,kaj->kij", u[self.nodes], self.grads)
+        return u * (strain / float(np.linalg.norm(G, ord=2, axis=(1, 2)).max()))
 
     def random(self, strain: float) -> np.ndarray:
-        """A random displacement of edge strain ``strain``."""
+        """A random displacement of largest gradient ``strain``."""
         return self.strained(self.rng.standard_normal(self.x0.shape), strain)
+
+    def typical(self, strain: float) -> np.ndarray:
+        """A random displacement of largest edge strain ``|u_i - u_j| / |X_i - X_j|``
+        ``strain``: the forces of a typical element at ``strain``, whatever the slivers
+        (the references of the rigid-motion checks)."""
+        u = self.rng.standard_normal(self.x0.shape)
+        du = u[self.edges[:, 0]] - u[self.edges[:, 1]]
+        X = self.x0[self.edges[:, 0]] - self.x0[self.edges[:, 1]]
+        return u * (strain / float((np.linalg.norm(du, axis=1) / np.linalg.norm(X, axis=1)).max()))
 
     def smooth(self, strain: float) -> np.ndarray:
         """A smooth random displacement vanishing at the fixed DOFs (eight neighbour
-        averages of a random field), of edge strain ``strain``."""
+        averages of a random field), of largest gradient ``strain``."""
         n = len(self.x0)
         e = self.edges
         A = sp.coo_matrix((np.ones(2 * len(e)), (e.ravel(), e[:, ::-1].ravel())), (n, n))
@@ -151,14 +166,14 @@ TURN = np.array([0.9, -0.6, 1.3])
 
 
 def translation(b: Body) -> Check:
-    ref = np.abs(b.internal(b.x0 + b.random(STRAIN))).max()
+    ref = np.abs(b.internal(b.x0 + b.typical(STRAIN))).max()
     f = b.internal(b.x0 + b.size * np.array([0.7, -0.4, 0.5]))
     what = "max |f| under a translation by 0.9 of the body's size / a 1 % strain's ="
     return _verdict("translation", float(np.abs(f).max() / ref), RIGID_TOL, what)
 
 
 def infinitesimal_rotation(b: Body) -> Check:
-    ref = np.abs(b.internal(b.x0 + b.random(ANGLE))).max()
+    ref = np.abs(b.internal(b.x0 + b.typical(ANGLE))).max()
     w = np.array([0.48, -0.6, 0.64])  # a unit axis off the mesh's axes
     f = b.internal(b.x0 + ANGLE * np.cross(w, b.x0 - b.centre))
     what = f"max |f| under a rotation by {ANGLE:.0e} rad / a strain of {ANGLE:.0e}'s ="
@@ -176,10 +191,11 @@ def finite_rotation(b: Body, claim: Rotation | None) -> Check:
         claim = "finite"
     if claim == "infinitesimal":
         return Check(name, "skipped", "the model claims infinitesimal rotations only")
+    ref = np.abs(b.internal(b.x0 + b.typical(STRAIN))).max()
     y = b.x0 + b.random(STRAIN)
     fy = b.internal(y)
     R = rotation(TURN)
-    rigid = np.abs(b.internal(b.rotated(b.x0, TURN) + 0.3 * b.size)).max() / np.abs(fy).max()
+    rigid = np.abs(b.internal(b.rotated(b.x0, TURN) + 0.3 * b.size)).max() / ref
     objective = relative_error(b.internal(b.rotated(y, TURN)), (fy @ R.T))
     what = (
         f"max |f| under a rotation by {np.linalg.norm(TURN):.2f} rad / a 1 % strain's "

@@ -47,7 +47,7 @@ class Cubic(LinearP1):
         super().__init__(scene)
         pairs = [(a, b) for a in range(4) for b in range(a)]
         self.edges = np.unique(np.sort(np.concatenate([self.tets[:, p] for p in pairs])), axis=0)
-        self.c = float(self.K.diagonal().mean()) / np.ptp(self.x0) ** 2
+        self.c = float(self.K.diagonal().mean()) / np.ptp(self.x0) ** 2 * 1e2
 
     def _d(self, x):
         u = np.asarray(x) - self.x0
