@@ -26,6 +26,7 @@ from ..errors import SceneError
 from .build import SECTIONS, model_sections, register_section, scene_from_dict
 from .dynamics import DynamicsOptions, RayleighDamping, parse_dynamics
 from .limits import BYTES_PER_TET, MAX_TETS, check_mesh_size, machine_memory
+from .load_time import TimeFunction, parse_time
 from .loader import load_scene, parse_scene
 from .output import OutputOptions, parse_output
 from .reader import MAX_INT, MAX_MAGNITUDE, MIN_MAGNITUDE, TableReader, suggestion
@@ -57,6 +58,8 @@ __all__ = [
     "DynamicsOptions",
     "RayleighDamping",
     "parse_dynamics",
+    "TimeFunction",
+    "parse_time",
     "SolverOptions",
     "model_precision",
     "parse_solver",
