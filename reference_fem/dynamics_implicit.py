@@ -215,7 +215,8 @@ def run(
         ``trapezoidal`` or ``generalized-alpha`` with its ``rho_inf``.
     initial
         ``rest``, ``static`` (equilibrium under the loads just before ``t = 0``) or a DOF
-        vector of the displacement space (then at rest).
+        vector of the displacement space (then at rest). Prescribed displacements hold
+        from ``t = 0`` on (from rest, a nonzero one is a jump at the start).
     frames
         How many full fields to keep, evenly spaced in time (first and last included), or
         the times to keep them at (each the first step at or after it).
@@ -276,15 +277,13 @@ class _Run:
         self.free_u = self.free[: self.nu]
         d = opts.damping
         self.C = None
-        if not d.none:
-            K0 = problem.internal_force(np.zeros(self.n), tangent=True)[1]
-            K0 = sp.csr_matrix(K0)[: self.nu, : self.nu]
-            self.C = (d.mass * self.M + d.stiffness * K0).tocsr()
+        K0 = sp.csr_matrix(problem.internal_force(np.zeros(self.n), tangent=True)[1])
+        if not d.none:  # K_0: the displacement block of the tangent at rest
+            self.C = (d.mass * self.M + d.stiffness * K0[: self.nu, : self.nu]).tocsr()
         self.probe_names, self.P = self._probes(probes)
-        K0 = problem.internal_force(np.zeros(self.n), tangent=True)[1]
         # the residual that round-off leaves: a few machine epsilons per DOF (root of their
         # count) of the largest stiffness and mass entries times the displacements
-        self.k_max = float(abs(sp.csr_matrix(K0).diagonal()).max())
+        self.k_max = float(abs(K0.diagonal()).max())
         self.m_max = float(self.M.diagonal().max())
         self.round_off = 100.0 * np.finfo(float).eps * math.sqrt(self.n)
         # a nonlinear law's stress near rest is a difference of O(modulus) terms

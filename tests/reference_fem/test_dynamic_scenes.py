@@ -26,7 +26,7 @@ def test_dynamic_scenes_declare_their_run(name):
 
 @pytest.mark.slow
 def test_pull_release_pulls_then_lets_go():
-    table = bundled_table("pull-release", {"mesh.divisions": [4, 4, 2]})
+    table = bundled_table("pull-release", {"mesh.divisions": [8, 8, 2]})  # the patch: 8 facets
     scene = scene_from_dict(table, path=SCENES / "pull-release.toml")
     r = run(scene, t_end=0.3, dt=2e-3)
     t, w, e = r.times, r.energies["external_work"], r.energies
