@@ -18,3 +18,14 @@ Examples
 from ._numba_cache import use_source_keyed_numba_cache
 
 use_source_keyed_numba_cache()
+
+#: The models from Python (:mod:`springfem.api`), imported on first use.
+_API = ("models", "get_model", "solve")
+
+
+def __getattr__(name: str):
+    if name in _API:
+        from . import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'springfem' has no attribute {name!r}")

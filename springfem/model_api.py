@@ -62,12 +62,15 @@ GROUP = "springfem.models"
 
 @dataclass
 class ModelSolution:
-    """What a model's solve returns: the result record, the nodal displacement ``(n, 3)``
-    at the mesh vertices and per-element data for the VTU file."""
+    """What every model's solve returns: the result record, the nodal displacement
+    ``(n, 3)`` at the mesh vertices, per-element data for the VTU file and the plausibility
+    warnings of the state (:func:`springfem.api.solve` fills them:
+    :func:`springfem.plausibility.check_solution`, the lines the CLI prints)."""
 
     result: Result
     u: np.ndarray
     cell_data: dict[str, np.ndarray] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
 
 
 @runtime_checkable
@@ -115,6 +118,22 @@ class ModelPlugin(Protocol):
     position-based peer) and the bytes that pass moves per element, for
     ``springfem bench forces --models`` (without it the bench times ``system(scene)``'s
     internal forces).
+
+    What a model applies to, which the verdict and the studies ask (:func:`declared`;
+    the default when a model does not say):
+
+    - ``order`` (``None``): the polynomial order of its tets (1: linear tets, the spring
+      elements included; 2: quadratic);
+    - ``reference`` (``False``): an FEM of the scene's law that may be a comparison's
+      reference;
+    - ``locking_free`` (``False``): accurate near incompressibility, so weighed too on a
+      nearly incompressible scene;
+    - ``small_strain_limit`` (``False``): it is linear P1 at small strain;
+    - ``law`` (``None``): the law it solves in its own words (``None``: the scene's);
+    - ``locks(scene)`` (``None``): why it locks on the scene (ruled out as a reference);
+    - ``solve_key(scene)`` (its name): models with equal keys are the same solve;
+    - ``law_versus(scene, reference_law)``: what it solves against the reference's law;
+    - ``fem_options(scene)``: the ``[fem]`` options an FEM model solves the scene with.
     """
 
     name: str
@@ -134,8 +153,39 @@ class ModelPlugin(Protocol):
 
     def system(self, scene: Scene) -> MechanicalSystem | None:
         """The model's explicit form (forces, masses, constraints), or ``None`` when it
-        has none: what timed runs, the stable step and the step cost use."""
+        has none (or raise :class:`~springfem.errors.InputError` saying why it has none on
+        this scene): what timed runs, the stable step and the step cost use."""
         ...
+
+
+def declared(model: Any, name: str, *args: Any, default: Any = None) -> Any:
+    """What ``model`` declares as ``name`` (:class:`ModelPlugin`, Notes), or ``default``.
+
+    Parameters
+    ----------
+    model
+        A model.
+    name
+        An attribute, or a method called with ``args``.
+    *args
+        The method's arguments (a scene ...).
+    default
+        What a model that does not declare ``name`` answers.
+
+    Returns
+    -------
+    object
+
+    Examples
+    --------
+    >>> m = SystemModel("mine", "my model", lambda scene: None)
+    >>> declared(m, "locking_free", default=False), declared(m, "locks", None)
+    (False, None)
+    """
+    got = getattr(model, name, None)
+    if got is None:
+        return default
+    return got(*args) if callable(got) else got
 
 
 def model_result(

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import tempfile
 
+from springfem.model_api import declared
+
 from .bench import STEP_COUNT, step_and_force_cases
 from .timing import deformed_state, median, median_ratio, timed
 
@@ -147,7 +149,7 @@ def warm_up(scene) -> None:
     x = deformed_state(scene.mesh.points)
     for name in MODELS:
         model = get(name)
-        if model.kind == "spring":
+        if declared(model, "spring_options", scene) is not None:
             system = model.system(scene)
             system.stiffness(x, 1.0)
             system.energy(x, 1.0)

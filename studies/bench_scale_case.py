@@ -60,16 +60,11 @@ def explicit_system(scene, name: str):
     -------
     MechanicalSystem or None
     """
-    from reference_fem.options import FemOptions
 
     from . import models
 
-    m = models.get(name)
-    if m.kind == "fem":
-        if m.order == 2 or FemOptions.of(m.fem_settings(scene)[0]).formulation != "displacement":
-            return None
-    try:
-        return m.system(scene)
+    try:  # the explicit FEM is P1 in the displacement formulation
+        return models.system(models.get(name), scene)
     except Exception:  # noqa: BLE001 - no explicit form on this scene
         return None
 

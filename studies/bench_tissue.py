@@ -6,7 +6,7 @@ Cases (``--cases``; names ``<scene>-<form>``): for each of Land's beam
 
 ``P1``
     the displacement formulation on P1 with the spring model's penalty
-    (:func:`studies.fem_laws.tissue_scene`, the ``P1`` model of :mod:`studies.models`);
+    (:func:`reference_fem.fitting.tissue_scene`, the ``P1`` model of :mod:`studies.models`);
 ``P2``
     the same penalised displacement formulation on P2 (slow: stiff, many load cutbacks);
 ``mixed``
@@ -119,9 +119,8 @@ def land_scenes(size: float = DEFAULT_SIZE, divisions=DEFAULT_DIVISIONS) -> dict
 
 def form_scene(scene: Scene, form: str) -> Scene:
     """The scene the FEM solves for a form (``P1``, ``P2`` or ``mixed``)."""
+    from reference_fem.fitting import tissue_scene
     from reference_fem.options import FemOptions
-
-    from .fem_laws import tissue_scene
 
     if form == "mixed":
         return scene

@@ -21,29 +21,30 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from reference_fem.fitting import is_tissue, tissue_note
 from springfem.errors import InputError, SolverError
 from springfem.mesh import displacement_gradients
+from springfem.model_api import ModelSolution as Solution
 from springfem.scene import Scene
 
 from . import metrics
-from .fem_laws import is_tissue, tissue_note
 from .model_set import (
+    LARGE_STRAIN,
     formulation_notes,
     locking_free_models,
     locking_note,
     mixed_reference,
+    reference_model,
     same_solves,
 )
 from .models import get as get_model
 from .models import run as run_model
 from .partial import partial_row
-from .solve import Solution
 
 #: The models a comparison runs by default (neo-Hookean ones when strains are large).
 MODELS = ("spring", "P1", "P2", "P1-NH", "P2-NH")
 
 REFERENCE_PREFERENCE = ("fem-P2-mixed", "P2-NH", "P2", "P1-NH", "P1", "fem")
-LARGE_STRAIN = 0.05  # max |principal Green-Lagrange strain| of the P1 linear solution
 COMPONENTS = "xyz"
 
 
@@ -58,7 +59,7 @@ class Comparison:
     table
         One row per model (see :func:`comparison_table`).
     solutions
-        Model name -> :class:`~studies.solve.Solution` (only the models that succeeded).
+        Model name -> :class:`~springfem.model_api.ModelSolution` (only the models that succeeded).
     reference
         Name of the reference solution (the finest FEM solution).
     strain
@@ -227,15 +228,17 @@ def compare_scene(
         else:
             notes.append(f"small strains (max {strain:.2%} <= {strain_limit:.0%}): linear FEM")
         models = ["spring", "P1", "P2"] + (["P1-NH", "P2-NH"] if nh else [])
+        ref = reference_model(scene, strain, strain_limit)  # the verdict's reference too
+        models += [ref] if ref not in models else []
         base = list(models)
         models += [n for n in locking_free_models(scene) if locking_free and n not in models]
         same = same_solves(scene, models)
         models = [n for n in models if n not in same]  # e.g. P2 of a mixed tissue scene
         weighed = [n for n in locking_free_models(scene) if n in models or n in same]
         if weighed:
-            ref = mixed_reference(scene)
-            name = same.get(ref, ref) if ref else "P2"
-            notes.append(locking_note(scene, weighed, name, mixed=ref is not None))
+            mixed = mixed_reference(scene)
+            name = same.get(mixed, mixed) if mixed else "P2"
+            notes.append(locking_note(scene, weighed, name, mixed=mixed is not None))
         extra = tuple(n for n in models if n not in base)
     else:
         models = [get_model(n).name for n in models]  # one spelling, whatever was typed

@@ -11,7 +11,7 @@
   ``fem-P2-mixed``), to be solved once.
 - :func:`formulation_notes`: the FEM rows whose order the scene's ``[fem] formulation`` does
   not fit, and the formulation they solve instead
-  (:func:`studies.fem_laws.fitting_formulation`).
+  (:func:`reference_fem.fitting.fitting_formulation`).
 - :func:`law_versus`: whether a model solves the reference's law, or a small-strain law or
   calibration of it (a speed is compared like for like only in the first case).
 
@@ -30,36 +30,22 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import replace
 from typing import Any
 
+from reference_fem.fitting import HYPERELASTIC, is_tissue
 from reference_fem.options import FemOptions
-from springfem.materials.tissue import TISSUE_LAWS
+from reference_fem.plugin import SMALL_STRAIN_LAWS
+from springfem.model_api import declared
 from springfem.plausibility import nearly_incompressible
 from springfem.scene import Scene
 
 from . import models
-from .fem_laws import HYPERELASTIC
 
 #: The P2/P1 mixed reference of a nearly incompressible hyperelastic scene.
 MIXED = "fem-P2-mixed"
-#: The small-strain laws (a model solving one against a hyperelastic reference is not
-#: like for like).
-SMALL_STRAIN_LAWS = ("linear", "transverse-linear")
-
-
-def _applies(scene: Scene, name: str) -> bool:
-    m = models.get(name)
-    if m.applies(scene) is not None:
-        return False
-    if m.kind == "spring":
-        try:
-            opts = m.spring_options(scene)
-        except (ValueError, TypeError):
-            return False
-        if opts.stiffening != "off" and opts.stiffening_modulus is None:
-            return scene.material.law in TISSUE_LAWS
-    return True
+#: The largest principal Green–Lagrange strain of the small-strain P1 solution above which
+#: a neo-Hookean or tissue reference is needed.
+LARGE_STRAIN = 0.05
 
 
 def locking_free_models(scene: Scene) -> list[str]:
@@ -77,7 +63,11 @@ def locking_free_models(scene: Scene) -> list[str]:
     """
     if not nearly_incompressible(scene):
         return []
-    return [n for n in LOCKING_FREE if _applies(scene, n)]
+    found = [m for m in models.plugin_models().values() if declared(m, "locking_free")]
+    rank = {n: i for i, n in enumerate(LOCKING_FREE)}
+    found.sort(key=lambda m: rank.get(m.name, len(rank)))
+    return [m.name for m in found if m.applies(scene) is None
+            and (m.name in rank or m.default)]  # fmt: skip
 
 
 def mixed_reference(scene: Scene) -> str | None:
@@ -97,6 +87,42 @@ def mixed_reference(scene: Scene) -> str | None:
     if scene.material.law in HYPERELASTIC and MIXED in locking_free_models(scene):
         return MIXED
     return None
+
+
+def reference_model(scene: Scene, p1_strain: float, large: float = LARGE_STRAIN) -> str:
+    """The scene's reference, which the verdict, the comparisons and every study take:
+    P2/P1 mixed on a nearly incompressible hyperelastic scene (:func:`mixed_reference`),
+    else P2 of its law (neo-Hookean when it is, or at large strain).
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    p1_strain
+        The largest principal Green–Lagrange strain of its small-strain P1 solution
+        (:func:`studies.compare.max_principal_strain`; ignored on a mixed scene).
+    large
+        The strain above which the reference is finite-strain (:data:`LARGE_STRAIN`).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> from springfem.scene import load_scene
+    >>> beam, cantilever = load_scene("land-beam"), load_scene("cantilever")
+    >>> [reference_model(s, e) for s, e in ((beam, 0.0), (cantilever, 0.01), (cantilever, 0.1))]
+    ['fem-P2-mixed', 'P2', 'P2-NH']
+    """
+    mixed = mixed_reference(scene)
+    if mixed is not None:
+        return mixed
+    if is_tissue(scene) or scene.material.law == "transverse-linear":
+        return "P2"
+    if scene.material.law == "neo-hookean" or p1_strain > large:
+        return "P2-NH"
+    return "P2"
 
 
 def locking_note(
@@ -137,19 +163,6 @@ def locking_note(
     return f"nearly incompressible ({why}): " + (f"{others} weighed too; " if others else "") + ref
 
 
-def _solve_key(scene: Scene, name: str) -> Any:
-    """What identifies the solve of model ``name`` on ``scene``."""
-    m = models.get(name)
-    if m.kind == "spring":
-        return ("spring", repr(m.spring_options(scene)))
-    if m.kind == "plugin":  # its own solve: the same only as itself
-        return ("plugin", m.name)
-    fem_scene, order, law = m.fem_settings(scene)
-    fem = FemOptions.of(fem_scene)
-    fem = replace(fem, order=fem.order if order is None else order)
-    return ("fem", repr(fem), law or fem_scene.material.law, repr(fem_scene.material))
-
-
 def same_solves(scene: Scene, names: Sequence[str]) -> dict[str, str]:
     """Models whose options resolve to the same solve on ``scene``: name -> the first one.
 
@@ -168,7 +181,8 @@ def same_solves(scene: Scene, names: Sequence[str]) -> dict[str, str]:
     alias = {}
     for n in names:
         try:
-            key = _solve_key(scene, n)
+            m = models.get(n)
+            key = declared(m, "solve_key", scene, default=("plugin", m.name))
         except Exception:  # noqa: BLE001 - a model that cannot be set up is solved (and fails) alone
             continue
         if key in seen:
@@ -181,7 +195,7 @@ def same_solves(scene: Scene, names: Sequence[str]) -> dict[str, str]:
 def formulation_notes(scene: Scene, names: Sequence[str]) -> list[str]:
     """Notes on the FEM rows that solve another formulation than the scene's ``[fem]
     formulation``, which does not fit their order or law
-    (:func:`studies.fem_laws.fitting_formulation`).
+    (:func:`reference_fem.fitting.fitting_formulation`).
 
     Parameters
     ----------
@@ -210,11 +224,11 @@ def formulation_notes(scene: Scene, names: Sequence[str]) -> list[str]:
     changed = []
     for n in names:
         m = models.get(n)
-        if m.kind != "fem" or m.law == "scene" or m.applies(scene) is not None:
-            continue
-        if m.order == 1 and scene.material.law in TISSUE_LAWS:
-            continue  # a tissue law's P1 is displacement P1 with a penalty (fem_laws.tissue_note)
-        form = FemOptions.of(m.fem_settings(scene)[0]).formulation
+        if getattr(m, "fem_law", "scene") == "scene" or m.applies(scene) is not None:
+            continue  # not an FEM, or an FEM of the scene's own formulation
+        if m.order == 1 and is_tissue(scene):
+            continue  # a tissue law's P1 is displacement P1 with a penalty (fitting.tissue_note)
+        form = m.fem_options(scene).formulation
         if form != own:
             changed.append((n, form, m.order))
     if not changed:
@@ -260,19 +274,11 @@ def law_versus(scene: Scene, name: str, reference_law: str) -> str:
     m = models.get(name)
     if ref in SMALL_STRAIN_LAWS or not ref:
         return "same law"
-    if m.kind == "spring":
-        opts = m.spring_options(scene)
-        if opts.stiffening == "law" and ref in TISSUE_LAWS:
-            return "same law"
-        return "small-strain calibration" if opts.stiffening == "off" else "stiffened calibration"
-    if m.kind == "plugin":  # its own law (a plug-in's ``law``, when it names one)
-        own = getattr(m.plugin, "law", None)
-        return "same law" if own == ref else f"own law ({own})" if own else "own law"
-    fem_scene, _, law = m.fem_settings(scene)
-    law = (law or fem_scene.material.law).split("/")[0]
-    if law == ref:
-        return "same law"
-    return "small-strain law" if law in SMALL_STRAIN_LAWS else "other law"
+    versus = declared(m, "law_versus", scene, ref)
+    if versus is not None:
+        return versus
+    own = declared(m, "law")  # a plug-in's own law, when it names one
+    return "same law" if own == ref else f"own law ({own})" if own else "own law"
 
 
 #: What a verdict, a comparison and a sweep weigh as well on a nearly incompressible scene

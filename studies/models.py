@@ -1,48 +1,17 @@
-"""The models: one name, one label and one solve per model, in one registry.
+"""The models the studies weigh: one name, one label and one solve per model, in the one
+registry of :mod:`springfem.model_api`.
 
 Every comparison, sweep and study names its models here, so a model has one spelling in
 the command line (``compare --models``), in tables, figures, sweep files and headline keys.
-Names are looked up case-insensitively (``p1`` is ``P1``); a misspelt name gets a "did you
-mean". Failures are caught in one place, :func:`run`.
-
-Models
-------
-``spring``
-    the spring model with the scene's ``[spring]`` options;
-``spring-<variant>``
-    the spring model with a variant's changes to the scene's ``[spring]`` options
-    (:func:`spring_variant`; ``spring-energy``, ``spring-cosine``: that torsion law; on a
-    scene that names an element other than ``seed``, or gets one by default, the changes
-    are made to the specification's element, so that a variant means the same on every
-    scene), or a
-    whole element of its own: ``spring-spec`` (the specification's element: barycentric
-    volume springs, cosine torsion, the analytic calibration), ``spring-exact`` (axis-volume
-    + energy torsion + the exact calibration, with the Poisson-coupling springs for an
-    anisotropic law: P1's small-strain element on any tet), ``spring-stiffened`` (the exact
-    element for tissue at finite strain: Green axial springs, shear torsion, exponential
-    stiffening);
-``fem``
-    the FEM the scene's ``[fem]`` section and law ask for (``springfem solve --model fem``);
-``P1``, ``P2``
-    FEM on the scene's mesh with the scene's small-strain law (``linear`` or
-    ``transverse-linear``; ``linear`` with ``E, nu`` for a neo-Hookean scene), or for a
-    finite-strain tissue law the scene's own law: ``P2`` with the scene's formulation,
-    ``P1`` in the displacement formulation with the scene's ``kappa`` or, for an
-    incompressible material, the spring model's penalty (:func:`studies.fem_laws.p1_penalty`);
-``P1-NH``, ``P2-NH``
-    neo-Hookean FEM (the scene's formulation); not for anisotropic laws;
-plug-ins
-    every model of the plug-in API (:mod:`springfem.model_api`: entry points of group
-    ``springfem.models`` and :func:`springfem.model_api.register_model`), such as
-    ``corotational``; :func:`plugins` lists those a study weighs by default.
-``fem-P1-nodal-strain``, ``fem-P1-nodal-volume``, ``fem-MINI``, ``fem-P2-mixed``
-    FEM of the scene's own law in that ``[fem] formulation``, and ``spring-stabilised``,
-    ``spring-tissue-stabilised``, the exact and tissue elements on nodal strain and nodal
-    volume: the locking-free methods (:data:`studies.model_set.LOCKING_FREE`).
-
-An FEM model whose order the scene's formulation does not fit (a P1 model of a ``mixed``
-scene) solves the nearest one of its order and law
-(:func:`studies.fem_laws.fitting_formulation`).
+The models come from their packages: the spring models of :mod:`springmodel.plugin`, the
+FEM orders and formulations of :mod:`reference_fem.plugin`, and the plug-ins (entry points
+of group ``springfem.models``, :func:`springfem.model_api.register_model`), such as
+``corotational``; :func:`plugins` lists those a study weighs without naming them. A model
+declares what it applies to (``applies``, ``locking_free``, ``reference``, ``order`` ...:
+:class:`springfem.model_api.ModelPlugin`), and the studies ask it
+(:func:`springfem.model_api.declared`). Names are looked up case-insensitively (``p1`` is
+``P1``); a misspelt name gets a "did you mean". Failures are caught in one place,
+:func:`run`.
 
 Examples
 --------
@@ -62,281 +31,39 @@ Examples
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
 
-from reference_fem.options import FemOptions
-from springfem.errors import InputError, SolverError
-from springfem.materials.tissue import TISSUE_LAWS
+import reference_fem.plugin as fem_models
+import springmodel.plugin as spring_models
+from springfem.api import get_model
+from springfem.errors import SolverError
 from springfem.mechanics.limits import SolveStopped
+from springfem.model_api import ModelPlugin, declared, plugin_models, register_model
 from springfem.plausibility import check_solution
 from springfem.scene import Scene
-from springfem.scene.reader import suggestion
-from springmodel.options import ANISOTROPIC_LAWS, ELEMENT_KEYS, ELEMENTS
 
-from .fem_laws import fitted_scene, formulation_problem, linear_law, tissue_scene
 from .partial import partial_solution
-from .solve import Solution
 
-#: The exact spring element: small-strain P1 on any tet (with coupling when anisotropic).
-EXACT = dict(ELEMENTS["exact"])
-#: The spring element for tissue at finite strain: the exact element with Green axial
-#: springs, the shear torsion law, the exponential stiffening of the element energy and the
-#: tissue laws' log penalty ``U(J)``.
-STIFFENED = dict(ELEMENTS["stiffened"])
-#: The tissue element: the stiffened element's Green measures with the Green torsion (all six
-#: frame components of E) and each spring group stiffened as the law's own terms, so that
-#: it equals its law under any homogeneous deformation (docs/tissue.rst).
-TISSUE = dict(ELEMENTS["tissue"])
-
-
-@dataclass(frozen=True)
-class Model:
-    """A model of the registry.
-
-    Attributes
-    ----------
-    name
-        Its one spelling.
-    label
-        A longer human name for tables and figures.
-    kind
-        ``spring``, ``fem`` or ``plugin`` (a model of :mod:`springfem.model_api`).
-    changes
-        Spring models: changes to the scene's ``[spring]`` options (values of
-        :class:`springmodel.options.SpringOptions`; ``lms`` may be a rule name and
-        ``axial`` ``"green"``, as in a scene file). If the scene's element is not the
-        seed's, the changes are made to the seed's element.
-    coupling
-        Spring models: add the Poisson-coupling springs when the law is anisotropic.
-    element
-        Spring models: the model defines the whole element (:data:`ELEMENT_KEYS` start from
-        their defaults, whatever the scene's ``[spring]`` says); otherwise ``changes``
-        modify the scene's options.
-    order
-        FEM models: 1 or 2 (``None``: the scene's ``[fem] order``).
-    law
-        FEM models: ``small-strain``, ``neo-hookean`` or ``scene`` (the scene's own law and
-        formulation).
-    fem
-        FEM models: ``[fem]`` options (fields of :class:`reference_fem.options.FemOptions`,
-        such as ``formulation``) that replace the scene's before the solve.
-    plugin
-        Plug-in models: the :class:`~springfem.model_api.ModelPlugin`.
-    """
-
-    name: str
-    label: str
-    kind: Literal["spring", "fem", "plugin"]
-    changes: Mapping[str, Any] = field(default_factory=dict)
-    coupling: bool = False
-    element: bool = False
-    order: int | None = None
-    law: Literal["small-strain", "neo-hookean", "scene"] = "small-strain"
-    fem: Mapping[str, Any] = field(default_factory=dict)
-    plugin: Any = None
-
-    # -- what the model solves ---------------------------------------------------------------
-    def applies(self, scene: Scene) -> str | None:
-        """Why this model cannot solve ``scene`` (``None``: it can).
-
-        Parameters
-        ----------
-        scene
-            The scene.
-
-        Returns
-        -------
-        str or None
-        """
-        if self.kind == "plugin":
-            return self.plugin.applies(scene)
-        if self.kind == "fem" and self.law == "neo-hookean":
-            law = scene.material.law
-            if law == "transverse-linear":
-                return (
-                    f"model {self.name}: reference_fem has no anisotropic hyperelastic law "
-                    "for the transverse-linear material"
-                )
-            if law in TISSUE_LAWS:
-                return (
-                    f"model {self.name}: neo-Hookean is not the scene's {law} law; P1 and P2 "
-                    "solve that law"
-                )
-        if self.kind == "spring" and self.changes.get("stiffening") == "law":
-            if scene.material.law not in TISSUE_LAWS:
-                return f'model {self.name}: stiffening = "law" needs a tissue law'
-        if self.kind == "fem" and self.fem.get("formulation"):
-            why = formulation_problem(scene, str(self.fem["formulation"]), self.law)
-            return None if why is None else f"model {self.name}: {why}"
-        return None
-
-    def spring_options(self, scene: Scene):
-        """The spring options this model solves ``scene`` with (spring models only).
-
-        Parameters
-        ----------
-        scene
-            The scene.
-
-        Returns
-        -------
-        springmodel.options.SpringOptions
-        """
-        from springmodel.options import GREEN_AXIAL_COEFFICIENTS, LMSOptions, SpringOptions
-
-        changes = dict(self.changes)
-        if isinstance(changes.get("lms"), str):
-            changes["lms"] = LMSOptions(rule=changes["lms"])
-        if changes.get("axial") == "green":  # the scene files' spelling of the cubic law
-            changes["axial"], changes["axial_coefficients"] = "cubic", GREEN_AXIAL_COEFFICIENTS
-        if self.coupling and scene.material.law in ANISOTROPIC_LAWS:
-            changes["coupling"] = True
-        options = SpringOptions.of(scene)
-        if self.element or (changes and options.element != "seed"):
-            # a whole element, or a variant of one option: a variant is of the spec's
-            # element, whichever element the scene names (docs/studies.rst)
-            default = SpringOptions()
-            reset = {k: getattr(default, k) for k in ELEMENT_KEYS}
-            options = replace(options, **reset, element="seed")
-        return replace(options, **changes)
-
-    def fem_settings(self, scene: Scene) -> tuple[Scene, int | None, str | None]:
-        """``(scene, order, law)`` of :func:`reference_fem.solve` for this FEM model.
-
-        Parameters
-        ----------
-        scene
-            The scene.
-
-        Returns
-        -------
-        tuple
-        """
-        if self.fem:
-            scene = scene.with_options(fem=replace(FemOptions.of(scene), **self.fem))
-        if self.law == "scene":
-            return scene, self.order, None
-        # the scene's formulation, or the nearest one of this order (fem_laws.fitted_scene)
-        if self.law == "neo-hookean":
-            return fitted_scene(scene, self.order, "neo-hookean"), self.order, "neo-hookean"
-        if scene.material.law in TISSUE_LAWS:
-            return tissue_scene(scene, self.order), self.order, scene.material.law
-        law = linear_law(scene)
-        return fitted_scene(scene, self.order, law), self.order, law
-
-    def solve(self, scene: Scene, verbose: bool = False) -> Solution:
-        """Solve ``scene`` with this model (raises what the model raises).
-
-        Parameters
-        ----------
-        scene
-            The scene.
-        verbose
-            Solver progress on stderr.
-
-        Returns
-        -------
-        Solution
-
-        Raises
-        ------
-        InputError
-            The model does not apply to the scene (:meth:`applies`).
-        SolverError
-            From the solver.
-        """
-        why = self.applies(scene)
-        if why is not None:
-            raise InputError(why)
-        if self.kind == "plugin":
-            got = self.plugin.solve(scene, verbose)
-            return Solution(got.result, got.u, dict(got.cell_data))
-        if self.kind == "spring":
-            from springmodel.model import solve_spring
-
-            sol = solve_spring(scene, self.spring_options(scene), verbose)
-            return Solution(sol.result, sol.u, dict(sol.cell_data))
-        import reference_fem
-
-        fem_scene, order, law = self.fem_settings(scene)
-        sol = reference_fem.solve(fem_scene, order=order, law=law, verbose=verbose)
-        return Solution(sol.result, sol.u_vertices, dict(sol.cell_data))
-
-    def system(self, scene: Scene):
-        """The model as a :class:`~springfem.mechanics.MechanicalSystem` for time
-        integration: the spring model, or the explicit P1 FEM.
-
-        Parameters
-        ----------
-        scene
-            The scene.
-
-        Returns
-        -------
-        MechanicalSystem
-
-        Raises
-        ------
-        InputError
-            For a P2 model (no explicit P2 FEM), a law the explicit FEM lacks, or a plug-in
-            without an explicit form.
-        """
-        if self.kind == "plugin":
-            why = self.applies(scene)
-            system = self.plugin.system(scene) if why is None else None
-            if system is None:
-                raise InputError(why or f"model {self.name}: no explicit form")
-            return system
-        if self.kind == "spring":
-            from springmodel.model import SpringModel
-
-            return SpringModel(scene, self.spring_options(scene))
-        if self.order == 2:
-            raise InputError(f"model {self.name}: there is no explicit P2 FEM")
-        from reference_fem.explicit import ExplicitFem
-
-        _, _, law = self.fem_settings(scene)
-        return ExplicitFem(scene, law=law or scene.material.law)
-
-
-#: Registered models, by name, in registration order.
-REGISTRY: dict[str, Model] = {}
-
-
-def register(model: Model) -> Model:
-    """Add ``model`` to :data:`REGISTRY` (a name is registered once).
-
-    Parameters
-    ----------
-    model
-        The model.
-
-    Returns
-    -------
-    Model
-        ``model``.
-
-    Raises
-    ------
-    ValueError
-        If another model has its name (case-insensitively).
-    """
-    key = model.name.lower()
-    old = next((m for m in REGISTRY.values() if m.name.lower() == key), None)
-    if old is not None and old != model:
-        raise ValueError(f"model {model.name!r} is registered twice")
-    REGISTRY[model.name] = model
-    return model
+#: A model of the registry (any :class:`~springfem.model_api.ModelPlugin`).
+Model = ModelPlugin
+# the in-house models, whether or not the installed metadata names their entry points yet
+register_model(spring_models.MODELS)
+register_model(fem_models.MODELS)
+SPRING = spring_models.SPRING
+EXACT, STIFFENED, TISSUE = spring_models.EXACT, spring_models.STIFFENED, spring_models.TISSUE
+FEM, P1, P2, P1_NH, P2_NH = (fem_models.FEM, fem_models.P1, fem_models.P2, fem_models.P1_NH,
+                             fem_models.P2_NH)  # fmt: skip
 
 
 def spring_variant(
     name: str, label: str, coupling: bool = False, element: bool = False, **changes: Any
 ) -> Model:
-    """Register a spring model: the scene's ``[spring]`` options with ``changes``.
+    """Register a spring model: the scene's ``[spring]`` options with ``changes``
+    (:class:`springmodel.plugin.SpringVariant`).
 
     Parameters
     ----------
@@ -347,7 +74,7 @@ def spring_variant(
     coupling
         Add the Poisson-coupling springs for an anisotropic law.
     element
-        The model defines the whole element (see :attr:`Model.element`).
+        The model defines the whole element.
     **changes
         Spring options.
 
@@ -355,16 +82,36 @@ def spring_variant(
     -------
     Model
     """
-    return register(Model(name, label, "spring", dict(changes), coupling=coupling, element=element))
+    known = plugin_models().get(name)
+    if known is not None:
+        return known
+    m = spring_models.SpringVariant(name, label, changes, coupling=coupling, element=element)
+    return register_model(m)[0]
+
+
+def fem_variant(name: str, label: str, order: int, formulation: str, **fem: Any) -> Model:
+    """Register an FEM model of the scene's own law with ``[fem] formulation``
+    (:class:`reference_fem.plugin.FemModel`; a registered name is returned as is).
+
+    Returns
+    -------
+    Model
+    """
+    known = plugin_models().get(name)
+    if known is not None:
+        return known
+    options = {"order": order, "formulation": formulation, **fem}
+    m = fem_models.FemModel(name, label, order=order, law="scene", fem=options)
+    return register_model(m)[0]
 
 
 def get(name: str | Model) -> Model:
-    """The registered model ``name`` (case-insensitive).
+    """The registered model ``name`` (case-insensitive; :func:`springfem.api.get_model`).
 
     Parameters
     ----------
     name
-        A model name, or a :class:`Model` (returned as is).
+        A model name, or a model (returned as is).
 
     Returns
     -------
@@ -375,15 +122,29 @@ def get(name: str | Model) -> Model:
     InputError
         Unknown name: the message suggests the closest and lists the valid ones.
     """
-    if isinstance(name, Model):
-        return name
-    sync_plugins()
-    for m in REGISTRY.values():
-        if m.name.lower() == str(name).lower():
-            return m
-    near = suggestion(str(name), REGISTRY)
-    hint = f" (did you mean {near}?)" if near else ""
-    raise InputError(f"unknown model {name!r}{hint}; valid models: {', '.join(REGISTRY)}")
+    return get_model(name)
+
+
+def solve_model(model: Model, scene: Scene, verbose: bool = False) -> Any:
+    """The solve :func:`run` makes by default: ``model.solve(scene, verbose)``."""
+    return model.solve(scene, verbose)
+
+
+def system(model: Model, scene: Scene):
+    """The model's explicit form on ``scene``.
+
+    Raises
+    ------
+    InputError
+        It has none on this scene (the model says why).
+    """
+    from springfem.errors import InputError
+
+    why = model.applies(scene)
+    got = model.system(scene) if why is None else None
+    if got is None:
+        raise InputError(why or f"model {model.name}: no explicit form")
+    return got
 
 
 @dataclass
@@ -400,7 +161,7 @@ class Outcome:
         solve stopped part way: ``solution`` is the state at ``load_factor``) or
         ``failed``.
     solution
-        The solution (``ok``: a :class:`~studies.solve.Solution`, or what a study's own
+        The solution (``ok``: a :class:`~springfem.model_api.ModelSolution`, or what a study's own
         solve returned) or the partial state (``partial``); ``None`` when failed.
     message
         Why it failed or stopped (empty when ok).
@@ -453,7 +214,7 @@ def run(
     model
         A model or its name.
     solve
-        How to solve (default :meth:`Model.solve`): a study's own solver settings; what it
+        How to solve (default :func:`solve_model`): a study's own solver settings; what it
         returns is the outcome's ``solution``.
     verbose
         Solver progress on stderr (the default solve).
@@ -476,10 +237,10 @@ def run(
     m = get(model)
     t0 = time.perf_counter()
     try:
-        sol = solve(m, scene) if solve is not None else m.solve(scene, verbose)
+        sol = solve(m, scene) if solve is not None else solve_model(m, scene, verbose)
     except (SolverError, SolveStopped) as exc:  # a stop by a cap is kept like a failure
         seconds = time.perf_counter() - t0
-        state = partial_solution(scene, m.kind, exc, seconds)
+        state = partial_solution(scene, declared(m, "result_model", default="plugin"), exc, seconds)
         status: Literal["partial", "failed"] = "partial" if state is not None else "failed"
         return Outcome(m, status, state, str(exc), seconds)
     seconds = time.perf_counter() - t0
@@ -489,54 +250,6 @@ def run(
             return Outcome(m, "implausible", sol, "; ".join(f.line for f in findings), seconds)
     return Outcome(m, "ok", sol, "", seconds)
 
-
-# -- the registry ----------------------------------------------------------------------------
-
-SPRING = register(Model("spring", "spring model (the scene's [spring] options)", "spring"))
-spring_variant("spring-spec", "the specification's spring element", element=True)
-spring_variant("spring-exact", "exact spring element", coupling=True, element=True, **EXACT)
-spring_variant(
-    "spring-stiffened", "stiffened exact spring element", coupling=True, element=True, **STIFFENED
-)
-spring_variant(
-    "spring-tissue",
-    "tissue spring element (Green torsion, the law's stiffening)",
-    coupling=True,
-    element=True,
-    **TISSUE,
-)
-spring_variant("spring-energy", "spring model, energy torsion", torsion="energy")
-spring_variant("spring-cosine", "spring model, cosine torsion", torsion="cosine")
-FEM = register(Model("fem", "FEM (the scene's [fem] options)", "fem", law="scene"))
-P1 = register(Model("P1", "FEM P1", "fem", order=1))
-P2 = register(Model("P2", "FEM P2", "fem", order=2))
-P1_NH = register(Model("P1-NH", "FEM P1 neo-Hookean", "fem", order=1, law="neo-hookean"))
-P2_NH = register(Model("P2-NH", "FEM P2 neo-Hookean", "fem", order=2, law="neo-hookean"))
-
-# the locking-free methods (docs/volumetric.rst), in the locking study's spelling
-for _name, _label, _order, _form in (
-    ("fem-P1-nodal-volume", "FEM P1, nodal-averaged volume", 1, "nodal-volume"),
-    ("fem-P1-nodal-strain", "FEM P1, nodal-averaged strain", 1, "nodal-strain"),
-    ("fem-MINI", "FEM MINI (P1-bubble / P1)", 1, "mini"),
-    ("fem-P2-mixed", "FEM P2/P1 Taylor–Hood", 2, "mixed"),
-):
-    register(Model(_name, _label, "fem", order=_order, law="scene",
-                   fem={"order": _order, "formulation": _form}))  # fmt: skip
-_NODAL = {"volume_average": "nodal", "strain_average": "nodal"}
-spring_variant(
-    "spring-stabilised",
-    "exact spring element, stabilised nodal strain + nodal volume",
-    coupling=True,
-    element=True,
-    **{**EXACT, **_NODAL},
-)
-spring_variant(
-    "spring-tissue-stabilised",
-    "tissue spring element, stabilised nodal strain + nodal volume",
-    coupling=True,
-    element=True,
-    **{**TISSUE, **_NODAL},
-)
 
 #: The models a verdict weighs on a user's scene: the scene's own spring model, the three
 #: spring elements and the FEM of the scene's law (the torsion variants and the studies'
@@ -554,23 +267,21 @@ PRIMARY = (
 
 
 def sync_plugins() -> list[Model]:
-    """Register the plug-in models (:func:`springfem.model_api.plugin_models`) not yet in
-    :data:`REGISTRY`; the plug-in models, in registration order.
+    """The plug-in models: those of packages other than the spring model's and the FEM's,
+    in registration order.
 
     Returns
     -------
     list of Model
     """
-    from springfem.model_api import plugin_models
+    from springfem.model_api import plugin_module
 
-    for p in plugin_models().values():
-        if p.name not in REGISTRY:
-            register(Model(p.name, p.label, "plugin", plugin=p))
-    return [m for m in REGISTRY.values() if m.kind == "plugin"]
+    own = ("springmodel", "reference_fem")
+    return [m for m in plugin_models().values() if plugin_module(m) not in own]
 
 
 def plugins(scene: Scene | None = None, explicit: bool = False) -> list[str]:
-    """The plug-in models a study weighs by default (``default``) on ``scene``.
+    """The models a study weighs without naming them (``default``) on ``scene``.
 
     Parameters
     ----------
@@ -584,14 +295,14 @@ def plugins(scene: Scene | None = None, explicit: bool = False) -> list[str]:
     list of str
     """
     out = []
-    for m in sync_plugins():
-        if not m.plugin.default:
+    for m in plugin_models().values():
+        if not m.default:
             continue
         if scene is not None and m.applies(scene) is not None:
             continue
         if explicit and scene is not None:
             try:
-                m.system(scene)
+                system(m, scene)
             except Exception:  # noqa: BLE001 - no explicit form on this scene
                 continue
         out.append(m.name)

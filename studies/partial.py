@@ -2,7 +2,8 @@
 
 A static solve that steps the load and stops (Newton gave up) raises a
 :class:`~springfem.errors.SolverError` with the last converged state and its
-``load_factor``; :func:`partial_solution` turns it into a :class:`~studies.solve.Solution`
+``load_factor``; :func:`partial_solution` turns it into a
+:class:`~springfem.model_api.ModelSolution`
 marked ``partial`` (probes, volume, ventricle cavity at that load) and :func:`partial_row`
 into a comparison-table row.
 

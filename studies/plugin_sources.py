@@ -26,7 +26,7 @@ def plugin_sources() -> list[Path]:
 
     folders = set()
     for m in sync_plugins():
-        name = plugin_module(m.plugin)
+        name = plugin_module(m)
         if name in ("springfem", "studies"):
             continue  # in every fingerprint already
         src = getattr(importlib.import_module(name), "__file__", None)

@@ -1,4 +1,4 @@
-"""Solving one scene with one model: the :class:`Solution`, its last good state, its output.
+"""Solving one scene with one model: its solution, its last good state, its output.
 
 Examples
 --------
@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import sys
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +20,7 @@ from springfem.cardiac import cavity_summary, is_ventricle
 from springfem.errors import InputError, SolverError
 from springfem.files import output_folder
 from springfem.mechanics.limits import SolveStopped
+from springfem.model_api import ModelSolution as Solution  # the one solution type
 from springfem.result import Result, volume_summary, write_result
 from springfem.scene import OutputOptions, Scene
 
@@ -29,15 +29,6 @@ P2_VERTEX_NOTE = (
     "P2 solution reduced to the mesh vertices in result.vtu (the mid-edge nodes are not "
     "written); probes and volume_p2 use the full P2 field"
 )
-
-
-@dataclass
-class Solution:
-    """What a model produced: the result record, nodal displacement and VTU cell data."""
-
-    result: Result
-    u: np.ndarray  # (n, 3) displacement at the mesh vertices
-    cell_data: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 def solve_scene(

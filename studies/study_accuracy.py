@@ -129,14 +129,15 @@ def summarize(cmp: Comparison, fields: bool = False) -> dict[str, Any]:
         "total": cmp.errors("spring"),
         "discretisation": cmp.errors(p1) if p1 else {},
     }
-    if cmp.reference.endswith("-NH"):  # what a small-strain analysis would have given
+    if p1 == "P1-NH":  # a finite-strain reference: what a small-strain analysis would give
         errors["small_strain_p2"] = cmp.errors("P2")
     if "spring-exact" in sol:
         errors["exact_model"] = cmp.errors("spring-exact", "P1")
         errors["exact_model_nh"] = cmp.errors("spring-exact", "P1-NH")
         errors["exact_total"] = cmp.errors("spring-exact")
         errors["model_nh"] = cmp.errors("spring", "P1-NH")
-    for name in [n for n in sol if models.get(n).kind == "plugin"]:
+    peers = {m.name for m in models.sync_plugins()}  # the plug-in models
+    for name in [n for n in sol if n in peers]:
         errors[f"peer_total:{name}"] = cmp.errors(name)
         if "P1-NH" in sol:
             errors[f"peer_model_nh:{name}"] = cmp.errors(name, "P1-NH")

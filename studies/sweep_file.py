@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from springfem.errors import InputError, SceneError
+from springfem.model_api import declared
 
 from . import model_set
 from . import models as registry
@@ -214,7 +215,7 @@ def parse_sweep(
             reference = registry.get(reference).name
         except InputError as exc:
             raise fail(f"reference: {exc}") from None
-        if registry.get(reference).kind != "fem":
+        if not declared(registry.get(reference), "reference", default=False):
             raise fail(f"reference: {reference!r} is not a FEM model")
     if reference not in models:
         models = [*models, reference]

@@ -33,6 +33,7 @@ import numpy as np
 
 from springfem.errors import SpringFemError
 from springfem.files import jsonable
+from springfem.model_api import declared
 
 from . import models
 from .overrides import scene_with_overrides
@@ -63,10 +64,9 @@ def resolved_key(task: dict[str, Any]) -> str:
     h.update(np.ascontiguousarray(scene.mesh.tets).tobytes())
     h.update(repr((task["models"], task["reference"])).encode())
     for name in task["models"]:
-        model = models.get(name)
-        if model.kind != "spring":
+        opts = declared(models.get(name), "spring_options", scene)
+        if opts is None:
             continue
-        opts = model.spring_options(scene)
         h.update(repr(replace(opts, calibration="analytic")).encode())
         el = build_spring_elements(
             scene.mesh.points, scene.mesh.tets, scene.frames, opts, scene.material

@@ -62,15 +62,16 @@ from pathlib import Path
 
 import numpy as np
 
-from springfem.materials.laws import LAWS
+from reference_fem.fitting import is_tissue
 from springfem.mechanics.limits import solve_limits
 from springfem.mechanics.memory import MemoryLimitExceeded, memory_limit
 from springfem.mesh.thickness import thin_wall_note
 from springfem.scene import Scene
 
-from . import fem_laws, model_set, models
-from .compare import LARGE_STRAIN, max_principal_strain
+from . import model_set, models
+from .compare import max_principal_strain
 from .cost_model import SolveCosts, gigabytes, read_laws
+from .model_set import reference_model
 from .peak_memory import PeakMemory
 from .verdict_plan import (
     SOLVE_SHARE,
@@ -106,55 +107,9 @@ def candidate_models(scene: Scene) -> list[str]:
     -------
     list of str
     """
-    out = []
-    for m in map(models.get, model_set.candidates()):
-        if m.name == "fem" or m.applies(scene) is not None:
-            continue
-        if m.kind == "spring" and not _spring_builds(m, scene):
-            continue
-        out.append(m.name)
+    out = [m.name for m in map(models.get, model_set.candidates())
+           if m.name != "fem" and m.applies(scene) is None]  # fmt: skip
     return out + [n for n in model_set.locking_free_models(scene) if n not in out]
-
-
-def _spring_builds(m: models.Model, scene: Scene) -> bool:
-    """Whether the spring variant's options are valid for the scene's law (a stiffening
-    needs a modulus the law gives, e.g.)."""
-    try:
-        opts = m.spring_options(scene)
-    except (ValueError, TypeError):
-        return False
-    law = scene.material.law
-    if opts.stiffening == "law":
-        return law in LAWS
-    if opts.stiffening != "off" and opts.stiffening_modulus is None:
-        return law in LAWS and LAWS[law].stiffening_modulus(scene.material.parameters) is not None
-    return True
-
-
-def reference_model(scene: Scene, p1_strain: float) -> str:
-    """The scene's best reference: P2/P1 mixed on a nearly incompressible hyperelastic
-    scene (:func:`studies.model_set.mixed_reference`), else P2 of its law (neo-Hookean when
-    it is or at large strain).
-
-    Parameters
-    ----------
-    scene
-        The scene.
-    p1_strain
-        The largest principal Green–Lagrange strain of its small-strain P1 solution.
-
-    Returns
-    -------
-    str
-    """
-    mixed = model_set.mixed_reference(scene)
-    if mixed is not None:
-        return mixed
-    if fem_laws.is_tissue(scene) or scene.material.law == "transverse-linear":
-        return "P2"
-    if scene.material.law == "neo-hookean" or p1_strain > LARGE_STRAIN:
-        return "P2-NH"
-    return "P2"
 
 
 def verdict(
@@ -327,7 +282,7 @@ def _solve_reference(scene, plan, ref, ruled, names, state, run, skip, solve_roo
 
     planned = {p.name: p for p in plan}
     first_ref = ref
-    finite = ref != "P2" and not fem_laws.is_tissue(scene)  # P2, P1: a tissue law
+    finite = ref != "P2" and not is_tissue(scene)  # P2, P1: a tissue law
     fallback = ("P2-NH", "P1-NH", "P2", "P1") if finite else ("P2", "P2-NH", "P1-NH", "P1")
     preference = [ref] + [n for n in fallback if n in names and n not in ruled]
     for cand in dict.fromkeys(preference):

@@ -40,7 +40,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from springfem.plausibility import nearly_incompressible
+from springfem.model_api import declared
 from springfem.scene import Scene
 
 from . import models
@@ -103,24 +103,7 @@ def ruled_out(scene: Scene, name: str) -> str | None:
     -------
     str or None
     """
-    if not nearly_incompressible(scene):
-        return None
-    m = models.get(name)
-    if m.kind != "fem":
-        return None
-    from reference_fem.options import FemOptions
-
-    try:
-        formulation = FemOptions.of(m.fem_settings(scene)[0]).formulation
-    except Exception:  # noqa: BLE001 - a model that does not build here is not ruled out
-        return None
-    if formulation != "displacement":
-        return None
-    mat = scene.material
-    nu = getattr(mat, "nu", None)
-    why = "an incompressible material" if mat.incompressible else f"nu = {nu:.4g}"
-    order = m.order or FemOptions.of(scene).order
-    return f"displacement P{order} locks at {why}"
+    return declared(models.get(name), "locks", scene)
 
 
 def make_plan(

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from reference_fem.options import FemOptions
+from springfem.model_api import declared
 from springfem.plausibility import check_solution
 from springfem.scene import Scene
 
@@ -155,10 +155,9 @@ class VerdictState:
         same_mesh = p1 in done and p1 in self.outcomes and self.outcomes[p1].ok
         if same_mesh:
             u_p1 = self.outcomes[p1].u
-            scene_order = FemOptions.of(scene).order
             quadratic = {
                 n for n in done
-                if (m := registry.get(n)).kind == "fem" and (m.order or scene_order) == 2
+                if getattr(declared(registry.get(n), "fem_options", scene), "order", 1) == 2
             }  # fmt: skip
             same = {n for n in done if alias.get(n, n) == alias.get(p1, p1)}  # p1's own solve
             table.insert(3, f"vs {p1} (same mesh)", [

@@ -27,6 +27,7 @@ from reference_fem.options import FemOptions
 from springfem.errors import InputError
 from springfem.materials.tissue import TISSUE_LAWS
 from springfem.mechanics.limits import CAP_REASON, LIMITS, solve_limits
+from springfem.model_api import declared
 
 from .. import models
 from ..scenes import StudyScene
@@ -44,8 +45,7 @@ REFERENCE = "P2-mixed"
 
 def _fem(name: str, label: str, order: int, formulation: str, **fem: Any) -> models.Model:
     """Register an FEM model of the scene's own law with ``[fem] formulation``."""
-    options = {"order": order, "formulation": formulation, **fem}
-    return models.register(models.Model(name, label, "fem", order=order, law="scene", fem=options))
+    return models.fem_variant(name, label, order, formulation, **fem)
 
 
 def _spring(name: str, label: str, **changes: Any) -> models.Model:
@@ -99,7 +99,7 @@ METHODS: dict[str, models.Model] = {
     **SPRING_METHODS,
 }
 #: Methods on the mesh's own vertices (linear tets: P1-type FEM and the spring elements).
-LINEAR_TETS = tuple(n for n, m in METHODS.items() if m.kind == "spring" or m.order == 1)
+LINEAR_TETS = tuple(n for n, m in METHODS.items() if declared(m, "order") == 1)
 #: Solves under this many seconds are timed as the median of three.
 REPEAT_BELOW = 0.5
 #: Why a case is not run when a method on the same kind of tets is within the tolerance
@@ -212,7 +212,7 @@ def with_nu(sc: StudyScene, nu: float) -> StudyScene:
 
     An isotropic law gets ``E = 2 mu (1 + nu)`` and ``nu``; a tissue law the volumetric
     penalty ``kappa = 2 mu (1 + nu) / (3 (1 - 2 nu))`` of the isotropic equivalent (``mu``
-    the mean shear modulus of its small-strain tangent, :func:`studies.fem_laws.p1_penalty`),
+    the mean shear modulus of its small-strain tangent, :func:`reference_fem.fitting.p1_penalty`),
     an incompressible one becoming nearly incompressible. An anisotropic linear law has no
     single Poisson ratio: :class:`~springfem.errors.InputError`.
     """
@@ -317,8 +317,8 @@ def dofs(method: str, vertices: int, edges: int, tets: int) -> int:
     (30, 130, 100)
     """
     m = METHODS.get(method)
-    form = (m.fem or {}).get("formulation", "") if m is not None else ""
-    if m is not None and m.kind == "fem" and m.order == 2:
+    form = declared(m, "settings", default={}).get("formulation", "")
+    if declared(m, "order") == 2:
         return 3 * (vertices + edges) + (vertices if form == "mixed" else 0)
     if form == "mini":
         return 3 * (vertices + tets) + vertices

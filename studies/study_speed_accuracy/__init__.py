@@ -391,7 +391,7 @@ def peer_findings(good, err: str, put, pct, finest: str, sp, p1) -> list[str]:
     out = []
     fine = good[good["mesh"] == finest]
     for name in dict.fromkeys(model_of(m) for m in good["method"]):
-        if models.get(name).kind != "plugin":
+        if name not in {m.name for m in models.sync_plugins()}:
             continue
         own = fine[fine["method"].map(model_of) == name]
         st, ex = (most_accurate(own, err, suffix) for suffix in (" static", " explicit"))
@@ -518,7 +518,7 @@ def sweep_findings(
     meshes = sorted(meshes, key=lambda m: m != finest)  # stable: finest, then by size
     lines, rates = [], {}
     for name in dict.fromkeys(c["model"] for c, o in zip(cases, own, strict=True) if o):
-        defaults = models.get(name).plugin.settings
+        defaults = models.get(name).settings
         swept = [i for i, c in enumerate(cases) if c["model"] == name and own[i] and ok.iloc[i]]
         for key in dict.fromkeys(k for i in swept for k in own[i]):
             for mesh in meshes:

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from springfem.errors import InputError, SolverError
+from springfem.model_api import declared
 from springfem.result import Result
 from springfem.scene import Scene
 
@@ -113,7 +114,7 @@ def method_name(model: str, solution: str, setting: dict | None = None) -> str:
 def sweep(model: str, q: Settings) -> tuple[dict, ...]:
     """A plug-in's sweep (its optional ``sweep`` attribute; ``()``: none), the first
     ``q.sweep`` entries."""
-    got = tuple(dict(s) for s in getattr(models.get(model).plugin, "sweep", None) or ())
+    got = tuple(dict(s) for s in getattr(models.get(model), "sweep", None) or ())
     return got if q.sweep is None else got[: q.sweep]
 
 
@@ -121,10 +122,9 @@ def with_settings(m: models.Model, own: dict | None) -> models.Model:
     """The plug-in model ``m`` with its own settings changed (``own`` empty: ``m``)."""
     if not own:
         return m
-    if not hasattr(m.plugin, "with_settings"):
+    if not hasattr(m, "with_settings"):
         raise InputError(f"model {m.name} takes no settings of its own (no with_settings)")
-    plugin = m.plugin.with_settings(**own)
-    return replace(m, label=plugin.label, plugin=plugin)
+    return m.with_settings(**own)
 
 
 def explicit_fem_refusal(scene: Scene) -> str | None:
@@ -180,7 +180,8 @@ def point_case(s: StudyScene, model: str, solution: str, factor: int, setting: d
 
 def _trajectory(scene: Scene, m: models.Model, u: np.ndarray, facts: dict) -> Solution:
     """A :class:`Solution` of a run to rest: its probes and solver facts."""
-    res = Result(scene=scene.name, model=m.kind, element=m.name, law=scene.material.law,
+    kind = declared(m, "result_model", default="plugin")
+    res = Result(scene=scene.name, model=kind, element=m.name, law=scene.material.law,
                  counts={"nodes": scene.mesh.n_points, "tets": scene.mesh.n_tets},
                  probes=scene.probe_displacements(u), volume={}, reactions={},
                  wall_time=float("nan"), converged=True,
@@ -196,11 +197,12 @@ def solver(solution: str, setting: dict):
     from springfem.mechanics import explicit_static, implicit, stable_time_step
 
     def static(m: models.Model, scene: Scene) -> Solution:
-        if m.kind in ("fem", "plugin"):
+        opts = declared(m, "spring_options", scene)
+        if opts is None:  # not a spring model: its own static solve
             return with_settings(m, setting.get("model")).solve(scene)
         from springmodel.model import solve_spring
 
-        opts = replace(m.spring_options(scene), solver="static", tol=setting["tol"])
+        opts = replace(opts, solver="static", tol=setting["tol"])
         sol = solve_spring(scene, opts, parallel=None)
         return Solution(sol.result, sol.u)
 

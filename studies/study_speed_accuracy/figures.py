@@ -64,7 +64,7 @@ def _sweep_panel(ax, good: pd.DataFrame, colour: dict) -> bool:
     for j, ((model, factor), grp) in enumerate(
         swept.groupby([swept["method"].map(model_of), "factor"])
     ):
-        defaults = {k: str(v) for k, v in models.get(model).plugin.settings.items()}
+        defaults = {k: str(v) for k, v in models.get(model).settings.items()}
         own = grp["setting"].map(_settings)
         keys = list(dict.fromkeys(k for o in own for k in o))
         alpha = 1.0 - 0.25 * (j % 3)

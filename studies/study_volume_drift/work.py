@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from springfem.errors import SolverError
+from springfem.model_api import declared
 from springfem.result import Result, volume_summary
 from springfem.scene import Scene
 from springmodel.options import LMSOptions
@@ -56,7 +57,7 @@ def drift_measures(scene: Scene, x: np.ndarray) -> dict[str, float]:
 
 def newton(model: models.Model, scene: Scene) -> Solution:
     """The spring variants by Newton at full load (no load stepping), FEM as registered."""
-    if model.kind != "spring":
+    if declared(model, "spring_options", scene) is None:
         return model.solve(scene)
     from springfem.mechanics import static
 
@@ -79,7 +80,7 @@ def static_case(case: dict[str, Any]) -> dict[str, Any]:
         return {"status": got.status, "message": got.message[:200]}
     res = got.solution.result
     out = {**drift_measures(scene, scene.mesh.points + got.u), "status": "ok"}
-    if got.model.kind == "fem":
+    if declared(got.model, "reference", default=False):
         out["law"] = res.law
     if "volume_p2" in res.info:
         out["dV (P2 volume)"] = float(res.info["volume_p2"]) / float(scene.mesh.volumes().sum()) - 1

@@ -20,9 +20,9 @@ from springfem.errors import InputError, SolverError
 from springfem.materials.tissue import tissue_tangent
 from springfem.scene import scene_from_dict
 from studies import compare_output
+from studies import models as Model  # the registry: its solve_model is run's solve
 from studies.cli import main
 from studies.compare import compare_scene
-from studies.models import Model
 from studies.scenes import bundled_table
 
 DIVISIONS = (6, 1, 1)  # 36 tets: every model solves in about a second
@@ -136,7 +136,7 @@ def test_holzapfel_ogden_with_kappa_keeps_the_scenes_penalty():
 def test_a_spring_stop_is_a_partial_row_not_ranked(monkeypatch):
     """A spring model stopping at load factor 0.4 is reported partial at that load, with
     no error against the reference; the FEM models are still compared."""
-    real = Model.solve
+    real = Model.solve_model
 
     def stopping(self, scene, verbose=False):
         if self.name == "spring":
@@ -144,7 +144,7 @@ def test_a_spring_stop_is_a_partial_row_not_ranked(monkeypatch):
             raise SolverError("stopped at load factor 0.4 of 1", state=u, load_factor=0.4)
         return real(self, scene, verbose)
 
-    monkeypatch.setattr(Model, "solve", stopping)
+    monkeypatch.setattr(Model, "solve_model", stopping)
     cmp = compare_scene(scene_from_dict(beam(SMALL)))
     t = cmp.table.set_index("model")
     assert t.at["spring", "status"] == "partial" and t.at["spring", "load factor"] == 0.4

@@ -109,7 +109,7 @@ def test_solve_line_names_the_spring_model_once(tmp_path, capsys):
 def fake_models(monkeypatch):
     """``Model.solve`` with chosen failures: every model solves to a known field."""
     from springfem.result import Result
-    from studies.models import Model
+    from studies import models as Model  # the registry: its solve_model is run's solve
 
     failing: set[str] = set()
 
@@ -122,7 +122,7 @@ def fake_models(monkeypatch):
                    0.0, True, 1)  # fmt: skip
         return Solution(r, u)
 
-    monkeypatch.setattr(Model, "solve", solve)
+    monkeypatch.setattr(Model, "solve_model", solve)
     return failing
 
 

@@ -150,7 +150,7 @@ def test_a_model_registered_in_python_joins_compare(tmp_path):
                                  default=False)  # fmt: skip
     model_api.register_model(mine)
     try:
-        assert models.get("PY-P1").kind == "plugin"
+        assert models.get("PY-P1") is mine and mine in models.sync_plugins()
         assert "py-p1" not in models.plugins()  # not a default model
         scene = scene_from_dict(tomllib.loads(SCENE))
         cmp = compare_scene(scene, models=["P1", "P2", "py-p1"])
@@ -160,13 +160,12 @@ def test_a_model_registered_in_python_joins_compare(tmp_path):
         assert run.result.status.startswith("end of run at t = ")
     finally:
         model_api._REGISTERED.pop("py-p1")
-        models.REGISTRY.pop("py-p1")
 
 
 def test_bad_plugins_are_one_line_errors():
     with pytest.raises(InputError, match="lacks .*solve"):
         model_api.register_model(object)
-    corot = models.get("corotational").plugin
+    corot = models.get("corotational")
     clone = model_api.SystemModel("Corotational", "a second one", lambda scene: None)
     with pytest.raises(InputError, match="registered twice"):
         model_api.register_model(clone)

@@ -48,8 +48,8 @@ def test_each_sweep_setting_is_its_own_case_and_method():
         {"model": {"substeps": 80, "iterations": 2}},
     ]
     m = sa.with_settings(models.get("xpbd"), {"substeps": 10, "iterations": 4})
-    assert m.plugin.settings["substeps"] == 10 and "10 substeps x 4" in m.label
-    assert models.get("xpbd").plugin.settings["substeps"] == 40  # the registry's is unchanged
+    assert m.settings["substeps"] == 10 and "10 substeps x 4" in m.label
+    assert models.get("xpbd").settings["substeps"] == 40  # the registry's is unchanged
 
 
 def test_a_model_without_a_sweep_has_one_static_point_per_level():
@@ -58,7 +58,7 @@ def test_a_model_without_a_sweep_has_one_static_point_per_level():
     pts = [c for c in sa.points(BLOCK, BLOCK.build(), [1, 2], sa.Settings.full())
            if c["model"] == "mass-spring" and c["solution"] == "static"]  # fmt: skip
     assert [(c["factor"], c["setting"]) for c in pts] == [(1, {}), (2, {})]
-    assert not hasattr(models.get("mass-spring").plugin, "sweep")
+    assert not hasattr(models.get("mass-spring"), "sweep")
     with pytest.raises(InputError, match="no settings of its own"):
         sa.with_settings(models.get("mass-spring"), {"damping": 1.0})
 

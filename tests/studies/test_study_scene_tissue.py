@@ -1,6 +1,6 @@
 """The volume-drift study on an incompressible tissue scene (the Land beam, Guccione,
 ``formulation = "mixed"``): P1 cannot be Taylor–Hood, so the registry's P1 solves the
-displacement formulation with the spring model's penalty (``studies.fem_laws.tissue_scene``)
+displacement formulation with the spring model's penalty (``reference_fem.fitting.tissue_scene``)
 instead of stopping with "needs order 2".
 
 Independent reference: the mixed P2/P1 solve enforces ``int q (J - 1) dX = 0`` for every P1

@@ -157,16 +157,16 @@ def test_table_rows_columns_and_resume(tmp_path):
 
 
 def test_failures_are_rows_not_crashes(tmp_path, monkeypatch):
-    from studies.models import Model
+    from studies import models as Model  # the registry: its solve_model is run's solve
 
-    real = Model.solve
+    real = Model.solve_model
 
     def flaky(self, scene, verbose=False):
         if self.name == "P2" and scene.material.nu > 0.4:
             raise SolverError("P2 diverged (test)")
         return real(self, scene, verbose)
 
-    monkeypatch.setattr(Model, "solve", flaky)
+    monkeypatch.setattr(Model, "solve_model", flaky)
     run = run_sweep(parse_sweep(tiny()), tmp_path, progress=False, figures=False)
     t = run.table
     bad = t[t["material.nu"] == 0.45]

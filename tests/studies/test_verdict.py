@@ -104,16 +104,16 @@ def test_a_reference_stopped_by_the_budget_is_replaced_with_a_note(scene, tmp_pa
     """When the reference's solve is stopped (the budget's cap), the next finest FEM that
     finishes stands in, and a note names the substitution."""
     from springfem.mechanics.limits import SolveStopped
-    from studies.models import Model
+    from studies import models as Model  # the registry: its solve_model is run's solve
 
-    real = Model.solve
+    real = Model.solve_model
 
     def capped(self, s, verbose=False):
         if self.name == "P2":
             raise SolveStopped("stopped after 0.1 s")
         return real(self, s, verbose)
 
-    monkeypatch.setattr(Model, "solve", capped)
+    monkeypatch.setattr(Model, "solve_model", capped)
     argv = ["verdict", str(scene), "--json", "--out", str(tmp_path / "b"),
             "--models", "spring-exact,P1,P2", "--budget", "600"]  # fmt: skip
     assert main(argv) == 0

@@ -197,16 +197,16 @@ def test_a_failed_extra_locking_free_model_is_a_row_not_a_failed_compare(tmp_pat
     row says FAILED, a note names it); a failure of a model asked for is still exit 3."""
     from springfem.errors import SolverError
     from studies import compare_output
-    from studies.models import Model
+    from studies import models as Model  # the registry: its solve_model is run's solve
 
-    real = Model.solve
+    real = Model.solve_model
 
     def failing(self, scene, verbose=False):
         if self.name == "fem-P1-nodal-volume":
             raise SolverError("singular saddle-point system (made up by the test)")
         return real(self, scene, verbose)
 
-    monkeypatch.setattr(Model, "solve", failing)
+    monkeypatch.setattr(Model, "solve_model", failing)
     monkeypatch.setattr(compare_output, "render_comparison", lambda cmp, path: path)
     scene = tmp_path / "box.toml"
     scene.write_text(

@@ -1,4 +1,5 @@
-"""The laws and scenes the FEM models of :mod:`studies.models` solve on a scene.
+"""The law and ``[fem]`` formulation each FEM model (:mod:`reference_fem.plugin`) solves
+on a scene.
 
 A tissue scene's P2 model keeps the scene's ``[fem]`` options (its formulation); P1, which
 cannot be Taylor–Hood, is the displacement formulation with the penalty
@@ -17,9 +18,10 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from reference_fem.options import FemOptions
 from springfem.materials.laws import TISSUE_LAWS, LawNames
 from springfem.scene import Scene
+
+from .options import FemOptions
 
 
 def is_tissue(scene: Scene) -> bool:
@@ -166,7 +168,7 @@ def formulation_problem(scene: Scene, formulation: str, model_law: str) -> str |
     >>> formulation_problem(load_scene("cantilever"), "mini", "scene")
     'formulation mini needs a hyperelastic law (neo-hookean, guccione, holzapfel-ogden), not linear'
     """
-    law = scene.material.law
+    law: str = scene.material.law
     if model_law == "neo-hookean":
         law = "neo-hookean"
     elif model_law == "small-strain" and law not in TISSUE_LAWS:
@@ -202,7 +204,7 @@ def tissue_scene(scene: Scene, order: int | None) -> Scene:
     fem = FemOptions.of(scene)
     if order == 2:
         form = fitting_formulation(fem.formulation, 2, scene.material.law)
-        return scene.with_options(fem=replace(fem, order=2, formulation=form))
+        return scene.with_options(fem=replace(fem, order=2, formulation=form))  # type: ignore[arg-type]
     mat = scene.material
     params = {**mat.parameters, "kappa": p1_penalty(scene)}
     p1 = replace(scene, material=replace(mat, parameters=params, incompressible=False))
