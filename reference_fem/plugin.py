@@ -79,8 +79,9 @@ class FemModel:
     locking_free
         A formulation that does not lock near incompressibility (weighed too on a nearly
         incompressible scene).
-    small_strain_limit
-        Whether it is linear P1 at small strain (the displacement P1 models).
+    claims
+        What :func:`springfem.testing.check_model` holds it to: ``P1`` is linear P1
+        (``small_strain = "exact"``), ``P1-NH`` its limit under a tiny load (``limit``).
     """
 
     default = False
@@ -100,7 +101,9 @@ class FemModel:
         self.settings: Mapping[str, Any] = {"order": order, "law": law, **self.fem}
         form = self.fem.get("formulation", "displacement")
         self.locking_free = form != "displacement"
-        self.small_strain_limit = order == 1 and form == "displacement"
+        p1 = order == 1 and form == "displacement"
+        limit = {"small-strain": "exact", "neo-hookean": "limit"}.get(law) if p1 else None
+        self.claims: Mapping[str, str] = {"small_strain": limit} if limit else {}
 
     def __repr__(self) -> str:
         return f"FemModel({self.name!r})"
@@ -165,7 +168,7 @@ class FemModel:
         return ("fem", repr(fem), law or fem_scene.material.law, repr(fem_scene.material))
 
     def law_versus(self, scene: Scene, reference_law: str) -> str:
-        """What it solves against the reference's law (:func:`studies.model_set.law_versus`)."""
+        """What it solves against the reference's law (:func:`studies.models.law_versus`)."""
         law = self.solves_law(scene)
         if law == reference_law:
             return "same law"

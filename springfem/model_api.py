@@ -63,14 +63,16 @@ GROUP = "springfem.models"
 @dataclass
 class ModelSolution:
     """What every model's solve returns: the result record, the nodal displacement
-    ``(n, 3)`` at the mesh vertices, per-element data for the VTU file and the plausibility
+    ``(n, 3)`` at the mesh vertices, per-element data for the VTU file, the plausibility
     warnings of the state (:func:`springfem.api.solve` fills them:
-    :func:`springfem.plausibility.check_solution`, the lines the CLI prints)."""
+    :func:`springfem.plausibility.check_solution`, the lines the CLI prints) and the
+    solver's own record, when a model keeps it (iterations, residual history ...)."""
 
     result: Result
     u: np.ndarray
     cell_data: dict[str, np.ndarray] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+    info: Any = None
 
 
 @runtime_checkable
@@ -128,7 +130,9 @@ class ModelPlugin(Protocol):
       reference;
     - ``locking_free`` (``False``): accurate near incompressibility, so weighed too on a
       nearly incompressible scene;
-    - ``small_strain_limit`` (``False``): it is linear P1 at small strain;
+    - ``claims`` (``{}``): what :func:`springfem.testing.check_model` holds it to
+      (``small_strain``: ``exact``, its tangent at rest is linear P1's, or ``limit``, its
+      solve under a tiny load is; ``rotation``; ``tangent``);
     - ``law`` (``None``): the law it solves in its own words (``None``: the scene's);
     - ``locks(scene)`` (``None``): why it locks on the scene (ruled out as a reference);
     - ``solve_key(scene)`` (its name): models with equal keys are the same solve;

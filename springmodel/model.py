@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import sys
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +30,7 @@ from springfem.cardiac import cavity_summary, is_ventricle
 from springfem.errors import InputError, SolverError
 from springfem.loads import external_forces, has_follower_loads, lumped_masses, reactions
 from springfem.mechanics.limits import SolveStopped
+from springfem.model_api import ModelSolution
 from springfem.result import Result, frame_cell_data, volume_summary
 from springfem.scene import Scene, model_precision
 
@@ -230,28 +231,6 @@ class SpringModel:
         return out
 
 
-@dataclass
-class SpringSolution:
-    """Spring-model outcome: result record, nodal displacement, VTU cell data, raw info.
-
-    Attributes
-    ----------
-    result
-        The :class:`~springfem.result.Result` record.
-    u
-        Nodal displacements ``(n, 3)`` (m).
-    cell_data
-        Per-element arrays for the VTU output.
-    info
-        The solver's own outcome (iterations, residual history, times).
-    """
-
-    result: Result
-    u: np.ndarray
-    cell_data: dict[str, np.ndarray] = field(default_factory=dict)
-    info: object = None
-
-
 def variant_label(options: SpringOptions) -> str:
     """Short description of the enabled spring parts in the ``[spring]`` keys' own words,
     e.g. ``axial=linear,torsion=cosine,volume=true,calibration=analytic``.
@@ -310,7 +289,7 @@ def solve_spring(
     verbose: bool = False,
     parallel: bool | None = None,
     series_dir: str | Path | None = None,
-) -> SpringSolution:
+) -> ModelSolution:
     """Build the spring model of ``scene`` and run the solver its options ask for.
 
     A timed run (``steps`` or ``t_end``) of a scene with ``[output] interval`` writes its
@@ -332,8 +311,8 @@ def solve_spring(
 
     Returns
     -------
-    SpringSolution
-        Result, displacements ``(n, 3)`` and cell data.
+    ModelSolution
+        Result, displacements ``(n, 3)``, cell data and the solver's record (``info``).
 
     Raises
     ------
@@ -416,7 +395,7 @@ def solve_spring(
     if is_ventricle(scene.mesh):
         result.info["cavity"] = cavity_summary(scene.mesh, u)
     cells = {**model.cell_data(x), **frame_cell_data(scene, u)}
-    return SpringSolution(result=result, u=u, cell_data=cells, info=info)
+    return ModelSolution(result, u, cells, info=info)
 
 
 def with_options(scene: Scene, **changes) -> Scene:

@@ -21,8 +21,8 @@ Examples
 --------
 >>> [m.name for m in MODELS][:3]
 ['spring', 'spring-spec', 'spring-exact']
->>> MODELS[2].changes == EXACT, MODELS[2].order, MODELS[2].small_strain_limit
-(True, 1, True)
+>>> MODELS[2].changes == EXACT, MODELS[2].order, MODELS[2].claims
+(True, 1, {'small_strain': 'exact'})
 """
 
 from __future__ import annotations
@@ -57,6 +57,8 @@ STIFFENED = dict(ELEMENTS["stiffened"])
 #: it equals its law under any homogeneous deformation (docs/tissue.rst).
 TISSUE = dict(ELEMENTS["tissue"])
 _NODAL = {"volume_average": "nodal", "strain_average": "nodal"}
+#: The claim of the elements whose tangent at rest is linear P1's.
+P1_TANGENT = {"small_strain": "exact"}
 
 
 class SpringVariant:
@@ -86,8 +88,10 @@ class SpringVariant:
         material).
     locking_free
         Nodal strain and nodal volume (the stabilised elements).
-    small_strain_limit
-        Whether it claims linear P1's small-strain limit (the exact calibration).
+    claims
+        What :func:`springfem.testing.check_model` holds it to: ``small_strain = "exact"``
+        for the exact, stiffened and tissue elements (their tangent at rest is linear
+        P1's).
     """
 
     default = False
@@ -102,13 +106,15 @@ class SpringVariant:
         changes: Mapping[str, Any] | None = None,
         coupling: bool = False,
         element: bool = False,
+        claims: Mapping[str, str] | None = None,
     ):
         self.name, self.label = name, label
         self.changes = dict(changes or {})
         self.coupling, self.element = coupling, element
         self.settings: Mapping[str, Any] = dict(self.changes)
-        self.locking_free = self.changes.get("strain_average") == "nodal"
-        self.small_strain_limit = self.changes.get("calibration") == "exact"
+        nodal = ("strain_average", "volume_average")
+        self.locking_free = any(self.changes.get(k) == "nodal" for k in nodal)
+        self.claims: Mapping[str, str] = dict(claims or {})
 
     def __repr__(self) -> str:
         return f"SpringVariant({self.name!r})"
@@ -178,8 +184,7 @@ class SpringVariant:
         why = self.applies(scene)
         if why is not None:
             raise InputError(why)
-        sol = solve_spring(scene, self.spring_options(scene), verbose)
-        return ModelSolution(sol.result, sol.u, dict(sol.cell_data))
+        return solve_spring(scene, self.spring_options(scene), verbose)
 
     def system(self, scene: Scene):
         """The spring model as a :class:`~springfem.mechanics.MechanicalSystem`."""
@@ -195,38 +200,27 @@ class SpringVariant:
 MODELS: tuple[SpringVariant, ...] = (
     SpringVariant("spring", "spring model (the scene's [spring] options)"),
     SpringVariant("spring-spec", "the specification's spring element", element=True),
-    SpringVariant("spring-exact", "exact spring element", EXACT, coupling=True, element=True),
-    SpringVariant(
-        "spring-stiffened",
-        "stiffened exact spring element",
-        STIFFENED,
-        coupling=True,
-        element=True,
-    ),  # fmt: skip
-    SpringVariant(
-        "spring-tissue",
-        "tissue spring element (Green torsion, the law's stiffening)",
-        TISSUE,
-        coupling=True,
-        element=True,
-    ),  # fmt: skip
+    *(
+        SpringVariant(name, label, changes, coupling=True, element=True, claims=claims)
+        for name, label, changes, claims in (
+            ("spring-exact", "exact spring element", EXACT, P1_TANGENT),
+            ("spring-stiffened", "stiffened exact spring element", STIFFENED, P1_TANGENT),
+            ("spring-tissue", "tissue spring element (Green torsion, the law's stiffening)",
+             TISSUE, P1_TANGENT),
+        )
+    ),
     SpringVariant("spring-energy", "spring model, energy torsion", {"torsion": "energy"}),
     SpringVariant("spring-cosine", "spring model, cosine torsion", {"torsion": "cosine"}),
-    SpringVariant(
-        "spring-stabilised",
-        "exact spring element, stabilised nodal strain + nodal volume",
-        {**EXACT, **_NODAL},
-        coupling=True,
-        element=True,
-    ),  # fmt: skip
-    SpringVariant(
-        "spring-tissue-stabilised",
-        "tissue spring element, stabilised nodal strain + nodal volume",
-        {**TISSUE, **_NODAL},
-        coupling=True,
-        element=True,
-    ),  # fmt: skip
-)
+    *(
+        SpringVariant(name, label, {**changes, **_NODAL}, coupling=True, element=True)
+        for name, label, changes in (
+            ("spring-stabilised", "exact spring element, stabilised nodal strain + nodal "
+             "volume", EXACT),
+            ("spring-tissue-stabilised", "tissue spring element, stabilised nodal strain + "
+             "nodal volume", TISSUE),
+        )
+    ),
+)  # fmt: skip
 #: The scene's own spring model.
 SPRING = MODELS[0]
 

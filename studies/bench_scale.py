@@ -127,7 +127,7 @@ class ScaleSettings:
 def scale_models(scene) -> tuple[list[str], dict[str, str]]:
     """The models the verdict weighs on ``scene`` and its reference
     (:func:`studies.verdict.candidate_models`), each solve once: a model that is the same
-    solve as another (:func:`studies.model_set.same_solves`) is left out, the named one
+    solve as another (:func:`studies.models.same_solves`) is left out, the named one
     kept; and the models left out, each with the one it is the same solve as.
 
     Parameters
@@ -139,16 +139,16 @@ def scale_models(scene) -> tuple[list[str], dict[str, str]]:
     -------
     tuple of (list of str, dict)
     """
-    from . import model_set
+    from . import models
     from .verdict import candidate_models
 
     names = candidate_models(scene)
-    mixed = model_set.mixed_reference(scene)
+    mixed = models.mixed_reference(scene)
     if mixed and mixed not in names:
         names.append(mixed)
     # the scene's own spring model last, so that a named variant of the same solve is kept
     names = [n for n in names if n != "spring"] + (["spring"] if "spring" in names else [])
-    alias = model_set.same_solves(scene, names)
+    alias = models.same_solves(scene, names)
     return [n for n in names if n not in alias], alias
 
 
@@ -257,11 +257,11 @@ def bench_scale(settings: ScaleSettings, log: Callable[[str], None] = print) -> 
     warmup = organ_scene_file(settings.meshes, WARMUP_TETS, settings.max_memory)
     names = list(settings.models or [])
     notes = settings.notes
-    from . import model_set
+    from . import models
 
-    small = load_scene(warmup) if not names or model_set.MIXED in names else None
+    small = load_scene(warmup) if not names or models.MIXED in names else None
     if small is not None and settings.reference is None:
-        settings.reference = model_set.mixed_reference(small)
+        settings.reference = models.mixed_reference(small)
     if not names:
         names, aliases = scale_models(small)
         settings.aliases.update(aliases)

@@ -10,7 +10,7 @@ The models are those of :mod:`studies.models` (``spring``, ``P1``, ``P2``, and `
 ``P2-NH`` when the scene's law is neo-Hookean or its strains are large,
 :data:`LARGE_STRAIN`; never for a tissue law; on a nearly incompressible scene the
 locking-free methods too, with P2/P1 mixed as the reference of a hyperelastic law:
-:mod:`studies.model_set`); any registered model may be asked for.
+:mod:`studies.models`); any registered model may be asked for.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from springfem.model_api import ModelSolution as Solution
 from springfem.scene import Scene
 
 from . import metrics
-from .model_set import (
+from .models import (
     LARGE_STRAIN,
     formulation_notes,
     locking_free_models,
@@ -168,7 +168,7 @@ def compare_scene(
     locking_free
         On a nearly incompressible scene, add the locking-free models to the default ones
         and make P2/P1 mixed the reference of a hyperelastic law
-        (:mod:`studies.model_set`); ``False`` keeps the spring, P1 and P2 models alone.
+        (:mod:`studies.models`); ``False`` keeps the spring, P1 and P2 models alone.
 
     Returns
     -------

@@ -37,7 +37,6 @@ from typing import Any
 from springfem.errors import InputError, SceneError
 from springfem.model_api import declared
 
-from . import model_set
 from . import models as registry
 from .overrides import apply_overrides, parse_assignment, read_scene_table, scene_with_overrides
 from .scenes import scene_path as bundled
@@ -49,7 +48,7 @@ valid at any strain, before linear)."""
 
 def default_locking_free(scenes: Sequence) -> list[str]:
     """The locking-free models a sweep without ``models`` adds: those of
-    :func:`studies.model_set.locking_free_models` when a case is nearly incompressible,
+    :func:`studies.models.locking_free_models` when a case is nearly incompressible,
     kept if they apply to every case (P2/P1 mixed, added so, becomes the reference).
 
     Parameters
@@ -61,12 +60,12 @@ def default_locking_free(scenes: Sequence) -> list[str]:
     -------
     list of str
     """
-    from .model_set import locking_free_models
+    from .models import locking_free_models
 
     found = [n for s in scenes for n in locking_free_models(s)]
     return [
         n
-        for n in model_set.LOCKING_FREE
+        for n in registry.LOCKING_FREE
         if n in found and all(registry.get(n).applies(s) is None for s in scenes)
     ]
 

@@ -13,13 +13,13 @@ its best reference and measures for each
   of one explicit step (median of interleaved rounds) and the stable step
   ``2 / omega_max``, hence the cost of one simulated second, ``cost per step / stable step``;
 - what it solves against the reference's law (``law vs reference``:
-  :func:`studies.model_set.law_versus`): the same law, or a small-strain law or calibration
+  :func:`studies.models.law_versus`): the same law, or a small-strain law or calibration
   of it, whose speed is not like for like.
 
 The reference is the finest FEM of the scene's law: P2, neo-Hookean P2 at large strain, the
 scene's own formulation for tissue; on a nearly incompressible scene of a hyperelastic law
 P2/P1 mixed (``fem-P2-mixed``), and the locking-free methods are weighed too
-(:mod:`studies.model_set`). It then names the cheapest model within the tolerance, for
+(:mod:`studies.models`). It then names the cheapest model within the tolerance, for
 static solves and for explicit dynamics separately, in at most two short sentences
 (:func:`verdict_sentence`).
 
@@ -68,10 +68,10 @@ from springfem.mechanics.memory import MemoryLimitExceeded, memory_limit
 from springfem.mesh.thickness import thin_wall_note
 from springfem.scene import Scene
 
-from . import model_set, models
+from . import models
 from .compare import max_principal_strain
 from .cost_model import SolveCosts, gigabytes, read_laws
-from .model_set import reference_model
+from .models import reference_model
 from .peak_memory import PeakMemory
 from .verdict_plan import (
     SOLVE_SHARE,
@@ -94,9 +94,9 @@ SOLVES = 3
 
 
 def candidate_models(scene: Scene) -> list[str]:
-    """The primary models (:func:`studies.model_set.candidates`: :data:`~studies.models.PRIMARY`
+    """The primary models (:func:`studies.models.candidates`: :data:`~studies.models.PRIMARY`
     and the default plug-ins) that apply to ``scene``, and on a nearly incompressible scene
-    the locking-free ones (:func:`studies.model_set.locking_free_models`).
+    the locking-free ones (:func:`studies.models.locking_free_models`).
 
     Parameters
     ----------
@@ -107,9 +107,9 @@ def candidate_models(scene: Scene) -> list[str]:
     -------
     list of str
     """
-    out = [m.name for m in map(models.get, model_set.candidates())
+    out = [m.name for m in map(models.get, models.candidates())
            if m.name != "fem" and m.applies(scene) is None]  # fmt: skip
-    return out + [n for n in model_set.locking_free_models(scene) if n not in out]
+    return out + [n for n in models.locking_free_models(scene) if n not in out]
 
 
 def verdict(
@@ -215,20 +215,20 @@ def verdict(
         if on_update is not None:
             on_update(state.verdict())
 
-    mixed = model_set.mixed_reference(scene)
+    mixed = registry.mixed_reference(scene)
     if mixed is None:  # the reference depends on the strain of the small-strain P1 solution
         p1 = run("P1")
         strain = max_principal_strain(scene, p1.u) if p1.ok else float("nan")
     ref = reference_model(scene, strain if mixed is None else 0.0)
     if ref not in names:
         names.append(ref)
-    state.alias = model_set.same_solves(scene, names)
+    state.alias = registry.same_solves(scene, names)
     for n, first in state.alias.items():
         notes.append(f"{n} is the same solve as {first} on this scene: solved once")
-    locking_free = [n for n in model_set.locking_free_models(scene) if n in names]
+    locking_free = [n for n in registry.locking_free_models(scene) if n in names]
     if locking_free:
-        notes.append(model_set.locking_note(scene, locking_free, ref))
-    notes += model_set.formulation_notes(scene, names)
+        notes.append(registry.locking_note(scene, locking_free, ref))
+    notes += registry.formulation_notes(scene, names)
     ruled = {n: why for n in names if (why := ruled_out(scene, n)) is not None}
     distinct = [n for n in names if n not in state.alias]
     memory = _memory()

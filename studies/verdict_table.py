@@ -19,7 +19,7 @@ from springfem.model_api import declared
 from springfem.plausibility import check_solution
 from springfem.scene import Scene
 
-from . import metrics, model_set
+from . import metrics, models
 from .verdict_rank import pct as _pct
 from .verdict_rank import rank_by_error, ranking_line, same_mesh_line
 
@@ -124,7 +124,7 @@ class VerdictState:
             "step cost (s)": step,
             "stable step (s)": dt,
             "cost per simulated s": step / dt if np.isfinite(step) and dt > 0 else np.nan,
-            "law vs reference": model_set.law_versus(self.scene, n, ref_law) if ref else "",
+            "law vs reference": models.law_versus(self.scene, n, ref_law) if ref else "",
             "within tolerance": bool(
                 self.reference_valid and got.ok and np.isfinite(err) and err <= self.tolerance
             ),

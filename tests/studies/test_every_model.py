@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import pytest
 
+from springfem.model_api import plugin_models
 from springfem.scene import scene_from_dict
 from springfem.testing import check_model
 from studies import models
@@ -20,15 +21,11 @@ MATERIALS = {
                  "kappa": 5.0e4, "density": 1000.0},
     "linear": {"law": "linear", "E": 1.0e4, "nu": 0.3, "density": 1000.0},
 }  # fmt: skip
-#: What each model claims beyond the defaults (springfem.testing.check_model): ``exact``,
-#: its tangent at rest is linear P1's; ``limit``, so is its solve under a tiny load;
-#: ``approximate``, its stiffness is a Newton matrix, not the forces' derivative.
+#: What the plug-ins claim (springfem.testing.check_model): ``exact``, the tangent at rest is
+#: linear P1's; ``approximate``, the stiffness is a Newton matrix, not the forces' derivative.
+#: The spring and FEM models declare theirs (``claims``: the exact elements and P1 ``exact``,
+#: P1-NH ``limit``, its solve under a tiny load through reference_fem's Newton).
 CLAIMS = {
-    "P1": {"small_strain": "exact"},
-    "P1-NH": {"small_strain": "limit"},  # through reference_fem's Newton solve
-    "spring-exact": {"small_strain": "exact"},
-    "spring-stiffened": {"small_strain": "exact"},
-    "spring-tissue": {"small_strain": "exact"},
     "corotational": {"small_strain": "exact"},
     "corotational-warped": {"small_strain": "exact", "tangent": "approximate"},
 }
@@ -48,9 +45,8 @@ SCENES = {law: _scene(law) for law in MATERIALS}
 
 def _cases() -> list:
     """(model, law) pairs: neo-Hookean and Guccione where the model takes them, else linear."""
-    models.sync_plugins()
     out = []
-    for name, model in models.REGISTRY.items():
+    for name, model in plugin_models().items():
         laws = [law for law in ("neo-hookean", "guccione") if model.applies(SCENES[law]) is None]
         for law in laws or ["linear"]:
             out.append(pytest.param(name, law, id=f"{name}-{law}"))
@@ -62,5 +58,6 @@ def test_every_model_conforms(name, law):
     report = check_model(models.get(name), SCENES[law], **CLAIMS.get(name, {}))
     if all(c.status == "skipped" for c in report.checks):
         pytest.skip(f"{name}: {report.checks[0].message}")
-    claimed = CLAIMS.get(name, {}).get("small_strain")
+    claims = {**(getattr(models.get(name), "claims", None) or {}), **CLAIMS.get(name, {})}
+    claimed = claims.get("small_strain")
     assert (report.status("small strain") == "passed") == bool(claimed), str(report)

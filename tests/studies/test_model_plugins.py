@@ -27,7 +27,7 @@ import pytest
 from springfem import model_api
 from springfem.errors import InputError
 from springfem.scene import scene_from_dict
-from studies import model_set, models
+from studies import models
 from studies.compare import compare_scene
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -214,4 +214,4 @@ def test_the_studies_weigh_the_default_plugins_where_they_apply():
     assert "corotational" in dynamics.spring_models(sc.build(), settings)
     beam = dynamics.bundled_scenes(settings)[0].build()
     assert "corotational" not in dynamics.spring_models(beam, settings)
-    assert "corotational" in model_set.candidates()
+    assert "corotational" in models.candidates()

@@ -23,7 +23,7 @@ from springfem.api import get_model
 from springfem.errors import InputError
 from springfem.model_api import ModelSolution, plugin_models
 from springfem.scene import scene_from_dict
-from studies import model_set, models
+from studies import models
 from studies.cli import main
 from studies.compare import compare_scene, max_principal_strain
 
@@ -42,7 +42,7 @@ def test_every_model_the_cli_lists_is_in_the_one_registry(capsys):
     listed = re.search(r"valid models: (.*)$", err.strip()).group(1).split(", ")
     registry = plugin_models()
     assert set(listed) == set(registry)
-    names = set(models.PRIMARY) | set(model_set.LOCKING_FREE) | {"fem", "spring-tissue"}
+    names = set(models.PRIMARY) | set(models.LOCKING_FREE) | {"fem", "spring-tissue"}
     assert names <= set(listed)
     for name in names:  # each from its own package: the spring model's, the FEM's
         package = type(registry[name]).__module__.split(".")[0]
@@ -92,7 +92,7 @@ def test_accuracy_takes_the_verdicts_locking_free_reference(tmp_path):
     scene = load_scene(organ_scene(tmp_path, 700))  # neo-Hookean, nu = 0.49
     cmp = compare_scene(scene, locking_free=False)  # as the accuracy study runs it
     strain = max_principal_strain(scene, cmp.solutions["P1"].u)
-    assert cmp.reference == model_set.reference_model(scene, strain) == "fem-P2-mixed"
+    assert cmp.reference == models.reference_model(scene, strain) == "fem-P2-mixed"
     assert cmp.same_mesh_p1 == "P1-NH"
     # P1-NH locks: its discretisation error against the mixed reference is far from zero
     assert cmp.errors("P1-NH")["rel_l2"] > 0.05

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from studies.model_set import same_solves
+from studies.models import same_solves
 from studies.overrides import load_scene_with
 from studies.verdict import verdict
 
@@ -56,7 +56,7 @@ def test_plug_in_models_are_never_taken_for_one_solve(judged):
     assert not [n for n in judged.notes if "same solve" in n]
 
 
-@pytest.mark.parametrize("name", ["studies.verdict", "studies.verdict_rank", "studies.model_set"])
+@pytest.mark.parametrize("name", ["studies.verdict", "studies.verdict_rank", "studies.models"])
 def test_doctests(name):
     import doctest
     import importlib
