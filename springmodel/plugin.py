@@ -44,7 +44,6 @@ from .options import (
     LMSOptions,
     SpringOptions,
 )
-from .presets import LAW_TERMS
 
 #: The exact spring element: small-strain P1 on any tet (with coupling when anisotropic).
 EXACT = dict(ELEMENTS["exact"])
@@ -151,13 +150,13 @@ class SpringVariant:
         """Why this model cannot solve ``scene`` (``None``: it can): the law's stiffening
         needs a tissue law, and an exponential stiffening a modulus the law gives."""
         law = scene.material.law
-        if self.changes.get("stiffening") == "law" and law not in LAW_TERMS:
+        if self.changes.get("stiffening") == "law" and law not in LAWS:
             return f'model {self.name}: stiffening = "law" needs a tissue law'
         try:
             opts = self.spring_options(scene)
         except (ValueError, TypeError) as exc:
             return f"model {self.name}: {exc}"
-        if opts.stiffening == "law" and law not in LAW_TERMS:
+        if opts.stiffening == "law" and law not in LAWS:
             return f'model {self.name}: stiffening = "law" needs a tissue law'
         if opts.stiffening != "off" and opts.stiffening_modulus is None:
             own = LAWS[law].stiffening_modulus(scene.material.parameters) if law in LAWS else None
