@@ -474,14 +474,14 @@ def run(ctx: StudyContext, scenes: list[StudyScene], s: Settings) -> StudyOutput
                 "an axis on the six-tet box lattice), so no spring stiffness fits the scene's "
                 "material (docs/peers.rst)."
             )
-        cost = ", ".join(f"{r.model} {r['step (µs)']:.3g} µs ({r['cost / P1 step']:.2f}× P1) "
+        others = ", ".join(f"{r.model} {r['step (µs)']:.3g} µs ({r['cost / P1 step']:.2f}× P1) "
                          f"at dt {r['dt (s)']:.3g} s" for _, r in ok.iterrows()
                          if r.model != ref)  # fmt: skip
         spread = float(np.ptp(ok["dt (s)"]) / ok["dt (s)"].max())
         above = float(ok["dt (s)"].max() / ok["dt (s)"].min() - 1.0)
         findings.append(
             f"{scene}: one step of explicit {ref} costs {r0['step (µs)']:.3g} µs at dt "
-            f"{r0['dt (s)']:.3g} s; {cost} (median over the steps, interleaved in one process, "
+            f"{r0['dt (s)']:.3g} s; {others} (median over the steps, interleaved in one process, "
             "warm; XPBD: one substep)."
             + (f" The stable steps agree within {spread:.2g} (relative): the spring elements' "
                "small-strain tangent is P1's, so none buys a larger step." if spread < 0.01
