@@ -1,10 +1,5 @@
-"""Cases of the locking study: the methods, settings, the scenes at each Poisson ratio, and
-one timed solve per case.
-
-Every case is a :meth:`~studies.scenes.StudyScene.case` of a scene at one Poisson ratio
-(:func:`with_nu`: its table carries the material at that ratio) with ``method`` (a model of
-:data:`METHODS`), ``nu`` and ``factor`` (its refinement level,
-:mod:`studies.study_convergence.levels`).
+"""Cases of the locking study: the methods, settings, the scenes at each Poisson ratio
+(:func:`with_nu`), and one timed solve per case (``method``, ``nu``, ``factor``: its level).
 
 Examples
 --------
@@ -111,35 +106,21 @@ COSTLIER = "it cannot be the cheapest"
 class Settings:
     """Poisson ratios, meshes and the solve cap of the locking study.
 
-    Parameters
-    ----------
-    nus
-        The Poisson ratios (:data:`NUS` has two more).
-    cook, beam
-        The level-1 divisions of Cook's membrane and Land's beam (``None``: left out).
-    factors, beam_factors
-        Refinement factors of the three levels (Cook's mesh is not a box grid: powers of
-        two; the beam's box grid takes any integer: 1, 2, 3 reach Land's 30x3x3).
-    methods
-        Names of :data:`METHODS` to run.
-    max_time
-        Cap of one solve (s; the reference is capped only by the user's ``--max-time``).
-    timed
-        Time fairly (an untimed warm-up solve per method, the median of three under
-        :data:`REPEAT_BELOW` s); ``False``: one solve each.
-    prune
-        Skip a method's finer levels at a ν once a coarser one is within
-        :data:`TOLERANCE`, and a level predicted over 1.5 × ``max_time``. The quick preset
-        does not prune: its headline is every headline method's finest level, which must
-        not depend on the machine's speed.
-    skip_costlier
-        Skip a finer level that cannot be the cheapest of its kind of tets (linear:
-        :data:`LINEAR_TETS`, or quadratic): above all displacement P2 near
-        incompressibility, which needs hundreds of Newton iterations there (274 on the
-        quick beam's 486 tets at ν = 0.4999) where P2/P1 is more accurate and faster.
-    finest_nus
-        The ratios at which the methods run on the finest level (``None``: every one; the
-        reference runs there at every ratio).
+    ``nus`` (:data:`NUS` has two more); the level-1 divisions of Cook's membrane (``cook``)
+    and Land's beam (``beam``; ``None``: left out) and their refinement ``factors`` (Cook's
+    mesh is no box grid: powers of two) and ``beam_factors`` (1, 2, 3 reach Land's
+    30x3x3); the ``methods`` of :data:`METHODS`; ``max_time``, the cap of one solve (the
+    reference's is only the user's ``--max-time``); ``timed``: an untimed warm-up solve per
+    method and the median of three under :data:`REPEAT_BELOW` s (``False``: one solve).
+    ``prune`` skips a method's finer levels at a ν once a coarser one is within
+    :data:`TOLERANCE`, and a level predicted over 1.5 × ``max_time`` (the quick preset does
+    not: its headline, every headline method's finest level, must not depend on the
+    machine's speed). ``skip_costlier`` skips a finer level that cannot be the cheapest of
+    its kind of tets (:data:`LINEAR_TETS`, or quadratic): above all displacement P2 near
+    incompressibility, which needs hundreds of Newton iterations there (274 on the quick
+    beam's 486 tets at ν = 0.4999) where P2/P1 is more accurate and faster.
+    ``finest_nus``: the ratios at which the methods run on the finest level (``None``:
+    every one; the reference runs there at every ratio).
     """
 
     nus: tuple[float, ...] = (0.3, 0.49, 0.4999)
