@@ -189,7 +189,7 @@ def run(
     rho_inf: float | None = None,
     initial: str | np.ndarray | None = None,
     frames: int | Sequence[float] | None = None,
-    tol: float = 1e-10,
+    tol: float = 1e-8,
     max_iter: int = 25,
 ) -> DynamicResult:
     """Integrate a scene in time with the implicit reference (module docstring).
@@ -221,7 +221,8 @@ def run(
         How many full fields to keep, evenly spaced in time (first and last included), or
         the times to keep them at (each the first step at or after it).
     tol
-        Newton tolerance on the residual relative to the forces of the step.
+        Newton tolerance on the residual relative to the forces of the step (1e-8 moves
+        the organ scene's probes by 1e-8 of their motion against 1e-10, a quarter faster).
     max_iter
         Newton iterations per step at most.
 
