@@ -236,6 +236,21 @@ def run(
         Bad settings or a probe outside the mesh.
     SolverError
         A step's Newton does not converge (the message gives the time).
+
+    Examples
+    --------
+    A block under gravity switched on at ``t = 0``, watched at a point off the step grid:
+
+    >>> from springfem.scene import scene_from_dict
+    >>> block = scene_from_dict({
+    ...     "mesh": {"generator": "box", "size": [1, 1, 1], "divisions": [1, 1, 1]},
+    ...     "material": {"law": "neo-hookean", "E": 1e4, "nu": 0.3, "density": 1e3},
+    ...     "boundary": [{"region": "z_min", "fix": ["x", "y", "z"]}],
+    ...     "load": [{"type": "gravity", "value": [0, 0, -9.81]}],
+    ...     "probe": [{"name": "top", "point": [0.5, 0.5, 1.0]}]})
+    >>> r = run(block, t_end=0.05, dt=0.01, probes={"middle": [0.5, 0.5, 0.5]})
+    >>> r.steps, sorted(r.probes), bool(r.probes_at([0.025])["top"][0, 2] < 0)
+    (5, ['middle', 'top'], True)
     """
     opts = DynamicsOptions.of(scene)
     t_end = opts.t_end if t_end is None else float(t_end)
