@@ -177,9 +177,10 @@ class TimeLoads:
 
 def strain_energy(problem: FemProblem, x: np.ndarray) -> float:
     """The stored energy of state ``x``: ``int psi(F) dV`` (displacement formulations),
-    ``u.K.u / 2`` (linear law), or the mixed potential ``int W(F) - p (J - 1) - p^2 /
-    (2 kappa) dV`` (:mod:`reference_fem.mixed`), whose rate is ``f_int . v`` when the
-    constraint holds.
+    ``u.K.u / 2`` (linear law), a formulation's own potential (nodal volume and strain:
+    :meth:`~reference_fem.problem.FemProblem.energy` without the loads), or the mixed
+    potential ``int W(F) - p (J - 1) - p^2 / (2 kappa) dV`` (:mod:`reference_fem.mixed`),
+    whose rate is ``f_int . v`` when the constraint holds.
 
     Parameters
     ----------
@@ -195,6 +196,12 @@ def strain_energy(problem: FemProblem, x: np.ndarray) -> float:
     if not problem.nonlinear:
         return 0.5 * float(x @ (problem.stiffness @ x))
     nu = problem.space.n_dofs
+    if not problem.mixed and type(problem).energy is not FemProblem.energy:
+        # a formulation with its own energy (nodal volumes, nodal strain): its potential
+        # without the dead loads' work (None with follower loads: then the element part)
+        total = problem.energy(x, 1.0)
+        if total is not None:
+            return float(total) + float(problem.loads.dead @ x[:nu])
     U = np.asarray(x[:nu]).reshape(-1, 3)
     F = np.eye(3) + displacement_gradient(problem.space, U)
     psi = problem.law_at(1.0).energy(F, frames=problem.qframes)
