@@ -1,23 +1,9 @@
 """The FEM models of the model registry (:mod:`springfem.model_api`): each order, law and
-formulation of the reference, one name each.
-
-``fem``
-    the FEM the scene's ``[fem]`` section and law ask for (``springfem solve --model fem``);
-``P1``, ``P2``
-    FEM on the scene's mesh with the scene's small-strain law (``linear`` or
-    ``transverse-linear``; ``linear`` with ``E, nu`` for a neo-Hookean scene), or for a
-    finite-strain tissue law the scene's own law: ``P2`` with the scene's formulation,
-    ``P1`` in the displacement formulation with the scene's ``kappa`` or, for an
-    incompressible material, the spring model's penalty (:func:`~reference_fem.fitting.p1_penalty`);
-``P1-NH``, ``P2-NH``
-    neo-Hookean FEM (the scene's formulation); not for anisotropic laws;
+formulation of the reference, one name each: ``fem`` (the scene's ``[fem]``), ``P1``, ``P2``
+(the scene's small-strain law, or its tissue law), ``P1-NH``, ``P2-NH`` and the locking-free
 ``fem-P1-nodal-strain``, ``fem-P1-nodal-volume``, ``fem-MINI``, ``fem-P2-mixed``
-    FEM of the scene's own law in that ``[fem] formulation``: the locking-free methods
-    (docs/volumetric.rst).
-
-An FEM model whose order the scene's formulation does not fit (a P1 model of a ``mixed``
-scene) solves the nearest one of its order and law
-(:func:`~reference_fem.fitting.fitting_formulation`).
+(docs/studies.rst#the-model-registry). A model whose order the scene's formulation does not
+fit solves the nearest one (:func:`~reference_fem.fitting.fitting_formulation`).
 
 Examples
 --------

@@ -163,22 +163,8 @@ class ModelPlugin(Protocol):
 
 
 def declared(model: Any, name: str, *args: Any, default: Any = None) -> Any:
-    """What ``model`` declares as ``name`` (:class:`ModelPlugin`, Notes), or ``default``.
-
-    Parameters
-    ----------
-    model
-        A model.
-    name
-        An attribute, or a method called with ``args``.
-    *args
-        The method's arguments (a scene ...).
-    default
-        What a model that does not declare ``name`` answers.
-
-    Returns
-    -------
-    object
+    """What ``model`` declares as ``name`` (an attribute, or a method called with ``args``:
+    :class:`ModelPlugin`, Notes), or ``default`` when it does not say.
 
     Examples
     --------

@@ -1,21 +1,7 @@
 """The spring models of the model registry (:mod:`springfem.model_api`): the scene's spring
-model, each named element and each variant, one name each.
-
-``spring``
-    the spring model with the scene's ``[spring]`` options;
-``spring-<variant>``
-    the spring model with a variant's changes to the scene's ``[spring]`` options
-    (``spring-energy``, ``spring-cosine``: that torsion law; on a scene that names an
-    element other than ``seed``, or gets one by default, the changes are made to the
-    specification's element, so that a variant means the same on every scene), or a whole
-    element of its own: ``spring-spec`` (the specification's element: barycentric volume
-    springs, cosine torsion, the analytic calibration), ``spring-exact`` (axis-volume +
-    energy torsion + the exact calibration, with the Poisson-coupling springs for an
-    anisotropic law: P1's small-strain element on any tet), ``spring-stiffened`` (the exact
-    element for tissue at finite strain: Green axial springs, shear torsion, exponential
-    stiffening), ``spring-tissue`` (Green torsion, the law's own stiffening);
-``spring-stabilised``, ``spring-tissue-stabilised``
-    the exact and tissue elements on nodal strain and nodal volume: locking-free.
+model (``spring``), each named element (``spring-spec``, ``spring-exact``,
+``spring-stiffened``, ``spring-tissue``), the torsion variants and the stabilised
+(locking-free) elements, one name each (docs/studies.rst#the-model-registry).
 
 Examples
 --------

@@ -66,6 +66,7 @@ from reference_fem.fitting import is_tissue
 from springfem.mechanics.limits import solve_limits
 from springfem.mechanics.memory import MemoryLimitExceeded, memory_limit
 from springfem.mesh.thickness import thin_wall_note
+from springfem.model_api import declared
 from springfem.scene import Scene
 
 from . import models
@@ -79,7 +80,6 @@ from .verdict_plan import (
     dearer_than_reference,
     make_plan,
     plan_lines,
-    ruled_out,
     skip_reason,
 )
 from .verdict_table import Verdict, VerdictState, verdict_sentence
@@ -229,7 +229,7 @@ def verdict(
     if locking_free:
         notes.append(registry.locking_note(scene, locking_free, ref))
     notes += registry.formulation_notes(scene, names)
-    ruled = {n: why for n in names if (why := ruled_out(scene, n)) is not None}
+    ruled = {n: why for n in names if (why := declared(registry.get(n), "locks", scene))}
     distinct = [n for n in names if n not in state.alias]
     memory = _memory()
     plan = make_plan(distinct, ref, costs, ruled, budget, memory)

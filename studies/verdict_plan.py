@@ -5,7 +5,7 @@ peak memory (:mod:`studies.cost_model`) and what it will do with it:
 
 - the reference comes first: nothing is weighed without it;
 - then the models that can pass, cheapest first, so that a budget weighs as many as it can;
-- last, the models the scene rules out (:func:`ruled_out`: displacement P1 and P2 lock on a
+- last, the models the scene rules out (the models that say they lock: displacement P1 and P2 on a
   nearly incompressible scene); they never stand in for the reference, and one predicted
   to cost more than the reference is skipped (``skipped (ruled out)``): it only shows the
   locking, at a price the answer does not need;
@@ -40,10 +40,6 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from springfem.model_api import declared
-from springfem.scene import Scene
-
-from . import models
 from .cost_model import Prediction, SolveCosts, gigabytes
 
 #: The share of the budget the solves may take: the rest is for the explicit-step timing,
@@ -88,24 +84,6 @@ class Planned:
         return "; ".join(w for w in (self.why, self.skip) if w)
 
 
-def ruled_out(scene: Scene, name: str) -> str | None:
-    """Why the scene rules model ``name`` out (``None``: it does not): a displacement-based
-    P1 or P2 FEM locks on a nearly incompressible scene.
-
-    Parameters
-    ----------
-    scene
-        The scene.
-    name
-        The model.
-
-    Returns
-    -------
-    str or None
-    """
-    return declared(models.get(name), "locks", scene)
-
-
 def make_plan(
     names: Sequence[str],
     reference: str,
@@ -125,7 +103,7 @@ def make_plan(
     costs
         Their predicted costs.
     ruled
-        Model -> why the scene rules it out (:func:`ruled_out`).
+        Model -> why the scene rules it out (its ``locks``).
     budget
         Seconds for the whole verdict (``None``: no cap).
     memory
