@@ -67,7 +67,7 @@ from .dynamics_terms import Integrator, TimeLoads, mass_matrix, strain_energy
 from .newton import InvertedElements
 from .options import FemOptions
 from .problem import FemProblem
-from .solver import make_problem, solve
+from .solver import check_memory, make_problem, solve
 
 #: How many times a Newton increment that inverts an element is halved before giving up.
 MAX_HALVINGS = 10
@@ -236,6 +236,9 @@ def run(
         Bad settings or a probe outside the mesh.
     SolverError
         A step's Newton does not converge (the message gives the time).
+    MemoryLimitExceeded
+        The solves would not fit the memory limit
+        (:func:`reference_fem.solver.check_memory`).
 
     Examples
     --------
@@ -271,6 +274,7 @@ def run(
     fem = replace(fem, order=order, formulation=formulation or fem.formulation)  # type: ignore[arg-type]
     scene = scene.with_options(fem=fem)
     problem = make_problem(scene, order, law)
+    check_memory(problem)  # refused before it starts when its solves cannot fit
     return _Run(problem, scheme, opts, probes).integrate(
         t_end, dt, opts.initial if initial is None else initial,
         opts.frames if frames is None else frames, tol, max_iter,
