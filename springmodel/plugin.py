@@ -144,7 +144,7 @@ class SpringVariant:
             return f"model {self.name}: {exc}"
         if opts.stiffening == "law" and law not in LAWS:
             return f'model {self.name}: stiffening = "law" needs a tissue law'
-        if opts.stiffening != "off" and opts.stiffening_modulus is None:
+        if opts.stiffening == "exponential" and opts.stiffening_modulus is None:
             own = LAWS[law].stiffening_modulus(scene.material.parameters) if law in LAWS else None
             if own is None:
                 return f"model {self.name}: its stiffening needs a modulus the {law} law lacks"
