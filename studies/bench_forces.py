@@ -10,13 +10,15 @@ at a deformed state, on one thread (numba's threads set to 1), timed in interlea
 (:func:`studies.timing.interleaved`), the median reported.
 
 The **floor** is the rate at which the machine could merely move the bytes a pass must move:
-the STREAM-copy bandwidth (``numpy.copyto`` of a 256 MB array, read plus write bytes, best
-of five) over the bytes per tet: the element arrays the kernel reads (and writes), and once
+the STREAM-copy bandwidth (``numpy.copyto`` of a 256 MB array, read plus write bytes, timed
+as one more case of the same interleaved rounds, so under the same load) over the bytes per
+tet: the element arrays the kernel reads (and writes), and once
 per node the positions read and the forces written (:func:`bytes_per_tet`). ``of floor`` is
 the measured rate over it: 1 would be a kernel that only waits for memory.
 
-A size is skipped when the resident memory it would need (the growth per tet of the size
-before, times its tets) exceeds ``max_memory``.
+A size is skipped when the resident memory it would need exceeds ``max_memory``: the
+growth per tet while the size before was built, once that size had :data:`WARM` tets
+(smaller ones carry the compiled kernels' memory), else :data:`PRIOR_BYTES` per tet.
 
 Examples
 --------
@@ -52,20 +54,18 @@ READS: dict[str, tuple[str, ...]] = {
 }
 #: Per node, once: the positions read and the forces written (bytes).
 NODE_BYTES = 2 * 3 * 8
+#: Memory estimate: measured growth from sizes of at least WARM tets, else PRIOR_BYTES a tet
+#: (all models' systems together at 50k tets: about 2 KB a tet).
+WARM, PRIOR_BYTES = 20_000, 4_000
+#: The copy of the bandwidth case (bytes).
+COPY_BYTES = 256 << 20
 
 
-def copy_bandwidth(megabytes: int = 256, repeats: int = 5) -> float:
-    """STREAM copy in numpy: bytes read plus written per second (best of ``repeats``)."""
-    import time
-
-    b = np.ones(megabytes * (1 << 20) // 8)
+def copy_case() -> Callable[[], None]:
+    """STREAM copy in numpy (:data:`COPY_BYTES` read and as many written per call)."""
+    b = np.ones(COPY_BYTES // 8)
     a = np.empty_like(b)
-    best = np.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        np.copyto(a, b)
-        best = min(best, time.perf_counter() - t0)
-    return 2 * a.nbytes / best
+    return lambda: np.copyto(a, b)
 
 
 def per_tet(obj: Any, names: tuple[str, ...], m: int) -> float:
@@ -101,6 +101,29 @@ def model_pass(name: str, scene: Any) -> tuple[Callable[[], object], float, str]
     internal = getattr(system, "internal", None)
     go = (lambda: internal(x)) if internal is not None else (lambda: system.forces(x, None))
     return go, bytes_per_tet(system, scene.mesh.n_tets, scene.mesh.n_points), "force pass"
+
+
+def timed_rounds(
+    cases: dict[str, Callable[[], object]], rounds: int, count: int
+) -> tuple[dict[str, dict[str, list[float]]], float]:
+    """Every case once a round (:func:`studies.timing.interleaved`, ``count`` calls a
+    timing), then one copy of :func:`copy_case`: the samples and the median copy bandwidth
+    (bytes read plus written per second)."""
+    import time
+
+    copy = copy_case()
+    copy()  # warm-up: the pages of the copy
+    samples: dict[str, dict[str, list[float]]] = {}
+    seconds = []
+    for r in range(rounds):
+        got = interleaved(cases, rounds=1, count=count, warmup=0 if r else 1, seed=r)
+        for name, kinds in got.items():
+            for kind, values in kinds.items():
+                samples.setdefault(name, {}).setdefault(kind, []).extend(values)
+        t0 = time.perf_counter()
+        copy()
+        seconds.append(time.perf_counter() - t0)
+    return samples, 2 * COPY_BYTES / float(np.median(seconds))
 
 
 def bench_forces(
@@ -142,14 +165,13 @@ def bench_forces(
     from springfem.scene import load_scene
 
     numba.set_num_threads(1)
-    copy, read = copy_bandwidth(), stream_bandwidth()
-    out: dict[str, Any] = {"bandwidth_copy": copy, "bandwidth_read": read, "rows": [],
+    out: dict[str, Any] = {"bandwidth_read": stream_bandwidth(), "bandwidth_copy": {}, "rows": [],
                            "skipped": [], "load_average_before": load_average()}  # fmt: skip
     tmp = tempfile.TemporaryDirectory() if folder is None else None
     where = Path(tmp.name if tmp is not None else folder)  # type: ignore[arg-type]
-    per_tet_bytes = None
+    per_tet_bytes = float(PRIOR_BYTES)
     for size in sorted(sizes):
-        if per_tet_bytes is not None and resident_bytes() + per_tet_bytes * size > max_memory:
+        if resident_bytes() + per_tet_bytes * size > max_memory:
             need = per_tet_bytes * size / 1e9
             out["skipped"].append(f"{size} tets: about {need:.1f} GB (limit {max_memory / 1e9:g})")
             log(f"skip {size} tets: about {need:.1f} GB")
@@ -166,10 +188,12 @@ def bench_forces(
                 out["skipped"].append(f"{name} at {m} tets: {exc}")
                 continue
             cases[name], info[name] = go, (nbytes, what)
-        per_tet_bytes = max(resident_bytes() - base, 1) / m
+        if m >= WARM:
+            per_tet_bytes = max(resident_bytes() - base, 1) / m
         count = max(1, 2_000_000 // m)
         log(f"{m} tets: {', '.join(cases)} ({repeats} rounds of {count} passes)")
-        samples = interleaved(cases, rounds=repeats, count=count)
+        samples, copy = timed_rounds(cases, repeats, count)
+        out["bandwidth_copy"][m] = copy
         for name in cases:
             t = median(samples, name)
             nbytes, what = info[name]
@@ -186,10 +210,11 @@ def bench_forces(
 
 def markdown(res: dict[str, Any]) -> str:
     """The result as a Markdown table with its bandwidth and load lines."""
+    copies = ", ".join(f"{v / 1e9:.1f} GB/s ({m:,} tets)" for m, v in res["bandwidth_copy"].items())
     lines = [
-        f"Copy bandwidth {res['bandwidth_copy'] / 1e9:.1f} GB/s (read "
-        f"{res['bandwidth_read'] / 1e9:.1f} GB/s); one thread; load average "
-        f"{res['load_average_before']} before, {res['load_average_after']} after.",
+        f"Copy bandwidth {copies}, timed in the rounds; read {res['bandwidth_read'] / 1e9:.1f}"
+        f" GB/s; one thread; load average {res['load_average_before']} before, "
+        f"{res['load_average_after']} after.",
         "",
         "| tets | model | pass | µs / pass | M tets/s | bytes / tet | floor M tets/s | of floor |",
         "| ---: | --- | --- | ---: | ---: | ---: | ---: | ---: |",

@@ -252,7 +252,8 @@ class XPBD:
 
     def projection_pass(self, x: np.ndarray) -> tuple[Callable[[], None], float]:
         """One constraint iteration over every element, from positions ``x`` (a copy, moved
-        by every call), at the settings' substep: a function to time, and the bytes it moves
+        by every call; the multipliers restart every ``iterations`` calls, as a substep's
+        do), at the settings' substep: a function to time, and the bytes it moves
         per element (element arrays read, the multipliers read and written, and once per node
         the positions read and written and the inverse masses read).
 
@@ -275,7 +276,13 @@ class XPBD:
         gd, gh, F, D = np.empty((4, 3)), np.empty((4, 3)), np.empty((3, 3)), np.empty((3, 3))
         jacobi, coupled = s.iteration == "jacobi", s.coupling == "coupled"
 
+        calls = [0]
+
         def go() -> None:
+            if calls[0] % s.iterations == 0:  # a substep's start: the multipliers restart
+                lam_d[:] = 0.0
+                lam_h[:] = 0.0
+            calls[0] += 1
             sweep(p, self.w, self.sweep_tets, self.sweep_G, ad, ah, self.gamma, lam_d, lam_h, dp,
                   jacobi, coupled, s.omega, gd, gh, F, D)  # fmt: skip
 
