@@ -22,7 +22,9 @@ Gauss–Seidel visits the elements colour by colour (:func:`springfem.mesh.eleme
 elements of one colour share no node, so a colour could run in parallel and gives the same
 answer as this serial sweep), and the element arrays are stored in that order
 (:func:`sweep_order`) so that the sweep reads them front to back; an element's ``F`` is
-computed once per visit for both constraints. Jacobi computes every correction from the
+computed once per visit for both constraints, and the coupled sweep takes the elements in
+blocks of one colour (gather, solve each from the block's copy, scatter: the same
+arithmetic, but no element waits for the one before). Jacobi computes every correction from the
 same ``p`` and adds them all, each (its ``d_lambda`` and its ``d p`` alike, so that
 ``p - x~ = M^-1 grad C^T lambda`` still holds) times a relaxation ``omega``. Averaging the
 position corrections over a node's constraints instead (Macklin et al. 2014) would scale
@@ -40,8 +42,8 @@ Examples
 >>> R = np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]])
 >>> x, v = X @ R.T + 0.5, np.zeros((4, 3))  # rigid motion of the rest shape (mu = lam = 1)
 >>> moved = frame(x, v, np.ones((4, 3)), np.ones(4), np.zeros((4, 3)), np.array([[0, 1, 2, 3]]),
-...     G, 1.0 / V, 1.0 / V, 2.0, 1e-3, 2, 3, 0, 1, 1.0, 1.0, False, np.zeros(1), np.zeros(1),
-...     np.zeros((4, 3)))
+...     G, 1.0 / V, 1.0 / V, 2.0, 1e-3, 2, 3, 0, 1, 1.0, np.array([0, 1]), 1.0, False,
+...     np.zeros(1), np.zeros(1), np.zeros((4, 3)))
 >>> bool(moved < 1e-12), bool(np.allclose(x, X @ R.T + 0.5))  # it stays where it is
 (True, True)
 """
@@ -113,96 +115,142 @@ def _project(k, c, p, w, tets, G, alpha, gamma, lam, out, scale, g, F, D):  # pr
             out[node, r] += w[node, r] * g[a, r] * dl
 
 
+#: Elements of one colour per block of the coupled sweep, and the rows of its scratch
+#: ``(ROWS * BLOCK,)``: row ``r`` of element ``j`` of the block at ``r * BLOCK + j``.
+BLOCK = 16
+_E, _G, _W, _LD, _LH, _AD, _AH, _GD, _GH, _D1, _D2 = 0, 9, 18, 30, 31, 32, 33, 34, 46, 58, 59
+ROWS = 60
+
+
 @njit(**_FLAGS)
-def _project_pair(
-    k, p, w, tets, G, ad, ah, gamma, lam_d, lam_h, out, scale, gd, gh
+def _pair_block(
+    k0, nb, p, w, tets, G, ad, ah, gamma, lam_d, lam_h, out, scale, S
 ):  # pragma: no cover - compiled
-    """Both constraints of element ``k`` at once (a 2 x 2 solve), from one ``F``: adds
-    ``scale`` times the correction to ``out`` and to ``lam_d[k], lam_h[k]`` (``gd, gh``:
-    ``(4, 3)`` scratch for the node gradients)."""
-    i0, i1, i2, i3 = tets[k, 0], tets[k, 1], tets[k, 2], tets[k, 3]
-    # F = sum_a (p_a - p_0) (x) g_a, one row r at a time: F[r, d] = f{r}{d}
-    e1, e2, e3 = p[i1, 0] - p[i0, 0], p[i2, 0] - p[i0, 0], p[i3, 0] - p[i0, 0]
-    f00 = e1 * G[k, 0, 0] + e2 * G[k, 1, 0] + e3 * G[k, 2, 0]
-    f01 = e1 * G[k, 0, 1] + e2 * G[k, 1, 1] + e3 * G[k, 2, 1]
-    f02 = e1 * G[k, 0, 2] + e2 * G[k, 1, 2] + e3 * G[k, 2, 2]
-    e1, e2, e3 = p[i1, 1] - p[i0, 1], p[i2, 1] - p[i0, 1], p[i3, 1] - p[i0, 1]
-    f10 = e1 * G[k, 0, 0] + e2 * G[k, 1, 0] + e3 * G[k, 2, 0]
-    f11 = e1 * G[k, 0, 1] + e2 * G[k, 1, 1] + e3 * G[k, 2, 1]
-    f12 = e1 * G[k, 0, 2] + e2 * G[k, 1, 2] + e3 * G[k, 2, 2]
-    e1, e2, e3 = p[i1, 2] - p[i0, 2], p[i2, 2] - p[i0, 2], p[i3, 2] - p[i0, 2]
-    f20 = e1 * G[k, 0, 0] + e2 * G[k, 1, 0] + e3 * G[k, 2, 0]
-    f21 = e1 * G[k, 0, 1] + e2 * G[k, 1, 1] + e3 * G[k, 2, 1]
-    f22 = e1 * G[k, 0, 2] + e2 * G[k, 1, 2] + e3 * G[k, 2, 2]
-    # deviatoric: C_D = |F|, dC_D/dF = F / C_D
-    cd = np.sqrt(f00 * f00 + f01 * f01 + f02 * f02 + f10 * f10 + f11 * f11 + f12 * f12
-                 + f20 * f20 + f21 * f21 + f22 * f22)  # fmt: skip
-    r = 1.0 / cd if cd > 0.0 else 0.0
-    # hydrostatic: C_H = det F - gamma, dC_H/dF = cof F (columns f_{j+1} x f_{j+2})
-    c00, c01, c02 = f11 * f22 - f21 * f12, f12 * f20 - f22 * f10, f10 * f21 - f20 * f11
-    c10, c11, c12 = f21 * f02 - f01 * f22, f22 * f00 - f02 * f20, f20 * f01 - f00 * f21
-    c20, c21, c22 = f01 * f12 - f11 * f02, f02 * f10 - f12 * f00, f00 * f11 - f10 * f01
-    ch = f00 * c00 + f10 * c10 + f20 * c20 - gamma
-    for r_ in range(3):
-        gd[0, r_] = 0.0
-        gh[0, r_] = 0.0
-    for a in range(3):  # node a + 1: dC/dF g_a; node 0: minus their sum
-        g0, g1, g2 = G[k, a, 0], G[k, a, 1], G[k, a, 2]
-        s0 = (f00 * g0 + f01 * g1 + f02 * g2) * r
-        s1 = (f10 * g0 + f11 * g1 + f12 * g2) * r
-        s2 = (f20 * g0 + f21 * g1 + f22 * g2) * r
-        gd[a + 1, 0], gd[a + 1, 1], gd[a + 1, 2] = s0, s1, s2
-        gd[0, 0] -= s0
-        gd[0, 1] -= s1
-        gd[0, 2] -= s2
-        s0 = c00 * g0 + c01 * g1 + c02 * g2
-        s1 = c10 * g0 + c11 * g1 + c12 * g2
-        s2 = c20 * g0 + c21 * g1 + c22 * g2
-        gh[a + 1, 0], gh[a + 1, 1], gh[a + 1, 2] = s0, s1, s2
-        gh[0, 0] -= s0
-        gh[0, 1] -= s1
-        gh[0, 2] -= s2
-    a11, a12, a22 = ad, 0.0, ah
-    for a in range(4):
-        node = tets[k, a]
-        for c in range(3):
-            wr = w[node, c]
-            a11 += wr * gd[a, c] * gd[a, c]
-            a12 += wr * gd[a, c] * gh[a, c]
-            a22 += wr * gh[a, c] * gh[a, c]
-    b1 = -cd - ad * lam_d[k]
-    b2 = -ch - ah * lam_h[k]
-    det = a11 * a22 - a12 * a12
-    if not det > 0.0:
-        return
-    d1 = scale * (a22 * b1 - a12 * b2) / det
-    d2 = scale * (a11 * b2 - a12 * b1) / det
-    lam_d[k] += d1
-    lam_h[k] += d2
-    for a in range(4):
-        node = tets[k, a]
-        for c in range(3):
-            out[node, c] += w[node, c] * (gd[a, c] * d1 + gh[a, c] * d2)
+    """Both constraints of elements ``k0 .. k0 + nb - 1`` (one colour: no shared node), each
+    a 2 x 2 solve from one ``F``: adds ``scale`` times the corrections to ``out`` and to
+    ``lam_d, lam_h``. Gathers the block into ``S``, solves element by element from ``S``
+    alone (independent elements: no chain of dependent operations from one to the next),
+    then scatters."""
+    for j in range(nb):  # gather: edge vectors p_a - p_0, G, inverse masses, multipliers
+        k = k0 + j
+        i0 = tets[k, 0]
+        for a in range(3):
+            ia = tets[k, a + 1]
+            for r in range(3):
+                S[(_E + 3 * a + r) * BLOCK + j] = p[ia, r] - p[i0, r]
+                S[(_G + 3 * a + r) * BLOCK + j] = G[k, a, r]
+        for a in range(4):
+            ia = tets[k, a]
+            for c in range(3):
+                S[(_W + 3 * a + c) * BLOCK + j] = w[ia, c]
+        S[_LD * BLOCK + j] = lam_d[k]
+        S[_LH * BLOCK + j] = lam_h[k]
+        S[_AD * BLOCK + j] = ad[k]
+        S[_AH * BLOCK + j] = ah[k]
+    for j in range(nb):
+        # F = sum_a (p_a - p_0) (x) g_a: F[r, d] = f{r}{d}
+        e0, e1, e2 = S[_E * BLOCK + j], S[(_E + 1) * BLOCK + j], S[(_E + 2) * BLOCK + j]
+        e3, e4, e5 = S[(_E + 3) * BLOCK + j], S[(_E + 4) * BLOCK + j], S[(_E + 5) * BLOCK + j]
+        e6, e7, e8 = S[(_E + 6) * BLOCK + j], S[(_E + 7) * BLOCK + j], S[(_E + 8) * BLOCK + j]
+        g0, g1, g2 = S[_G * BLOCK + j], S[(_G + 1) * BLOCK + j], S[(_G + 2) * BLOCK + j]
+        g3, g4, g5 = S[(_G + 3) * BLOCK + j], S[(_G + 4) * BLOCK + j], S[(_G + 5) * BLOCK + j]
+        g6, g7, g8 = S[(_G + 6) * BLOCK + j], S[(_G + 7) * BLOCK + j], S[(_G + 8) * BLOCK + j]
+        f00 = e0 * g0 + e3 * g3 + e6 * g6
+        f01 = e0 * g1 + e3 * g4 + e6 * g7
+        f02 = e0 * g2 + e3 * g5 + e6 * g8
+        f10 = e1 * g0 + e4 * g3 + e7 * g6
+        f11 = e1 * g1 + e4 * g4 + e7 * g7
+        f12 = e1 * g2 + e4 * g5 + e7 * g8
+        f20 = e2 * g0 + e5 * g3 + e8 * g6
+        f21 = e2 * g1 + e5 * g4 + e8 * g7
+        f22 = e2 * g2 + e5 * g5 + e8 * g8
+        # deviatoric: C_D = |F|, dC_D/dF = F / C_D
+        cd = np.sqrt(f00 * f00 + f01 * f01 + f02 * f02 + f10 * f10 + f11 * f11 + f12 * f12
+                     + f20 * f20 + f21 * f21 + f22 * f22)  # fmt: skip
+        rc = 1.0 / cd if cd > 0.0 else 0.0
+        # hydrostatic: C_H = det F - gamma, dC_H/dF = cof F (columns f_{j+1} x f_{j+2})
+        c00, c01, c02 = f11 * f22 - f21 * f12, f12 * f20 - f22 * f10, f10 * f21 - f20 * f11
+        c10, c11, c12 = f21 * f02 - f01 * f22, f22 * f00 - f02 * f20, f20 * f01 - f00 * f21
+        c20, c21, c22 = f01 * f12 - f11 * f02, f02 * f10 - f12 * f00, f00 * f11 - f10 * f01
+        ch = f00 * c00 + f10 * c10 + f20 * c20 - gamma
+        # node gradients: node a + 1 dC/dF g_a, node 0 minus their sum
+        d0s = d1s = d2s = h0s = h1s = h2s = 0.0
+        for a in range(3):
+            u0, u1, u2 = (
+                S[(_G + 3 * a) * BLOCK + j],
+                S[(_G + 3 * a + 1) * BLOCK + j],
+                S[(_G + 3 * a + 2) * BLOCK + j],
+            )
+            d0 = (f00 * u0 + f01 * u1 + f02 * u2) * rc
+            d1 = (f10 * u0 + f11 * u1 + f12 * u2) * rc
+            d2 = (f20 * u0 + f21 * u1 + f22 * u2) * rc
+            h0 = c00 * u0 + c01 * u1 + c02 * u2
+            h1 = c10 * u0 + c11 * u1 + c12 * u2
+            h2 = c20 * u0 + c21 * u1 + c22 * u2
+            S[(_GD + 3 * a + 3) * BLOCK + j] = d0
+            S[(_GD + 3 * a + 4) * BLOCK + j] = d1
+            S[(_GD + 3 * a + 5) * BLOCK + j] = d2
+            S[(_GH + 3 * a + 3) * BLOCK + j] = h0
+            S[(_GH + 3 * a + 4) * BLOCK + j] = h1
+            S[(_GH + 3 * a + 5) * BLOCK + j] = h2
+            d0s -= d0
+            d1s -= d1
+            d2s -= d2
+            h0s -= h0
+            h1s -= h1
+            h2s -= h2
+        S[_GD * BLOCK + j], S[(_GD + 1) * BLOCK + j], S[(_GD + 2) * BLOCK + j] = d0s, d1s, d2s
+        S[_GH * BLOCK + j], S[(_GH + 1) * BLOCK + j], S[(_GH + 2) * BLOCK + j] = h0s, h1s, h2s
+        a11, a12, a22 = S[_AD * BLOCK + j], 0.0, S[_AH * BLOCK + j]
+        for q in range(12):
+            wr = S[(_W + q) * BLOCK + j]
+            gd, gh = S[(_GD + q) * BLOCK + j], S[(_GH + q) * BLOCK + j]
+            a11 += wr * gd * gd
+            a12 += wr * gd * gh
+            a22 += wr * gh * gh
+        b1 = -cd - S[_AD * BLOCK + j] * S[_LD * BLOCK + j]
+        b2 = -ch - S[_AH * BLOCK + j] * S[_LH * BLOCK + j]
+        det = a11 * a22 - a12 * a12
+        if det > 0.0:
+            S[_D1 * BLOCK + j] = scale * (a22 * b1 - a12 * b2) / det
+            S[_D2 * BLOCK + j] = scale * (a11 * b2 - a12 * b1) / det
+        else:
+            S[_D1 * BLOCK + j] = 0.0
+            S[_D2 * BLOCK + j] = 0.0
+    for j in range(nb):  # scatter
+        k = k0 + j
+        d1, d2 = S[_D1 * BLOCK + j], S[_D2 * BLOCK + j]
+        lam_d[k] += d1
+        lam_h[k] += d2
+        for a in range(4):
+            ia = tets[k, a]
+            for c in range(3):
+                q = 3 * a + c
+                out[ia, c] += S[(_W + q) * BLOCK + j] * (
+                    S[(_GD + q) * BLOCK + j] * d1 + S[(_GH + q) * BLOCK + j] * d2
+                )
 
 
 @njit(**_FLAGS)
 def sweep(
-    p, w, tets, G, ad, ah, gamma, lam_d, lam_h, dp, jacobi, coupled, omega, gd, gh, F, D
+    p, w, tets, G, ad, ah, gamma, lam_d, lam_h, dp, jacobi, coupled, omega, starts, S, g, F, D
 ):  # pragma: no cover - compiled
     """One iteration over every element in place on ``p``: Gauss–Seidel in the order the
     elements are stored, or Jacobi (every correction from the same ``p``, summed into ``dp``,
-    times ``omega``); ``ad, ah`` are the compliances over ``h^2``; ``gd, gh`` ``(4, 3)`` and
-    ``F, D`` ``(3, 3)`` scratch. The time of one call is XPBD's projection pass."""
+    times ``omega``); ``ad, ah`` are the compliances over ``h^2``; ``starts`` the first
+    element of every block (:func:`sweep_blocks`), ``S`` ``(ROWS * BLOCK,)``, ``g`` ``(4, 3)``
+    and ``F, D`` ``(3, 3)`` scratch. The time of one call is XPBD's projection pass."""
     out, scale = (dp, omega) if jacobi else (p, 1.0)
     if jacobi:
         dp[:, :] = 0.0
-    for k in range(tets.shape[0]):
-        if coupled:
-            _project_pair(k, p, w, tets, G, ad[k], ah[k], gamma, lam_d, lam_h, out, scale,
-                          gd, gh)  # fmt: skip
-        else:
-            _project(k, 0, p, w, tets, G, ad[k], gamma, lam_d, out, scale, gd, F, D)
-            _project(k, 1, p, w, tets, G, ah[k], gamma, lam_h, out, scale, gd, F, D)
+    if coupled:
+        for b in range(starts.shape[0] - 1):
+            _pair_block(starts[b], starts[b + 1] - starts[b], p, w, tets, G, ad, ah, gamma,
+                        lam_d, lam_h, out, scale, S)  # fmt: skip
+    else:
+        for k in range(tets.shape[0]):
+            _project(k, 0, p, w, tets, G, ad[k], gamma, lam_d, out, scale, g, F, D)
+            _project(k, 1, p, w, tets, G, ah[k], gamma, lam_h, out, scale, g, F, D)
     if jacobi:
         for r in range(p.shape[0]):
             for c in range(3):
@@ -227,6 +275,7 @@ def frame(
     jacobi,
     coupled,
     omega,
+    starts,
     damp,
     kinetic,
     lam_d,
@@ -240,8 +289,9 @@ def frame(
     The elements (``tets``, ``G`` and the compliances ``alpha_d, alpha_h = 1 / (mu' V),
     1 / (lam' V)``) are stored in the order Gauss–Seidel visits them, colour by colour
     (:func:`sweep_order`), so that the sweep reads them contiguously; ``coupled`` solves an
-    element's two constraints together (a 2 x 2 system from one ``F``), else one after the
-    other; ``jacobi`` selects Jacobi with relaxation ``omega``; ``lam_d, lam_h`` ``(m,)``
+    element's two constraints together (a 2 x 2 system from one ``F``), a block of elements
+    of one colour at a time (``starts``, :func:`sweep_blocks`), else one after the other;
+    ``jacobi`` selects Jacobi with relaxation ``omega``; ``lam_d, lam_h`` ``(m,)``
     and ``dp`` ``(n, 3)`` are work arrays.
     """
     n = x.shape[0]
@@ -249,8 +299,8 @@ def frame(
     p = np.empty_like(x)
     F = np.empty((3, 3))
     D = np.empty((3, 3))
-    gd = np.empty((4, 3))
-    gh = np.empty((4, 3))
+    g = np.empty((4, 3))
+    S = np.empty(ROWS * BLOCK)
     h2 = h * h
     ad = alpha_d / h2  # the compliances over h^2, once per frame
     ah = alpha_h / h2
@@ -271,7 +321,7 @@ def frame(
             lam_h[k] = 0.0
         for _it in range(iterations):
             sweep(p, w, tets, G, ad, ah, gamma, lam_d, lam_h, dp, jacobi, coupled, omega,
-                  gd, gh, F, D)  # fmt: skip
+                  starts, S, g, F, D)  # fmt: skip
         ke = 0.0
         for r in range(n):
             for c in range(3):
@@ -298,3 +348,19 @@ def sweep_order(colours: np.ndarray) -> np.ndarray:
     [1, 3, 0, 2]
     """
     return np.argsort(colours, kind="stable").astype(np.int64)
+
+
+def sweep_blocks(colours: np.ndarray) -> np.ndarray:
+    """The first element of every block of the coupled sweep, and the end: runs of at most
+    :data:`BLOCK` elements of one colour, for ``colours`` in sweep order.
+
+    Examples
+    --------
+    >>> sweep_blocks(np.array([0] * 20 + [1] * 3)).tolist()
+    [0, 16, 20, 23]
+    """
+    edges = [0, *(np.flatnonzero(np.diff(colours)) + 1).tolist(), len(colours)]
+    starts = {len(colours)}
+    for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+        starts.update(range(lo, hi, BLOCK))
+    return np.array(sorted(starts), dtype=np.int64)

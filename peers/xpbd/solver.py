@@ -54,7 +54,7 @@ from springfem.scene import Scene
 
 from .constraints import rest_shape, stable_neo_hookean
 from .energy import StableNeoHookean
-from .kernels import frame, sweep, sweep_order
+from .kernels import BLOCK, ROWS, frame, sweep, sweep_blocks, sweep_order
 
 Iteration = Literal["gauss-seidel", "jacobi"]
 ITERATIONS = ("gauss-seidel", "jacobi")
@@ -192,6 +192,7 @@ class XPBD:
         self.sweep_G = np.ascontiguousarray(self.G[self.order])
         self.sweep_alpha_d = np.ascontiguousarray(self.alpha_d[self.order])
         self.sweep_alpha_h = np.ascontiguousarray(self.alpha_h[self.order])
+        self.sweep_starts = sweep_blocks(self.colours[self.order])
         m = self.tets.shape[0]
         self._lam_d, self._lam_h, self._dp = np.zeros(m), np.zeros(m), np.zeros((n, 3))
         self.damping_rate = self._damping_rate()
@@ -246,7 +247,7 @@ class XPBD:
                 x, v, self.w, self.masses, a_ext, self.sweep_tets, self.sweep_G,
                 self.sweep_alpha_d, self.sweep_alpha_h, self.gamma, self.h, s.substeps,
                 s.iterations, s.iteration == "jacobi", s.coupling == "coupled", s.omega,
-                damp, kinetic, self._lam_d, self._lam_h, self._dp,
+                self.sweep_starts, damp, kinetic, self._lam_d, self._lam_h, self._dp,
             )
         )  # fmt: skip
 
@@ -273,7 +274,7 @@ class XPBD:
         ad, ah = self.sweep_alpha_d / h2, self.sweep_alpha_h / h2
         m = self.tets.shape[0]
         lam_d, lam_h, dp = np.zeros(m), np.zeros(m), np.zeros_like(p)
-        gd, gh, F, D = np.empty((4, 3)), np.empty((4, 3)), np.empty((3, 3)), np.empty((3, 3))
+        S, g, F, D = np.empty(ROWS * BLOCK), np.empty((4, 3)), np.empty((3, 3)), np.empty((3, 3))
         jacobi, coupled = s.iteration == "jacobi", s.coupling == "coupled"
 
         calls = [0]
@@ -284,7 +285,7 @@ class XPBD:
                 lam_h[:] = 0.0
             calls[0] += 1
             sweep(p, self.w, self.sweep_tets, self.sweep_G, ad, ah, self.gamma, lam_d, lam_h, dp,
-                  jacobi, coupled, s.omega, gd, gh, F, D)  # fmt: skip
+                  jacobi, coupled, s.omega, self.sweep_starts, S, g, F, D)  # fmt: skip
 
         arrays = (self.sweep_tets, self.sweep_G, ad, ah)
         per_element = sum(a.nbytes for a in arrays) / m + 2 * 2 * 8  # + lam_d, lam_h r/w

@@ -200,7 +200,7 @@ def _bench_models(args: argparse.Namespace) -> int:
     sizes = _sizes(args, bf.DEFAULT_SIZES)
     names = None if args.models in (None, "all") else [m.strip() for m in args.models.split(",")]
     memory = 4.0e9 if args.max_memory is None else float(args.max_memory) * 1e9
-    res = bf.bench_forces(sizes, names, _repeats(args, 7), memory,
+    res = bf.bench_forces(sizes, names, _repeats(args, 7), memory, args.meshes,
                           log=lambda s: print(s, file=sys.stderr, flush=True))  # fmt: skip
     if args.json:
         _print_json(res)

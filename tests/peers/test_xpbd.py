@@ -104,8 +104,8 @@ def test_only_the_coupled_solve_keeps_a_rigidly_moved_body_at_rest(scene, couple
     w = np.repeat((1.0 / s.masses)[:, None], 3, axis=1)
     h = 1.0 / 600
     frame(x, v, w, s.masses, np.zeros_like(x), s.sweep_tets, s.sweep_G, s.sweep_alpha_d,
-          s.sweep_alpha_h, s.gamma, h, 10, 2, 0, coupled, 1.0, 1.0, False, np.zeros(len(s.V)),
-          np.zeros(len(s.V)), np.zeros_like(x))  # fmt: skip
+          s.sweep_alpha_h, s.gamma, h, 10, 2, 0, coupled, 1.0, s.sweep_starts, 1.0, False,
+          np.zeros(len(s.V)), np.zeros(len(s.V)), np.zeros_like(x))  # fmt: skip
     moved = np.abs(x - start).max() / np.ptp(s.x0, axis=0).max()
     assert (moved < 1e-12) == still, moved
 
