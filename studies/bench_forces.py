@@ -7,7 +7,8 @@ pass is its plug-in's ``kernel_pass(scene)`` where it has one (XPBD: one constra
 iteration over every element), else the internal forces of its explicit form
 (``system(scene).internal``). Each runs on the organ of :func:`springfem.mesh.organ.organ_scene`
 at a deformed state, on one thread (numba's threads set to 1), timed in interleaved rounds
-(:func:`studies.timing.interleaved`), the median reported.
+(:func:`studies.timing.interleaved`), the median of the CPU times reported (on a shared,
+loaded machine CPU time is what preemption does not inflate).
 
 The **floor** is the rate at which the machine could merely move the bytes a pass must move:
 the STREAM-copy bandwidth (``numpy.copyto`` of a 256 MB array, read plus write bytes, timed
@@ -108,7 +109,7 @@ def timed_rounds(
 ) -> tuple[dict[str, dict[str, list[float]]], float]:
     """Every case once a round (:func:`studies.timing.interleaved`, ``count`` calls a
     timing), then one copy of :func:`copy_case`: the samples and the median copy bandwidth
-    (bytes read plus written per second)."""
+    (bytes read plus written per CPU second)."""
     import time
 
     copy = copy_case()
@@ -120,9 +121,9 @@ def timed_rounds(
         for name, kinds in got.items():
             for kind, values in kinds.items():
                 samples.setdefault(name, {}).setdefault(kind, []).extend(values)
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         copy()
-        seconds.append(time.perf_counter() - t0)
+        seconds.append(time.process_time() - t0)
     return samples, 2 * COPY_BYTES / float(np.median(seconds))
 
 
@@ -195,7 +196,7 @@ def bench_forces(
         samples, copy = timed_rounds(cases, repeats, count)
         out["bandwidth_copy"][m] = copy
         for name in cases:
-            t = median(samples, name)
+            t = median(samples, name, "cpu")
             nbytes, what = info[name]
             rate, floor = m / t, copy / nbytes
             out["rows"].append({"tets": m, "nodes": n, "model": name, "pass": what,
@@ -213,7 +214,7 @@ def markdown(res: dict[str, Any]) -> str:
     copies = ", ".join(f"{v / 1e9:.1f} GB/s ({m:,} tets)" for m, v in res["bandwidth_copy"].items())
     lines = [
         f"Copy bandwidth {copies}, timed in the rounds; read {res['bandwidth_read'] / 1e9:.1f}"
-        f" GB/s; one thread; load average {res['load_average_before']} before, "
+        f" GB/s; one thread, CPU time; load average {res['load_average_before']} before, "
         f"{res['load_average_after']} after.",
         "",
         "| tets | model | pass | µs / pass | M tets/s | bytes / tet | floor M tets/s | of floor |",
