@@ -286,7 +286,8 @@ def bar_figure(ctx: StudyContext, errors: pd.DataFrame, probes: pd.DataFrame) ->
 def field_figure(ctx: StudyContext, scene: Any, name: str, r: dict) -> Figure:
     """The deformed meshes coloured by the error, captioned with where the spring model's
     error peaks and its three errors."""
-    fields = {n: np.asarray(r["u"][n], float) for n in MODELS if n in r["u"]}
+    names = dict.fromkeys((*MODELS, r["reference"]))  # the reference may be P2/P1 mixed
+    fields = {n: np.asarray(r["u"][n], float) for n in names if n in r["u"]}
     fields, note = figure_fields(fields, r["reference"])
     path = error_figure(scene, fields, r["reference"], ctx.path(f"error_field_{name}.png"),
                         laws=r["laws"], note=note)  # fmt: skip
