@@ -90,6 +90,8 @@ def bytes_per_tet(system: Any, m: int, n: int) -> float:
 
 def model_pass(name: str, scene: Any) -> tuple[Callable[[], object], float, str]:
     """``(go, bytes per tet, what)`` of model ``name`` on ``scene`` (the module docstring)."""
+    from springfem.errors import InputError
+
     from .timing import deformed_state
 
     model = models.get(name)
@@ -98,6 +100,8 @@ def model_pass(name: str, scene: Any) -> tuple[Callable[[], object], float, str]
         go, nbytes = plugin.kernel_pass(scene)
         return go, float(nbytes), "one iteration"
     system = model.system(scene)
+    if system is None:
+        raise InputError(f"model {name}: no explicit form and no kernel pass")
     x = deformed_state(system.x0)
     internal = getattr(system, "internal", None)
     go = (lambda: internal(x)) if internal is not None else (lambda: system.forces(x, None))
