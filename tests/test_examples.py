@@ -35,3 +35,16 @@ def test_python_api_example_runs(capsys):
     # than P1 at the tip); 10% is the accuracy goal the spring model was built to
     tip_fem, tip_spring = ns["fem"].result.probes["tip"][2], ns["spring"].result.probes["tip"][2]
     assert 0.0 < tip_spring / tip_fem - 1.0 < 0.10
+
+
+def test_the_example_plugin_passes_the_conformance_check(monkeypatch, capsys):
+    """The out-of-tree example model's own test runs check_model (docs/plugins.rst#plugin-check
+    shows that file and what it prints)."""
+    plugins = (ROOT / "docs" / "plugins.rst").read_text(encoding="utf-8")
+    assert ".. literalinclude:: ../examples/plugin_model/test_example_model.py\n" in plugins
+    monkeypatch.syspath_prepend(str(ROOT / "examples" / "plugin_model"))
+    ns = runpy.run_path(str(ROOT / "examples" / "plugin_model" / "test_example_model.py"))
+    ns["test_the_model_conforms"]()
+    out = capsys.readouterr().out
+    assert "model example-p1 on scene jittered-box:" in out
+    assert out.count(": passed:") == 6 and out.count(": skipped:") == 1

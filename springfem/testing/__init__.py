@@ -23,10 +23,10 @@ explicit energy
     conserves the total energy: its excursion is Verlet's, small and falling as ``dt^2``
     (a damped system's may only fall).
 
-The tolerances are module constants, each with its reason; a check states what it
-measured against them. Tests call :func:`check_model` for every registered model
-(``tests/springfem/test_check_model.py``); an out-of-tree model calls it in its own tests
-(docs/plugins.rst).
+The tolerances are constants of :mod:`springfem.testing.checks`, each with its reason; a
+check states what it measured against them. ``tests/studies/test_every_model.py`` calls
+:func:`check_model` for every registered model; an out-of-tree model calls it in its own
+tests (docs/plugins.rst#plugin-check).
 
 Examples
 --------
@@ -53,7 +53,7 @@ linear and it claims none; the same forces with the tangent's sign flipped fail:
 >>> [c.name for c in report.failures]  # the stable step comes from the tangent
 ['tangent', 'explicit energy']
 >>> print(report.checks[4].line())
-tangent: failed: |K d + df/dx d| (central differences, h = 1e-05 l) / |df/dx d| = 2 > 1e-06
+tangent: failed: |K d + df/dx d| (central differences, h = 1e-04 l) / |df/dx d| = 2 > 1e-06
 >>> check_model(SystemModel("flipped", "P1", Flipped), scene)  # doctest: +ELLIPSIS
 Traceback (most recent call last):
 AssertionError: model flipped fails 2 checks on scene ...: tangent: ...
