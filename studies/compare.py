@@ -23,11 +23,11 @@ import pandas as pd
 
 from reference_fem.fitting import is_tissue, tissue_note
 from springfem.errors import InputError, SolverError
-from springfem.mesh import displacement_gradients
 from springfem.model_api import ModelSolution as Solution
 from springfem.scene import Scene
 
 from . import metrics
+from .metrics import max_principal_strain
 from .models import (
     LARGE_STRAIN,
     formulation_notes,
@@ -123,18 +123,6 @@ class Comparison:
 
 
 # ------------------------------------------------------------------------------ solving
-
-
-def max_principal_strain(scene: Scene, u: np.ndarray) -> float:
-    """Max |principal Green–Lagrange strain| over the P1 elements for vertex field ``u``.
-
-    The Green–Lagrange strain ``E = (H + Hᵀ + HᵀH) / 2`` of a small-strain solution also
-    flags large rotations (a rotation by θ gives ``E ≈ θ²/2``), which a linear solution
-    cannot represent either.
-    """
-    H = displacement_gradients(scene.mesh.points, scene.mesh.tets, u)
-    E = 0.5 * (H + np.swapaxes(H, 1, 2) + np.swapaxes(H, 1, 2) @ H)
-    return float(np.abs(np.linalg.eigvalsh(E)).max())
 
 
 def compare_scene(

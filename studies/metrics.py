@@ -12,6 +12,9 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
+from springfem.mesh import displacement_gradients
+from springfem.scene import Scene
+
 
 def relative_l2_error(u: np.ndarray, u_ref: np.ndarray) -> float:
     """``||u - u_ref|| / ||u_ref||`` over all vertex displacement components."""
@@ -26,6 +29,18 @@ def relative_max_error(u: np.ndarray, u_ref: np.ndarray) -> float:
     den = np.linalg.norm(u_ref, axis=1).max()
     err = np.linalg.norm(u - u_ref, axis=1).max()
     return float(err / den) if den > 0 else float("nan")
+
+
+def max_principal_strain(scene: Scene, u: np.ndarray) -> float:
+    """Max |principal Green–Lagrange strain| over the P1 elements for vertex field ``u``.
+
+    The Green–Lagrange strain ``E = (H + Hᵀ + HᵀH) / 2`` of a small-strain solution also
+    flags large rotations (a rotation by θ gives ``E ≈ θ²/2``), which a linear solution
+    cannot represent either.
+    """
+    H = displacement_gradients(scene.mesh.points, scene.mesh.tets, u)
+    E = 0.5 * (H + np.swapaxes(H, 1, 2) + np.swapaxes(H, 1, 2) @ H)
+    return float(np.abs(np.linalg.eigvalsh(E)).max())
 
 
 def nodal_error(u: np.ndarray, u_ref: np.ndarray) -> np.ndarray:

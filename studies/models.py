@@ -398,7 +398,7 @@ def reference_model(scene: Scene, p1_strain: float, large: float = LARGE_STRAIN)
         The scene.
     p1_strain
         The largest principal Green–Lagrange strain of its small-strain P1 solution
-        (:func:`studies.compare.max_principal_strain`; ignored on a mixed scene).
+        (:func:`studies.metrics.max_principal_strain`; ignored on a mixed scene).
     large
         The strain above which the reference is finite-strain (:data:`LARGE_STRAIN`).
 

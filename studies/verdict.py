@@ -70,8 +70,8 @@ from springfem.model_api import declared
 from springfem.scene import Scene
 
 from . import models
-from .compare import max_principal_strain
 from .cost_model import SolveCosts, gigabytes, read_laws
+from .metrics import max_principal_strain
 from .models import reference_model
 from .peak_memory import PeakMemory
 from .verdict_plan import (

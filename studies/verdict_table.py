@@ -20,8 +20,6 @@ from springfem.plausibility import check_solution
 from springfem.scene import Scene
 
 from . import metrics, models
-from .verdict_rank import pct as _pct
-from .verdict_rank import rank_by_error, ranking_line, same_mesh_line
 
 #: The same mesh's P1 of a reference's law: the model error of a P1-based fast model.
 SAME_MESH_P1 = {"P2-NH": "P1-NH", "P2": "P1"}
@@ -256,7 +254,7 @@ For explicit dynamics spring-exact (small-strain calibration, not the reference'
 3% off, 12 s per simulated second, 1.33× explicit P1's.
     """
     t = table.set_index("model")
-    within = f"within {_pct(tol)} of {ref}"
+    within = f"within {pct(tol)} of {ref}"
     if not ref:
         return "No FEM reference finished: no error, no verdict."
     if static_pick and static_pick != ref:
@@ -265,7 +263,7 @@ For explicit dynamics spring-exact (small-strain calibration, not the reference'
         in_time = f", in {ratio:.2g}× the reference's time" if np.isfinite(ratio) else ""
         first = (
             f"{static_pick}{_unlike(r)} is the cheapest static solve {within}: "
-            f"{_pct(r['rel L2 error'])} off{in_time}."
+            f"{pct(r['rel L2 error'])} off{in_time}."
         )
     else:
         others = t[(t["rel L2 error"] > 0) & np.isfinite(t["rel L2 error"])]
@@ -273,10 +271,10 @@ For explicit dynamics spring-exact (small-strain calibration, not the reference'
         if not good.empty:  # within it, but dearer than the reference
             n = good["static time (s)"].idxmin()
             ratio = good.at[n, "static time (s)"] / t.at[ref, "static time (s)"]
-            rest = f"{n} ({_pct(good.at[n, 'rel L2 error'])} off) takes {ratio:.2g}× its time"
+            rest = f"{n} ({pct(good.at[n, 'rel L2 error'])} off) takes {ratio:.2g}× its time"
         elif not others.empty:
             n = others["rel L2 error"].idxmin()
-            rest = f"no other model is (closest: {n}, {_pct(others.at[n, 'rel L2 error'])} off)"
+            rest = f"no other model is (closest: {n}, {pct(others.at[n, 'rel L2 error'])} off)"
         else:
             rest = "no other model is"
         first = f"{ref}, the reference, is the cheapest static solve {within}: {rest}."
@@ -291,5 +289,110 @@ For explicit dynamics spring-exact (small-strain calibration, not the reference'
         return f"{first} For explicit dynamics it is too: {cost:.3g} s per simulated second{vs}."
     return (
         f"{first} For explicit dynamics {dynamic_pick}{_unlike(r)} is: "
-        f"{_pct(r['rel L2 error'])} off, {cost:.3g} s per simulated second{vs}."
+        f"{pct(r['rel L2 error'])} off, {cost:.3g} s per simulated second{vs}."
     )
+
+
+# -- the ranking: by the error against the reference, and against the same mesh's P1 ----
+
+
+def pct(x: float) -> str:
+    """``5%``, ``12.3%``, ``0.04%``."""
+    return f"{100 * x:.3g}%"
+
+
+def rank_by_error(table: pd.DataFrame, ref: str, same_as_ref: pd.Series) -> pd.Series:
+    """Each model's place by its error against the reference (1: closest), ties sharing
+    the lower place; the reference, rows that are its solve and rows without an error get
+    none (``<NA>``).
+
+    Parameters
+    ----------
+    table
+        The verdict's table (``model``, ``rel L2 error``).
+    ref
+        The reference model.
+    same_as_ref
+        Per row, whether it is the reference's solve.
+
+    Returns
+    -------
+    pandas.Series
+        Nullable integers, aligned with ``table``.
+
+    Examples
+    --------
+    >>> t = pd.DataFrame({"model": ["P2", "xpbd", "P1"], "rel L2 error": [0, .02, .01]})
+    >>> rank_by_error(t, "P2", t["model"] == "P2").tolist()
+    [<NA>, 2, 1]
+    """
+    err = table["rel L2 error"].where(~same_as_ref & np.isfinite(table["rel L2 error"]))
+    return err.rank(method="min").astype("Int64")
+
+
+def ranking_line(table: pd.DataFrame, ref: str) -> str:
+    """One line: every ranked model (:func:`rank_by_error`), closest first, with its error
+    and its static time as a ratio to the reference's.
+
+    Parameters
+    ----------
+    table
+        The verdict's table with its ``rank`` column.
+    ref
+        The reference model.
+
+    Returns
+    -------
+    str
+        Empty when nothing is ranked.
+
+    Examples
+    --------
+    >>> t = pd.DataFrame({"model": ["P2", "xpbd", "P1"], "rank": pd.array([None, 2, 1], "Int64"),
+    ...     "rel L2 error": [0, .02, .01], "static time (s)": [4.0, 8.0, 1.0]})
+    >>> ranking_line(t, "P2")
+    'By error against P2: 1. P1 1% (0.25× its time), 2. xpbd 2% (2×).'
+    """
+    ranked = table[table["rank"].notna()].sort_values(["rank", "static time (s)"])
+    if ranked.empty or not ref:
+        return ""
+    t_ref = float(table.set_index("model").at[ref, "static time (s)"])
+    parts = []
+    for i, (_, r) in enumerate(ranked.iterrows()):
+        ratio = float(r["static time (s)"]) / t_ref
+        when = f"{ratio:.2g}×" if np.isfinite(ratio) else "time n/a"
+        when = f"{when} its time" if i == 0 and np.isfinite(ratio) else when
+        parts.append(f"{int(r['rank'])}. {r['model']} {pct(float(r['rel L2 error']))} ({when})")
+    return f"By error against {ref}: " + ", ".join(parts) + "."
+
+
+def same_mesh_line(table: pd.DataFrame, ref: str, p1: str, same_as_ref: pd.Series) -> str:
+    """One line: the models by their error against the same mesh's P1 of the reference's
+    law (model error, without the mesh's discretisation error), closest first.
+
+    Parameters
+    ----------
+    table
+        The verdict's table with its ``vs <p1> (same mesh)`` column.
+    ref, p1
+        The reference and its same-mesh P1 model.
+    same_as_ref
+        Per row, whether it is the reference's solve.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> t = pd.DataFrame({"model": ["P2-NH", "P1-NH", "xpbd", "P1"],
+    ...     "rel L2 error": [0, .3, .31, .4], "vs P1-NH (same mesh)": [.3, 0, .02, .4]})
+    >>> same_mesh_line(t, "P2-NH", "P1-NH", t["model"] == "P2-NH")
+    'Against P1-NH on the same mesh (itself 30% off P2-NH): 1. xpbd 2%, 2. P1 40%.'
+    """
+    col = f"vs {p1} (same mesh)"
+    t = table[~same_as_ref & (table[col] > 0) & np.isfinite(table[col])]
+    t = t.sort_values(col)
+    own = float(table.set_index("model").at[p1, "rel L2 error"])
+    parts = [f"{i}. {r['model']} {pct(float(r[col]))}" for i, (_, r) in enumerate(t.iterrows(), 1)]
+    return f"Against {p1} on the same mesh (itself {pct(own)} off {ref}): " + ", ".join(parts) + "."

@@ -56,7 +56,7 @@ def test_plug_in_models_are_never_taken_for_one_solve(judged):
     assert not [n for n in judged.notes if "same solve" in n]
 
 
-@pytest.mark.parametrize("name", ["studies.verdict", "studies.verdict_rank", "studies.models"])
+@pytest.mark.parametrize("name", ["studies.verdict", "studies.verdict_table", "studies.models"])
 def test_doctests(name):
     import doctest
     import importlib
