@@ -9,10 +9,9 @@ from __future__ import annotations
 
 import pytest
 
-from springfem.model_api import plugin_models
+from springfem.api import models
 from springfem.scene import scene_from_dict
 from springfem.testing import check_model
-from studies import models
 
 BOX = {"generator": "box", "size": [0.06, 0.02, 0.02], "divisions": [6, 3, 3], "split": "delaunay"}
 MATERIALS = {
@@ -41,12 +40,14 @@ def _scene(law: str):
 
 
 SCENES = {law: _scene(law) for law in MATERIALS}
+#: Every registered model, from the public listing.
+MODELS = models()
 
 
 def _cases() -> list:
     """(model, law) pairs: neo-Hookean and Guccione where the model takes them, else linear."""
     out = []
-    for name, model in plugin_models().items():
+    for name, model in MODELS.items():
         laws = [law for law in ("neo-hookean", "guccione") if model.applies(SCENES[law]) is None]
         for law in laws or ["linear"]:
             out.append(pytest.param(name, law, id=f"{name}-{law}"))
@@ -55,9 +56,10 @@ def _cases() -> list:
 
 @pytest.mark.parametrize(("name", "law"), _cases())
 def test_every_model_conforms(name, law):
-    report = check_model(models.get(name), SCENES[law], **CLAIMS.get(name, {}))
+    model = MODELS[name]
+    report = check_model(model, SCENES[law], **CLAIMS.get(name, {}))
     if all(c.status == "skipped" for c in report.checks):
         pytest.skip(f"{name}: {report.checks[0].message}")
-    claims = {**(getattr(models.get(name), "claims", None) or {}), **CLAIMS.get(name, {})}
+    claims = {**(getattr(model, "claims", None) or {}), **CLAIMS.get(name, {})}
     claimed = claims.get("small_strain")
     assert (report.status("small strain") == "passed") == bool(claimed), str(report)
