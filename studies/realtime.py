@@ -339,7 +339,7 @@ def _better(a: FrameResult, b: FrameResult) -> bool:
 
 #: The dynamic reference's time step at most, as a fraction of the run (its error is
 #: second order in the step; jumps of the loads are on its grid).
-REFERENCE_STEPS = 200
+REFERENCE_STEPS = 100
 #: A dynamic step's Newton work against a static solve's (a static solve load-steps and
 #: starts far from the answer; a time step starts from the predictor a step away).
 STEP_OF_STATIC = 0.25
@@ -347,13 +347,21 @@ STEP_OF_STATIC = 0.25
 
 def reference_settings(scene: Scene, t_end: float, frame_dt: float) -> dict[str, Any]:
     """The dynamic reference of ``scene``: P2, mixed P2/P1 for a nearly incompressible
-    material (ν >= 0.45, as the static verdict's reference), the scene's integrator; a
-    step of at most ``t_end / REFERENCE_STEPS`` dividing the frame."""
+    material (ν >= 0.45, as the static verdict's reference); its step is the scene's
+    ``[dynamics] dt``, else ``t_end / REFERENCE_STEPS``, made to fit the frames: a whole
+    fraction of a frame, or a whole number of frames that divides the field's spacing
+    (:func:`keep_every`), so the kept fields fall on its time grid."""
     nu = float(getattr(scene.material, "nu", 0.3) or 0.3)
     mixed = nu >= 0.45 or bool(getattr(scene.material, "incompressible", False))
-    per_frame = max(1, int(np.ceil(frame_dt / (t_end / REFERENCE_STEPS))))
-    return {"order": 2, "formulation": "mixed" if mixed else "displacement",
-            "dt": frame_dt / per_frame}  # fmt: skip
+    given = (scene.raw.get("dynamics") or {}).get("dt")
+    target = float(given) if given else t_end / REFERENCE_STEPS
+    if target <= frame_dt:
+        dt = frame_dt / int(np.ceil(frame_dt / target - 1e-9))
+    else:
+        keep = keep_every(max(1, int(round(t_end / frame_dt))))
+        m = max(d for d in range(1, keep + 1) if keep % d == 0 and d * frame_dt <= target * 1.0001)
+        dt = m * frame_dt
+    return {"order": 2, "formulation": "mixed" if mixed else "displacement", "dt": dt}
 
 
 def reference_plan(scene: Scene, t_end: float, frame_dt: float) -> str:

@@ -34,6 +34,7 @@ from . import study_scaling  # noqa: F401, E402
 from . import study_ablation  # noqa: F401, E402
 from . import study_tissue  # noqa: F401, E402
 from . import study_locking  # noqa: F401, E402
+from . import study_frames  # noqa: F401, E402
 from . import study_dynamics  # noqa: F401, E402
 # isort: on
 

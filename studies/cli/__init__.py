@@ -246,7 +246,8 @@ def build_parser() -> argparse.ArgumentParser:
         "bench", help="benchmarks: spring force kernel, threads rule, FEM, steps, tissue solves"
     )
     p.add_argument(
-        "what", choices=("forces", "fem", "step", "threads", "tissue", "scale", "lockfree")
+        "what",
+        choices=("forces", "fem", "step", "threads", "tissue", "scale", "lockfree", "frames"),
     )
     p.add_argument("--tets", type=int, default=None, help="approximate number of tets")
     p.add_argument("--repeats", type=int, default=None,

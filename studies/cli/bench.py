@@ -1,4 +1,4 @@
-"""``springfem bench forces|fem|step|threads|tissue|scale|lockfree``: benchmarks (medians).
+"""``springfem bench forces|fem|step|threads|tissue|scale|lockfree|frames``: benchmarks.
 
 Each benchmark returns a JSON-able result (``--json`` prints it) that its printer of
 :mod:`studies.bench_print` shows as a table; ``scale`` writes its own folder.
@@ -121,6 +121,22 @@ def _tissue(args: argparse.Namespace) -> dict:
     return bench_tissue(repeats, args.cases, size, divisions)
 
 
+def _frames(args: argparse.Namespace) -> dict:
+    """``springfem bench frames`` (:mod:`studies.bench_frames`)."""
+    from ..bench_frames import MODELS, SIZES, bench_frames
+
+    _no_tets(args, "frames", "--sizes")
+    names = [m.strip() for m in args.models.split(",")] if args.models else MODELS
+    rows = bench_frames(_sizes(args, SIZES), names, rounds=_repeats(args, 3))
+    return {"rows": rows, "machine": machine()}
+
+
+def _print_frames(res: dict) -> None:
+    from ..bench_frames import frames_markdown
+
+    print(frames_markdown(res["rows"]))
+
+
 #: ``what`` -> (run the benchmark from the options, print its result).
 BENCHES = {
     "forces": (_forces, bench_print.print_forces),
@@ -129,6 +145,7 @@ BENCHES = {
     "fem": (_fem, _print_fem),
     "lockfree": (_lockfree, bench_print.print_lockfree),
     "tissue": (_tissue, bench_print.print_tissue),
+    "frames": (_frames, _print_frames),
 }
 
 

@@ -51,6 +51,10 @@ TIMING_KEYS = {
         for scene in ("cook-membrane", "land-beam")
         for nu in ("0.3", "0.49", "0.4999")
     },
+    # the cheapest frame of each model (its errors are not timings: they are checked)
+    "frame_budget": {
+        f"pull-release_{rate}Hz_{m}_ms_min" for rate in (60, 1000) for m in ("P1-NH", "xpbd", "vbd")
+    },
     "scaling": {
         "slope_static_P1",
         "slope_static_P1-NH",
