@@ -234,7 +234,8 @@ def deflection_probe(sc: StudyScene) -> str:
 def scene_methods(sc: StudyScene, s: Settings) -> list[str]:
     """The methods of ``s`` that apply to the scene (the tissue element: a tissue law)."""
     tissue = sc.table.get("material", {}).get("law") in TISSUE_LAWS
-    return [m for m in s.methods if tissue or METHODS[m].changes.get("stiffening") != "law"]
+    return [m for m in s.methods
+            if tissue or getattr(METHODS[m], "changes", {}).get("stiffening") != "law"]  # fmt: skip
 
 
 def case_of(sc: StudyScene, s: Settings, method: str, nu: float, factor: int) -> dict[str, Any]:
