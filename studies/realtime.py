@@ -37,7 +37,7 @@ import numpy as np
 
 from springfem.errors import InputError, SolverError
 from springfem.frames import FrameStepper, frame_stepper, frames_settings
-from springfem.mechanics.limits import SolveStopped
+from springfem.mechanics.limits import Deadline, SolveStopped, solve_limits
 from springfem.scene import Scene
 
 #: Frames timed per setting when searching for the settings that fit (after one warm frame).
@@ -292,7 +292,7 @@ def weigh(
     rate: float,
     t_end: float,
     scale: Callable[[float], float],
-    reference: Motion,
+    reference: Motion | None,
     max_runs: int = 3,
     deadline: float | None = None,
 ) -> FrameResult:
@@ -304,7 +304,7 @@ def weigh(
     for s in frames_settings(model):  # cheapest frame first: stop at the first miss
         spf, stepper, why = time_frames(model, scene, frame_dt, s, scale)
         if stepper is None:
-            return FrameResult(model.name, s, float("nan"), False, message=why)
+            return FrameResult(model.name, {}, float("nan"), False, message=why)
         timed.append((spf, s, stepper))
         if spf > frame_dt:
             break
@@ -318,7 +318,7 @@ def weigh(
         stepper = frame_stepper(model, scene, frame_dt, **s)
         assert stepper is not None
         r = frame_run(stepper, scene, t_end, scale, model=model.name, deadline=deadline)
-        if r.motion is not None and r.stable:
+        if r.motion is not None and r.stable and reference is not None:
             r.errors = trajectory_error(r.motion, reference)
             r.errors["energy"] = energy_error(r.motion, reference)
         runs.append(r)
@@ -340,9 +340,12 @@ def _better(a: FrameResult, b: FrameResult) -> bool:
 #: The dynamic reference's time step at most, as a fraction of the run (its error is
 #: second order in the step; jumps of the loads are on its grid).
 REFERENCE_STEPS = 100
-#: A dynamic step's Newton work against a static solve's (a static solve load-steps and
-#: starts far from the answer; a time step starts from the predictor a step away).
-STEP_OF_STATIC = 0.25
+#: A dynamic step's time against a static solve's (a static solve load-steps and starts far
+#: from the answer; a time step starts from the predictor a step away): measured 0.2-0.6 on
+#: the bundled pull-release (1.5k tets) and organs of 1k and 5k tets.
+STEP_OF_STATIC = 0.5
+#: Seconds a reference step takes at least (assembly and solve overheads of a small mesh).
+STEP_FLOOR = 0.05
 
 
 def reference_settings(scene: Scene, t_end: float, frame_dt: float) -> dict[str, Any]:
@@ -364,9 +367,10 @@ def reference_settings(scene: Scene, t_end: float, frame_dt: float) -> dict[str,
     return {"order": 2, "formulation": "mixed" if mixed else "displacement", "dt": dt}
 
 
-def reference_plan(scene: Scene, t_end: float, frame_dt: float) -> str:
-    """One line: the reference, its step and its predicted time (a static solve's cost
-    law times :data:`STEP_OF_STATIC` per step, :mod:`studies.cost_model`)."""
+def reference_plan(scene: Scene, t_end: float, frame_dt: float) -> tuple[str, float]:
+    """One line on the reference, its step and its predicted time, and that time (s; NaN
+    when no cost law prices it): per step :data:`STEP_OF_STATIC` of a static solve's cost
+    law (:mod:`studies.cost_model`), at least :data:`STEP_FLOOR`."""
     from .cost_model import SolveCosts, read_laws
 
     s = reference_settings(scene, t_end, frame_dt)
@@ -374,15 +378,16 @@ def reference_plan(scene: Scene, t_end: float, frame_dt: float) -> str:
     name = "fem-P2-mixed" if s["formulation"] == "mixed" else "P2"
     try:
         p = SolveCosts(read_laws(), tets=scene.mesh.n_tets, law=scene.material.law).predict(name)
-        when = f"predicted {p.seconds * STEP_OF_STATIC * steps:.3g} s"
+        seconds = steps * max(STEP_FLOOR, p.seconds * STEP_OF_STATIC)
+        when = f"predicted {seconds:.3g} s"
     except Exception:  # noqa: BLE001 - no law prices it: the plan says so
-        when = "no cost law prices it"
+        seconds, when = float("nan"), "no cost law prices it"
     kind = "P2/P1 mixed" if s["formulation"] == "mixed" else "P2"
-    return f"reference: implicit {kind}, {steps} steps of {1e3 * s['dt']:.3g} ms, {when}"
+    return f"reference: implicit {kind}, {steps} steps of {1e3 * s['dt']:.3g} ms, {when}", seconds
 
 
 def reference_motion(
-    scene: Scene, t_end: float, frame_dt: float, scale: Any = None
+    scene: Scene, t_end: float, frame_dt: float, scale: Any = None, max_time: float | None = None
 ) -> tuple[Motion, str]:
     """The dynamic reference (:func:`reference_fem.dynamics_implicit.run`) from rest over
     ``[0, t_end]``, at the probes of :func:`probe_nodes`, its field at the frames
@@ -396,8 +401,16 @@ def reference_motion(
     n = max(1, int(round(t_end / frame_dt)))
     kept = n // keep_every(n) + 1
     t0 = time.perf_counter()
-    r = run(scene, t_end=n * frame_dt, dt=s["dt"], order=2, formulation=s["formulation"],
-            probes=points, initial="rest", frames=kept)  # fmt: skip
+    with solve_limits(max_time=max_time):
+        deadline = Deadline()
+        deadline.progress = "the dynamic reference's steps"
+        try:
+            with deadline.watch():
+                r = run(scene, t_end=n * frame_dt, dt=s["dt"], order=2,
+                        formulation=s["formulation"], probes=points, initial="rest",
+                        frames=kept)  # fmt: skip
+        except KeyboardInterrupt:
+            raise deadline.stopped(interrupted=True) from None
     probes = np.stack([r.probes[k] for k in points], axis=1)
     e = r.energies
     stored = e["kinetic"] + e["strain"]

@@ -44,14 +44,20 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from springfem.errors import InputError
+from springfem.errors import InputError, SolverError
 from springfem.files import atomic_write_text
+from springfem.mechanics.limits import SolveStopped
 from springfem.scene import Scene
 
 from . import realtime
 
 #: Seconds of free motion after the last change of the loads, when the scene sets no t_end.
 SETTLE = 0.3
+#: The share of the budget the reference may use (the models get the rest).
+REFERENCE_SHARE = 0.7
+#: The reference is not started when its prediction is this many times the time it may use
+#: (the prediction is rough; the cap stops a run that overshoots).
+SKIP_FACTOR = 3.0
 #: Reference time steps per frame at most (the reference's step is also bounded by its own
 #: accuracy: :func:`studies.realtime.reference_step`).
 COLUMNS = ["settings", "ms per frame", "fits", "stable", "probe error", "field error",
@@ -208,15 +214,30 @@ def frame_verdict(
     frame_dt = 1.0 / rate
     scale = realtime.load_factor(scene)
     candidates = fast_models(scene, names)
-    ref_fn = reference or realtime.reference_motion
     plan = [f"frame-rate verdict of {scene.name}: {tets:,} tets, {rate:g} Hz "
             f"({1e3 * frame_dt:.3g} ms a frame), run of {t_end:.3g} s "
             f"({int(round(t_end / frame_dt))} frames)",
-            realtime.reference_plan(scene, t_end, frame_dt),
             "models: " + ", ".join(m.name for m in candidates)]  # fmt: skip
+    ref_line, ref_seconds = realtime.reference_plan(scene, t_end, frame_dt)
+    plan.insert(1, ref_line)
+    room = None if deadline is None else REFERENCE_SHARE * (deadline - time.monotonic())
+    if room is not None and ref_seconds > SKIP_FACTOR * room:
+        plan.append(f"the reference would take about {ref_seconds:.3g} s, more than the "
+                    f"{room:.3g} s it may use of the budget: the models are timed, not weighed "
+                    "(--budget)")  # fmt: skip
     for line in plan:
         log(line)
-    ref, ref_text = ref_fn(scene, t_end, frame_dt, scale)
+    ref: realtime.Motion | None = None
+    if room is None or ref_seconds <= SKIP_FACTOR * room:
+        try:
+            if reference is None:
+                ref, ref_text = realtime.reference_motion(scene, t_end, frame_dt, scale, room)
+            else:
+                ref, ref_text = reference(scene, t_end, frame_dt, scale)
+        except (SolveStopped, SolverError) as exc:
+            ref_text = f"not finished: {str(exc)[:160]}"
+    else:
+        ref_text = f"not run: it would take about {ref_seconds:.3g} s"
     log(f"reference: {ref_text} ({time.monotonic() - start:.1f} s)")
     rows = {}
     for m in candidates:
@@ -230,6 +251,8 @@ def frame_verdict(
         t0 = time.monotonic()
         r = realtime.weigh(m, scene, rate=rate, t_end=t_end, scale=scale, reference=ref,
                            deadline=deadline)  # fmt: skip
+        if ref is None and not r.message:
+            r.message = "fits the frame; error not measured (no reference)"
         fits = bool(np.isfinite(r.seconds_per_frame) and r.seconds_per_frame <= frame_dt)
         rows[m.name] = _row(r.settings, r.seconds_per_frame, fits, r.stable, r.errors, r.message)
         e = r.errors.get("probe", float("nan"))
@@ -237,6 +260,11 @@ def frame_verdict(
             f"frame, probe error {100 * e:.3g} % ({time.monotonic() - t0:.1f} s)")  # fmt: skip
     table = pd.DataFrame.from_dict(rows, orient="index", columns=COLUMNS)
     sentence = frame_sentence(table, rate, tets)
+    if ref is None:
+        fit = [str(n) for n in table.index[table["fits"].astype(bool)]]
+        sentence = (f"No dynamic reference within the budget ({ref_text}), so no error is "
+                    f"measured. At {rate:g} Hz on this {tets:,}-tet mesh these models fit the "
+                    f"frame: {', '.join(fit) or 'none'}.")  # fmt: skip
     pick = None
     if sentence.startswith("At "):
         ok = table[table["fits"].astype(bool) & table["stable"].astype(bool)]

@@ -91,3 +91,13 @@ def test_no_model_fits_a_frame_of_ten_microseconds(scene):
                       reference=still)  # fmt: skip
     assert v.pick is None and not v.table.loc["P1-NH", "fits"]
     assert v.sentence.startswith("No model runs at 100000 Hz") and "faster" in v.sentence
+
+
+def test_a_reference_past_the_budget_is_not_started(scene, monkeypatch):
+    from studies import realtime
+
+    monkeypatch.setattr(realtime, "reference_plan", lambda *a: ("reference: huge", 1e6))
+    v = frame_verdict(scene, 200.0, names=["P1-NH"], budget=60, log=lambda s: None)
+    assert v.sentence.startswith("No dynamic reference within the budget")
+    assert "P1-NH" in v.sentence or "none" in v.sentence
+    assert np.isnan(v.table.loc["P1-NH", "probe error"])
