@@ -364,7 +364,13 @@ def reference_settings(scene: Scene, t_end: float, frame_dt: float) -> dict[str,
         keep = keep_every(max(1, int(round(t_end / frame_dt))))
         m = max(d for d in range(1, keep + 1) if keep % d == 0 and d * frame_dt <= target * 1.0001)
         dt = m * frame_dt
-    return {"order": 2, "formulation": "mixed" if mixed else "displacement", "dt": dt}
+    # a release excites mesh modes no step resolves: unless the scene names its integrator,
+    # generalised-alpha (its rho_inf, default 0.8) damps them, where the trapezoidal rule
+    # keeps them ringing and its Newton can fail after the jump
+    given_integrator = (scene.raw.get("dynamics") or {}).get("integrator")
+    integrator = given_integrator or "generalized-alpha"
+    return {"order": 2, "formulation": "mixed" if mixed else "displacement", "dt": dt,
+            "integrator": integrator}  # fmt: skip
 
 
 def reference_plan(scene: Scene, t_end: float, frame_dt: float) -> tuple[str, float]:
@@ -408,7 +414,7 @@ def reference_motion(
             with deadline.watch():
                 r = run(scene, t_end=n * frame_dt, dt=s["dt"], order=2,
                         formulation=s["formulation"], probes=points, initial="rest",
-                        frames=kept)  # fmt: skip
+                        frames=kept, integrator=s["integrator"])  # fmt: skip
         except KeyboardInterrupt:
             raise deadline.stopped(interrupted=True) from None
     probes = np.stack([r.probes[k] for k in points], axis=1)
