@@ -32,7 +32,8 @@ def relative_max_error(u: np.ndarray, u_ref: np.ndarray) -> float:
 
 
 def max_principal_strain(scene: Scene, u: np.ndarray) -> float:
-    """Max |principal Green–Lagrange strain| over the P1 elements for vertex field ``u``.
+    """The largest absolute principal Green–Lagrange strain over the P1 elements for the
+    vertex field ``u``.
 
     The Green–Lagrange strain ``E = (H + Hᵀ + HᵀH) / 2`` of a small-strain solution also
     flags large rotations (a rotation by θ gives ``E ≈ θ²/2``), which a linear solution
