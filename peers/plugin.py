@@ -10,7 +10,10 @@
     :class:`peers.mass_spring.MassSpring` through :class:`~springfem.model_api.SystemModel`:
     Newton for the static answer, the core's integrators for timed runs;
 ``vbd``
-    Vertex Block Descent's run to rest (:class:`peers.vbd.model.VBDModel`).
+    Vertex Block Descent's run to rest (:class:`peers.vbd.model.VBDModel`);
+``pd``, ``pd-nh``
+    Projective Dynamics' run to rest, with its ARAP-like energy and in its quasi-Newton
+    neo-Hookean form (:mod:`peers.pd.model`).
 
 All are weighed by default where they apply (``default`` true: the verdict and the
 studies of docs/peers.rst#in-the-studies). The entry
@@ -19,7 +22,7 @@ point ``peers = "peers.plugin:models"`` of group ``springfem.models`` registers 
 Examples
 --------
 >>> [m.name for m in models()], models()[0].settings["substeps"]
-(['xpbd', 'mass-spring', 'vbd'], 40)
+(['xpbd', 'mass-spring', 'vbd', 'pd', 'pd-nh'], 40)
 """
 
 from __future__ import annotations
@@ -41,7 +44,8 @@ from springfem.scene import Scene
 
 from .mass_spring.network import MassSpring
 from .mass_spring.network import why_not as mass_spring_why_not
-from .rest_model import FRAME_SWEEP, PeerFrames
+from .pd.model import PDModel, PDNHModel
+from .rest_model import FRAME_SWEEP, PeerFrames, RestModel
 from .vbd.model import VBDModel
 from .xpbd.solver import XPBD, XPBDSettings
 from .xpbd.solver import why_not as xpbd_why_not
@@ -238,7 +242,7 @@ def build_mass_spring(
 
 
 @cache
-def models() -> tuple[XPBDModel | SystemModel | VBDModel, ...]:
+def models() -> tuple[XPBDModel | SystemModel | RestModel, ...]:
     """The peers (one object each per process).
 
     Returns
@@ -253,6 +257,8 @@ def models() -> tuple[XPBDModel | SystemModel | VBDModel, ...]:
             calibration="van-gelder", damping=0.0,
         ),
         VBDModel(),
+        PDModel(),
+        PDNHModel(),
     )  # fmt: skip
 
 

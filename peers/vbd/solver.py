@@ -45,7 +45,7 @@ from springfem.scene import Scene
 from ..xpbd.constraints import deformation_gradients, rest_shape, stable_neo_hookean
 from ..xpbd.energy import StableNeoHookean
 from .colouring import vertex_colouring
-from .energy import LAW_CODES, first_piola
+from .energy import LAW_CODES, density, first_piola
 from .kernels import frame
 
 #: Laws VBD takes, and the energy each becomes.
@@ -253,6 +253,11 @@ class VBD:
             info={"settings": asdict(s), "damping_rate": self.damping_rate,
                   "colours": self.colouring.n_colours},
         )  # fmt: skip
+
+    def strain_energy(self, x: np.ndarray) -> float:
+        """The stored energy ``sum_e V_e psi(F_e)`` of ``x`` (:mod:`.energy`)."""
+        F = deformation_gradients(x, self.tets, self.G)
+        return float(np.sum(self.V * density(F, self.mu, self.lam, self.gamma, self.law)))
 
     def internal(self, x: np.ndarray) -> np.ndarray:
         """Internal nodal forces ``-dE/dx`` ``(n, 3)`` of VBD's energy (numpy, from ``F``)."""
