@@ -167,7 +167,8 @@ def frame_sentence(table: pd.DataFrame, rate: float, tets: int) -> str:
 
 def _settings_text(s: dict[str, Any]) -> str:
     if "iterations" in s:
-        return f"{s['substeps']} substeps x {s['iterations']}"
+        n = s["substeps"]
+        return f"{n} substep{'s' if n != 1 else ''} x {s['iterations']}"
     if "safety" in s:
         n = s.get("substeps", "?")
         return f"{n} step{'s' if n != 1 else ''} of {s['safety']:g} dt_crit"
