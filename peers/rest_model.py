@@ -168,6 +168,16 @@ class RestModel:
         """The peer's own frames of ``frame_dt`` (:class:`PeerFrames`)."""
         return PeerFrames.of(self, scene, frame_dt)
 
+    def kernel_pass(self, scene: Scene) -> tuple[Callable[[], object], float]:
+        """One iteration over every element at a deformed state (its settings, undamped):
+        a function to time and the bytes it moves per element (the solver's
+        ``iteration_pass``; ``springfem bench forces``)."""
+        solver = type(self).Solver(scene, replace(self._settings, damping=0.0))
+        x0 = solver.x0
+        rng = np.random.default_rng(0)  # a stretch and a little noise, as XPBD's pass
+        x = x0 * [1.02, 0.99, 0.995] + 1e-3 * np.ptp(x0) * rng.standard_normal(x0.shape)
+        return solver.iteration_pass(x)
+
     def _solver(self, scene: Scene) -> Any:
         why = self.applies(scene)
         if why is not None:

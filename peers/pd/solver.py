@@ -34,7 +34,8 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, replace
 from typing import Literal
 
 import numpy as np
@@ -325,6 +326,27 @@ class PD:
             wall_time=time.perf_counter() - t0, residual=self.residual(x),
             info={"settings": asdict(s), "damping_rate": self.damping_rate},
         )  # fmt: skip
+
+    def iteration_pass(self, x: np.ndarray) -> tuple[Callable[[], None], float]:
+        """One iteration from positions ``x`` (a copy, moved by every call; the inertial
+        target ``x``): local step and global solve (``arap``), or an L-BFGS step (its
+        memory cleared every call): a function to time and the bytes its element pass
+        moves per element (shape gradients, volume, nodes read, and once per node the
+        positions read and the right-hand side written)."""
+        p, y = np.array(x, dtype=float), np.array(x, dtype=float)
+        one = replace(self.settings, iterations=1)
+        stepper = PD.__new__(PD)
+        stepper.__dict__.update(self.__dict__)
+        stepper.settings = one
+
+        def go() -> None:
+            if one.energy == "arap":
+                stepper._local_global(p, y)
+            else:
+                stepper._quasi_newton(p, y)
+
+        m, n = self.tets.shape[0], self.x0.shape[0]
+        return go, 72 + 8 + 32 + 48 * n / m
 
     def strain_energy(self, x: np.ndarray) -> float:
         """The stored energy of ``x`` (:class:`peers.pd.energy.PDEnergy`)."""

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from typing import Literal
 
@@ -46,7 +47,7 @@ from ..xpbd.constraints import deformation_gradients, rest_shape, stable_neo_hoo
 from ..xpbd.energy import StableNeoHookean
 from .colouring import vertex_colouring
 from .energy import LAW_CODES, density, first_piola
-from .kernels import frame
+from .kernels import _sweep, frame
 
 #: Laws VBD takes, and the energy each becomes.
 LAWS = {"neo-hookean": "stable-neo-hookean", "linear": "linear"}
@@ -253,6 +254,26 @@ class VBD:
             info={"settings": asdict(s), "damping_rate": self.damping_rate,
                   "colours": self.colouring.n_colours},
         )  # fmt: skip
+
+    def iteration_pass(self, x: np.ndarray) -> tuple[Callable[[], None], float]:
+        """One Gauss–Seidel sweep over every vertex from positions ``x`` (a copy, moved by
+        every call; the inertial target ``x``), at the settings' substep: a function to time
+        and the bytes it moves per element (each element's shape gradients, volume and
+        nodes read once per corner, the incidence, and once per node positions read and
+        written, mass, inertial target and supports read)."""
+        c = self.colouring
+        p, xt = np.array(x, dtype=float), np.array(x, dtype=float)
+        h2 = self.h * self.h
+        kd_h = self.settings.kd / self.h
+        code = LAW_CODES[self.law]
+
+        def go() -> None:
+            _sweep(p, xt, xt, self.masses, self.free, self.tets, self.G, self.V, c.order,
+                   c.inc_ptr, c.inc_elem, c.inc_local, code, self.mu, self.lam, self.gamma,
+                   kd_h, h2)  # fmt: skip
+
+        m, n = self.tets.shape[0], self.x0.shape[0]
+        return go, 4 * (72 + 8 + 32 + 16) + (48 + 8 + 24 + 24) * n / m
 
     def strain_energy(self, x: np.ndarray) -> float:
         """The stored energy ``sum_e V_e psi(F_e)`` of ``x`` (:mod:`.energy`)."""
