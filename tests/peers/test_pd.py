@@ -164,5 +164,9 @@ def test_plug_ins_are_registered_and_refuse_other_laws(scene):
     assert pd.applies(linear) is None
     assert pd_nh.applies(linear) == "model pd-nh: no linear law; it takes neo-hookean"
     assert pd_nh.with_settings(iterations=3).settings["energy"] == "neo-hookean"  # type: ignore[attr-defined]
+    for model in (pd, pd_nh, found["vbd"]):  # one iteration for springfem bench forces
+        go, per_tet = model.kernel_pass(scene)  # type: ignore[attr-defined]
+        go()
+        assert 100 < per_tet < 1000
     with pytest.raises(InputError, match="energy 'stvk' is not one of"):
         PDSettings(energy="stvk")  # type: ignore[arg-type]
