@@ -168,6 +168,26 @@ class RestModel:
         """The peer's own frames of ``frame_dt`` (:class:`PeerFrames`)."""
         return PeerFrames.of(self, scene, frame_dt)
 
+    @property
+    def setting_step(self) -> float:
+        """The substep of its settings, ``dt / substeps`` (s)."""
+        return float(self._settings.dt / self._settings.substeps)
+
+    def release_run(self, scene: Scene, **run: Any) -> dict[str, Any]:
+        """Released from its rest state, its own undamped substeps:
+        :func:`peers.rest_release.release_run` (``t_end``, ``safety``, ``samples``,
+        ``probe``)."""
+        from .rest_release import release_run
+
+        return release_run(self, scene, **run)
+
+    def step_timer(self, scene: Scene, safety: float) -> Callable[[int, Callable[[], None]], None]:
+        """``(steps, tick)`` running its substeps from rest:
+        :func:`peers.rest_release.step_timer`."""
+        from .rest_release import step_timer
+
+        return step_timer(self, scene, safety)
+
     def kernel_pass(self, scene: Scene) -> tuple[Callable[[], object], float]:
         """One iteration over every element at a deformed state (its settings, undamped):
         a function to time and the bytes it moves per element (the solver's
