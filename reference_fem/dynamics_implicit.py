@@ -71,6 +71,9 @@ from .solver import check_memory, make_problem, solve
 
 #: How many times a Newton increment that inverts an element is halved before giving up.
 MAX_HALVINGS = 10
+#: A step whose Newton fails is split in two at most this many times over (a step of
+#: ``dt / 2**MAX_SPLITS`` at the shortest) before the run gives up.
+MAX_SPLITS = 3
 #: ``linear_solver = "auto"`` factorises up to this many DOFs in a dynamic run (PARDISO): a
 #: factorisation serves several steps' solves, where AMG rebuilds a preconditioner and
 #: iterates for each (pull-release at 24,375 P2 DOFs: 1.8 s a step direct, 15 s with AMG).
@@ -313,6 +316,7 @@ class _Run:
         self.stress_noise = self.k_max * edge if problem.nonlinear else 0.0
         self.symmetric = not problem.mixed and not any(e.has_follower for e, _ in self.loads.parts)
         self.factorizations = 0
+        self.splits = 0
 
     def _probes(self, extra):
         scene, space = self.problem.scene, self.problem.space
@@ -403,13 +407,12 @@ class _Run:
         step_time = 0.0
         for k in range(1, len(grid)):
             t0, t1 = grid[k - 1], grid[k]
-            h = t1 - t0
             tick = time.perf_counter()
-            x_new, v_new, a_new, fi_u, fe_left, iters[k - 1] = self._step(
-                x, v, a, g_n, t1, h, tol, max_iter
+            x_new, v_new, a_new, fi_u, fe_left, iters[k - 1], work, lost = self._advance(
+                x, v, a, g_n, fe, t0, t1, tol, max_iter, rec
             )
             step_time += time.perf_counter() - tick
-            rec.work(k, fe, fe_left, x, x_new, v, v_new, h)
+            rec.work(k, work, lost)
             x, v, a = x_new, v_new, a_new
             fe = fe_left
             if any(abs(t1 - j) <= 1e-9 * dt for j in jumps):  # the load jumped: a afresh
@@ -432,11 +435,34 @@ class _Run:
             "dt": float(dt),
             "t_end": float(t_end),
             "factorizations": self.factorizations,
+            "split_steps": self.splits,
             "seconds_per_step": step_time / max(1, len(grid) - 1),
             "wall_time": time.perf_counter() - t_wall,
         }
         return DynamicResult(grid, rec.probe_dict(), rec.energy_dict(), frame_times, frames,
                              iters, info, rec.probe_dict(velocity=True))  # fmt: skip
+
+    def _advance(self, x, v, a, g_n, fe, t0, t1, tol, max_iter, rec, depth=0):
+        """A step from ``t0`` to ``t1``; when its Newton fails, two half steps (at most
+        :data:`MAX_SPLITS` times over): after a release the mesh modes the step does not
+        resolve can stall Newton where a shorter step converges. Returns :meth:`_step`'s
+        state, its iterations, and the step's external work and dissipation."""
+        try:
+            x1, v1, a1, fi_u, fe1, it = self._step(x, v, a, g_n, t1, t1 - t0, tol, max_iter)
+        except (SolverError, InvertedElements):
+            if depth >= MAX_SPLITS:
+                raise
+        else:
+            work, lost = rec.increments(fe, fe1, x, x1, v, v1, t1 - t0)
+            return x1, v1, a1, fi_u, fe1, it, work, lost
+        tm = 0.5 * (t0 + t1)
+        first = self._advance(x, v, a, g_n, fe, t0, tm, tol, max_iter, rec, depth + 1)
+        xm, vm, am, fim, fem, im, wm, lm = first
+        x1, v1, a1, fi_u, fe1, it, w1, l1 = self._advance(
+            xm, vm, am, fim - fem, fem, tm, t1, tol, max_iter, rec, depth + 1
+        )
+        self.splits += 1
+        return x1, v1, a1, fi_u, fe1, im + it, wm + w1, lm + l1
 
     def _step(self, x, v, a, g_n, t1, h, tol, max_iter):
         """One step to ``t1``: Newton on ``u_{n+1}`` (module docstring).
@@ -566,13 +592,17 @@ class _Recorder:
         self.kinetic[k] = 0.5 * float(v @ (r.M @ v))
         self.strain[k] = strain_energy(r.problem, x)
 
-    def work(self, k, fe0, fe1, x0, x1, v0, v1, h) -> None:
-        """External work (trapezoid in ``u``) and damping dissipation of step ``k``."""
+    def increments(self, fe0, fe1, x0, x1, v0, v1, h) -> tuple[float, float]:
+        """External work (trapezoid in ``u``) and damping dissipation of one step."""
         r = self.run
         du = x1[: r.nu] - x0[: r.nu]
-        self.external[k] = self.external[k - 1] + 0.5 * float((fe0 + fe1) @ du)
         vm = 0.5 * (v0 + v1)
-        self.dissipated[k] = self.dissipated[k - 1] + h * float(vm @ r._damping_force(vm))
+        return 0.5 * float((fe0 + fe1) @ du), h * float(vm @ r._damping_force(vm))
+
+    def work(self, k, external: float, dissipated: float) -> None:
+        """Add step ``k``'s external work and dissipation to the running sums."""
+        self.external[k] = self.external[k - 1] + external
+        self.dissipated[k] = self.dissipated[k - 1] + dissipated
 
     def probe_dict(self, velocity: bool = False) -> dict[str, np.ndarray]:
         q = self.qv if velocity else self.q

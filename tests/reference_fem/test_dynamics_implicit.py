@@ -206,3 +206,36 @@ def test_every_p1_formulation_keeps_its_own_energy(formulation):
     e = r.energies
     assert e["kinetic"].max() > 0.5 * e["strain"][0]
     assert np.abs(e["balance"]).max() < 1e-5 * e["strain"][0]  # measured 1e-7 to 7e-7
+
+
+def test_a_step_whose_newton_fails_is_split_in_two(monkeypatch):
+    """A failing step is taken as two half steps; the motion stays that of the run (the
+    halves are a finer step of the same integrator) and the run says how many it split."""
+    import reference_fem.dynamics_implicit as dyn
+    from springfem.errors import SolverError
+    from springfem.scene import scene_from_dict
+
+    scene = scene_from_dict({
+        "mesh": {"generator": "box", "size": [0.1, 0.01, 0.01], "divisions": [4, 1, 1]},
+        "material": {"law": "neo-hookean", "E": 1.0e4, "nu": 0.3, "density": 1000.0},
+        "boundary": [{"region": "x_min", "fix": ["x", "y", "z"]}],
+        "load": [{"type": "traction", "region": "x_max", "value": [0, 0, -0.5],
+                  "time": {"ramp": [0.0, 0.05]}}],
+        "probe": [{"name": "tip", "point": [0.1, 0.005, 0.005]}]})  # fmt: skip
+    plain = dyn.run(scene, t_end=0.1, dt=0.01)
+    step = dyn._Run._step
+    failed = []
+
+    def flaky(self, x, v, a, g_n, t1, h, tol, max_iter):
+        if abs(t1 - 0.03) < 1e-12 and h > 0.006:
+            failed.append(t1)
+            raise SolverError("Newton did not converge (test)")
+        return step(self, x, v, a, g_n, t1, h, tol, max_iter)
+
+    monkeypatch.setattr(dyn._Run, "_step", flaky)
+    split = dyn.run(scene, t_end=0.1, dt=0.01)
+    assert failed == [0.03] and split.info["split_steps"] == 1
+    assert len(split.times) == len(plain.times)
+    tip, ref = split.probes["tip"][:, 2], plain.probes["tip"][:, 2]
+    assert np.abs(tip - ref).max() < 0.05 * np.abs(ref).max()
+    assert np.abs(tip - ref).max() > 0  # the split step did take two halves
