@@ -42,7 +42,7 @@ TIMING_KEYS = {
         "land-beam-nh_P1-NH_step_us",
         *(
             f"land-beam-nh_{m}_cost_ratio"
-            for m in ("spring-exact", "corotational", "mass-spring", "xpbd")
+            for m in ("spring-exact", "corotational", "mass-spring", "xpbd", "vbd", "pd", "pd-nh")
         ),
     },
     # the cheapest method within the tolerance is picked by its solve time
