@@ -63,7 +63,7 @@ from springfem.regions import locate_points
 from springfem.scene import DynamicsOptions, Scene
 from springfem.scene.dynamics import STEPS
 
-from .dynamics_terms import Integrator, TimeLoads, mass_matrix, strain_energy
+from .dynamics_terms import Integrator, Recorder, TimeLoads, mass_matrix
 from .newton import InvertedElements
 from .options import FemOptions
 from .problem import FemProblem
@@ -395,7 +395,7 @@ class _Run:
         else:
             wanted = np.asarray(n_frames, dtype=float)
         frame_at = set(np.searchsorted(grid, wanted - 1e-9 * dt).tolist())
-        rec = _Recorder(self, len(grid))
+        rec = Recorder(self, len(grid))
         rec.record(0, x, v, grid[0])
         fe = self.loads.vector(self._U(x), 0.0)
         g_n = p.internal_force(x)[0][: self.nu] - fe
@@ -571,49 +571,3 @@ class _Run:
             A = A.tobsr(blocksize=(3, 3))
         self.factorizations += 1
         return self.problem.linear_solver.factorize(A, self.free, self.symmetric, f"t = {t1:.6g}: ")
-
-
-class _Recorder:
-    """Probe trajectories and energies along a run."""
-
-    def __init__(self, run: _Run, n: int):
-        self.run = run
-        self.q = np.zeros((n, run.P.shape[0], 3))
-        self.qv = np.zeros((n, run.P.shape[0], 3))
-        self.kinetic = np.zeros(n)
-        self.strain = np.zeros(n)
-        self.external = np.zeros(n)
-        self.dissipated = np.zeros(n)
-
-    def record(self, k: int, x: np.ndarray, v: np.ndarray, t: float) -> None:
-        r = self.run
-        self.q[k] = r.P @ r._U(x)
-        self.qv[k] = r.P @ v.reshape(-1, 3)
-        self.kinetic[k] = 0.5 * float(v @ (r.M @ v))
-        self.strain[k] = strain_energy(r.problem, x)
-
-    def increments(self, fe0, fe1, x0, x1, v0, v1, h) -> tuple[float, float]:
-        """External work (trapezoid in ``u``) and damping dissipation of one step."""
-        r = self.run
-        du = x1[: r.nu] - x0[: r.nu]
-        vm = 0.5 * (v0 + v1)
-        return 0.5 * float((fe0 + fe1) @ du), h * float(vm @ r._damping_force(vm))
-
-    def work(self, k, external: float, dissipated: float) -> None:
-        """Add step ``k``'s external work and dissipation to the running sums."""
-        self.external[k] = self.external[k - 1] + external
-        self.dissipated[k] = self.dissipated[k - 1] + dissipated
-
-    def probe_dict(self, velocity: bool = False) -> dict[str, np.ndarray]:
-        q = self.qv if velocity else self.q
-        return {name: q[:, i] for i, name in enumerate(self.run.probe_names)}
-
-    def energy_dict(self) -> dict[str, np.ndarray]:
-        total = self.kinetic + self.strain - self.external + self.dissipated
-        return {
-            "kinetic": self.kinetic,
-            "strain": self.strain,
-            "external_work": self.external,
-            "dissipated": self.dissipated,
-            "balance": total - total[0],
-        }

@@ -211,3 +211,50 @@ def strain_energy(problem: FemProblem, x: np.ndarray) -> float:
         bulk = problem.bulk  # type: ignore[attr-defined]
         psi = psi - pq * (_det(F) - 1.0) - (pq**2 / (2.0 * bulk) if np.isfinite(bulk) else 0.0)
     return float((problem.space.dx * psi).sum())
+
+
+class Recorder:
+    """Probe trajectories and energies along a run of :mod:`reference_fem.dynamics_implicit`
+    (``run``: its ``_Run``, which holds the problem, the probes and the matrices)."""
+
+    def __init__(self, run, n: int):
+        self.run = run
+        self.q = np.zeros((n, run.P.shape[0], 3))
+        self.qv = np.zeros((n, run.P.shape[0], 3))
+        self.kinetic = np.zeros(n)
+        self.strain = np.zeros(n)
+        self.external = np.zeros(n)
+        self.dissipated = np.zeros(n)
+
+    def record(self, k: int, x: np.ndarray, v: np.ndarray, t: float) -> None:
+        r = self.run
+        self.q[k] = r.P @ r._U(x)
+        self.qv[k] = r.P @ v.reshape(-1, 3)
+        self.kinetic[k] = 0.5 * float(v @ (r.M @ v))
+        self.strain[k] = strain_energy(r.problem, x)
+
+    def increments(self, fe0, fe1, x0, x1, v0, v1, h) -> tuple[float, float]:
+        """External work (trapezoid in ``u``) and damping dissipation of one step."""
+        r = self.run
+        du = x1[: r.nu] - x0[: r.nu]
+        vm = 0.5 * (v0 + v1)
+        return 0.5 * float((fe0 + fe1) @ du), h * float(vm @ r._damping_force(vm))
+
+    def work(self, k, external: float, dissipated: float) -> None:
+        """Add step ``k``'s external work and dissipation to the running sums."""
+        self.external[k] = self.external[k - 1] + external
+        self.dissipated[k] = self.dissipated[k - 1] + dissipated
+
+    def probe_dict(self, velocity: bool = False) -> dict[str, np.ndarray]:
+        q = self.qv if velocity else self.q
+        return {name: q[:, i] for i, name in enumerate(self.run.probe_names)}
+
+    def energy_dict(self) -> dict[str, np.ndarray]:
+        total = self.kinetic + self.strain - self.external + self.dissipated
+        return {
+            "kinetic": self.kinetic,
+            "strain": self.strain,
+            "external_work": self.external,
+            "dissipated": self.dissipated,
+            "balance": total - total[0],
+        }
