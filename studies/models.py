@@ -195,6 +195,8 @@ class Outcome:
         Why it failed or stopped (empty when ok).
     seconds
         Wall time of the attempt.
+    stopped
+        Ended by a cap of :func:`springfem.mechanics.limits.solve_limits`, not the solver.
     """
 
     model: Model
@@ -202,6 +204,7 @@ class Outcome:
     solution: Any = None
     message: str = ""
     seconds: float = float("nan")
+    stopped: bool = False  # ended by a cap (time, steps), not by the solver
 
     @property
     def ok(self) -> bool:
@@ -270,7 +273,7 @@ def run(
         seconds = time.perf_counter() - t0
         state = partial_solution(scene, declared(m, "result_model", default="plugin"), exc, seconds)
         status: Literal["partial", "failed"] = "partial" if state is not None else "failed"
-        return Outcome(m, status, state, str(exc), seconds)
+        return Outcome(m, status, state, str(exc), seconds, isinstance(exc, SolveStopped))
     seconds = time.perf_counter() - t0
     if check and getattr(sol, "u", None) is not None:
         findings = check_solution(scene, sol.u, sol.result.law)

@@ -196,6 +196,12 @@ def verdict(
             say(f"  {name:<26} skipped (memory): {why}")
             publish()
             return registry.Outcome(registry.get(name), "failed", None, why)
+        if got.stopped and got.status == "failed":  # the budget's cap, not a solver failure
+            why = got.message  # "stopped after ... (the --max-time cap ...)"
+            state.skipped[name] = ("skipped (budget)", why[:200])
+            say(f"  {name:<26} skipped (budget): {why[:120]}")
+            publish()
+            return got
         state.outcomes[name], state.peaks[name] = got, pm.peak
         if got.ok:
             costs.observe(name, got.seconds)
