@@ -80,6 +80,7 @@ class LoadHistory:
         self._fn = fns[0] if fns else None
         self._parts: list[tuple[Any, Any, np.ndarray | None]] = []
         self._rest_force: np.ndarray | None = None
+        self._follower: bool | None = None
         if not self.single:
             for load, fn in zip(loads, fns, strict=True):
                 sub = replace(scene, loads=[load])
@@ -120,9 +121,11 @@ class LoadHistory:
         g = self(t)
         if not g:
             return np.zeros_like(x)
-        if self._rest_force is None or has_follower_loads(self.scene):
+        if self._follower is None:
+            self._follower = has_follower_loads(self.scene)
+        if self._rest_force is None or self._follower:
             f = external_forces(self.scene, x=x)
-            if not has_follower_loads(self.scene):
+            if not self._follower:
                 self._rest_force = f
             return g * f
         return g * self._rest_force

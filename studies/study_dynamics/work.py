@@ -27,6 +27,7 @@ from springfem.errors import SolverError
 from springfem.scene import Scene
 
 from .. import models
+from ..realtime import probe_nodes
 from ..scenes import case_scene
 
 
@@ -70,15 +71,10 @@ def rayleigh_period(masses: np.ndarray, u: np.ndarray, f: np.ndarray) -> float:
 
 def probe_weights(scene: Scene) -> tuple[np.ndarray, np.ndarray, str]:
     """``(nodes, weights, name)`` of the probe: the scene's first ``[[probe]]`` (linear in
-    its tet), else the node farthest from the fixed nodes."""
-    if scene.probes:
-        p = scene.probes[0]
-        return scene.mesh.tets[p.tet], np.asarray(p.bary, dtype=float), p.name
-    X = scene.mesh.points
-    fixed = np.unique(np.asarray(scene.dirichlet()[0]) // 3)
-    centre = X[fixed].mean(axis=0) if fixed.size else X.mean(axis=0)
-    node = int(np.argmax(np.linalg.norm(X - centre, axis=1)))
-    return np.array([node]), np.array([1.0]), f"node {node}"
+    its tet), else the node farthest from the fixed nodes
+    (:func:`studies.realtime.probe_nodes`)."""
+    nodes, w, names = probe_nodes(scene)
+    return nodes[0], w[0], names[0]
 
 
 def preload(system) -> np.ndarray:
